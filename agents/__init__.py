@@ -1,0 +1,1 @@
+"""Baseline agents: the scripted path follower and stable-baselines3 agents."""

@@ -1,0 +1,67 @@
+"""Pure-pursuit path follower driving on a pose (true or estimated)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from envs.config import CONFIG_DIR, build, read_yaml
+from envs.task import Polyline
+
+
+@dataclass(frozen=True)
+class FollowerConfig:
+    speed: float
+    lookahead: float
+    max_yaw_rate: float
+    turn_in_place: float
+
+
+def load_follower_config(path: str | Path | None = None, **overrides) -> FollowerConfig:
+    """``configs/agents/follower.yaml`` (or ``path``) with keyword overrides; unknown keys fail."""
+    data = read_yaml(path or CONFIG_DIR / "agents" / "follower.yaml")
+    return build(FollowerConfig, {**data, **overrides}, "follower")
+
+
+class PathFollower:
+    """Pure pursuit: steer towards the path point ``lookahead`` metres ahead of the robot.
+
+    The curvature to reach a point (x_r, y_r) in the robot frame is ``2 y_r / d^2``; the
+    follower drives at ``speed`` with yaw rate ``speed * curvature`` (clipped), and turns on
+    the spot when the point is more than ``turn_in_place`` radians off its heading. Actions
+    are scaled to the env's ``[-1, 1]`` box by the robot's ``max_speed`` and ``max_yaw_rate``.
+    """
+
+    def __init__(self, path, cfg: FollowerConfig, max_speed: float, max_yaw_rate: float) -> None:
+        self.path, self.cfg = Polyline(path), cfg
+        self.scale = np.array([max_speed, max_yaw_rate])
+
+    @classmethod
+    def for_env(cls, env, config: str | Path | None = None, **overrides) -> PathFollower:
+        """A follower of ``env``'s world path, scaled to its action space."""
+        env_cfg = env.unwrapped.config
+        return cls(
+            env_cfg.world.path,
+            load_follower_config(config, **overrides),
+            env_cfg.robot.max_speed,
+            env_cfg.robot.max_yaw_rate,
+        )
+
+    def act(self, pose: np.ndarray) -> np.ndarray:
+        """Action [v, w] in [-1, 1] for the robot at ``pose`` = [x, y, yaw]."""
+        x, y, yaw = pose
+        target = self.path.point_at(self.path.project(pose) + self.cfg.lookahead)
+        dx, dy = target - (x, y)
+        c, s = math.cos(yaw), math.sin(yaw)
+        x_r, y_r = c * dx + s * dy, -s * dx + c * dy
+        bearing = math.atan2(y_r, x_r)
+        if abs(bearing) > self.cfg.turn_in_place:
+            v, w = 0.0, math.copysign(self.cfg.max_yaw_rate, bearing)
+        else:
+            curvature = 2 * y_r / max(x_r * x_r + y_r * y_r, 1e-9)
+            v = self.cfg.speed
+            w = float(np.clip(v * curvature, -self.cfg.max_yaw_rate, self.cfg.max_yaw_rate))
+        return np.clip(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)

@@ -1,0 +1,303 @@
+"""The Gymnasium environment: a differential-drive robot in a PyBullet corridor."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from envs.config import ConfigError, EnvConfig, load_config
+from envs.robot import DiffDriveRobot
+from envs.sensors.camera import PinholeCamera, look_at, view_matrix
+from envs.sensors.encoders import OdometryCalibration, WheelEncoders
+from envs.sensors.sonar import SonarRing
+from envs.simulator import Simulator
+from envs.task import PathTask
+from envs.world import CorridorWorld, Landmark
+
+MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
+RENDER_VFOV_DEG = 60.0
+EGL_WARMUP_FRAMES = 2
+SETTLE_STEPS = 30
+
+
+class CorridorEnv(gym.Env):
+    """Drive a differential-drive robot along a corridor path using camera, sonar and encoders.
+
+    ## Action space
+    ``Box(-1, 1, (2,), float32)``: ``[v, w]`` scaled to forward speed ``robot.max_speed`` (m/s)
+    and yaw rate ``robot.max_yaw_rate`` (rad/s). With ``camera.control`` set to ``pan`` or
+    ``pan_tilt`` one or two more entries set the mount's target angles, scaled to its limits.
+    Out-of-range actions are clipped; NaN or infinite actions raise ``ValueError``.
+
+    ## Observation space
+    ``Dict``:
+
+    - ``image``: ``Box(0, 255, (H, W, 3), uint8)``, the latest camera frame (default 320x240);
+      frames are taken at ``camera.rate_hz`` of simulated time, independent of the control
+      period, so between frames the previous one is repeated.
+    - ``image_new``: ``Discrete(2)``, 1 when ``image`` was captured during this step (or reset).
+    - ``camera_pan_tilt``: ``Box((2,), float32)``, measured mount angles (rad) of that frame.
+    - ``sonar``: ``Box(min_range, max_range, (16,), float32)``, ranges (m), transducer 0
+      forward, counter-clockwise.
+    - ``encoders``: ``Box((2,), int64)``, wheel tick **deltas** [left, right] since the previous
+      step (not cumulative counts); convert with ``env.unwrapped.odometry_calibration``.
+
+    ## Reward
+    ``reward.progress`` per metre gained along the path, ``reward.time`` per second,
+    ``reward.goal`` on reaching the goal, ``reward.collision`` on a collision.
+
+    ## Episode end
+    Terminated on reaching the goal (within ``goal_radius``) or on touching a wall or obstacle;
+    truncated after ``sim.max_episode_seconds`` of simulated time.
+
+    ## Info
+    ``true_pose`` ([x, y, yaw], privileged: for evaluation only), ``camera_pose`` (4x4
+    world-from-camera, OpenCV axes, of the frame in ``image``), ``collision``,
+    ``distance_travelled`` (m, true), ``progress`` (m along the path), ``sim_time`` (s).
+
+    ## Arguments
+    - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
+    - ``config``: YAML path or mapping merged over ``configs/default.yaml``.
+    - ``render_mode``: ``None`` or ``"rgb_array"`` (chase or top view, ``render.view``).
+    - ``**overrides``: single values, e.g. ``camera__width=640`` or ``camera={"rate_hz": 10}``.
+
+    ``reset(seed=..., options={"start_pose": [x, y, yaw]})`` places the robot elsewhere.
+    """
+
+    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(
+        self,
+        world: str | dict | None = None,
+        config: str | dict | None = None,
+        render_mode: str | None = None,
+        **overrides: Any,
+    ) -> None:
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.config: EnvConfig = load_config(config, world=world, **overrides)
+        cfg = self.config
+        substeps = cfg.sim.control_dt * cfg.sim.physics_hz
+        if cfg.sim.control_dt <= 0 or abs(substeps - round(substeps)) > 1e-6 or substeps < 1:
+            raise ConfigError(
+                f"sim.control_dt ({cfg.sim.control_dt}) must be a positive whole number of "
+                f"physics steps (sim.physics_hz = {cfg.sim.physics_hz})"
+            )
+        if cfg.camera.rate_hz <= 0:
+            raise ConfigError(f"camera.rate_hz must be positive, got {cfg.camera.rate_hz}")
+        self.render_mode = render_mode
+        self.dt = cfg.sim.control_dt
+        self.metadata = {**self.metadata, "render_fps": 1.0 / self.dt}
+        self._substeps = round(substeps)
+        renders = cfg.camera.enabled or render_mode is not None
+        self.sim = Simulator(cfg.sim.physics_hz, cfg.camera.renderer if renders else "none")
+        try:
+            self.world = CorridorWorld(self.sim, cfg.world)
+            self.robot = DiffDriveRobot(self.sim, cfg.robot)
+        except Exception:
+            self.sim.close()
+            raise
+        self.camera = PinholeCamera(
+            cfg.camera.width,
+            cfg.camera.height,
+            cfg.camera.vfov_deg,
+            cfg.camera.near,
+            cfg.camera.far,
+        )
+        self.sonar = SonarRing(cfg.sonar, cfg.robot.body_radius)
+        self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
+        self.task = PathTask(cfg.world, cfg.reward)
+        self._projection = self.camera.projection_matrix()
+        self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
+        self.observation_space = self._observation_space()
+        self._mount_target = np.radians([cfg.camera.pan_deg, cfg.camera.tilt_deg])
+        self.robot.reset(cfg.world.start, *self._mount_target)
+        # Saved after the wheels settled on the floor: the state then holds the contacts too,
+        # so each reset starts the solver alike whatever the previous episode did.
+        self.sim.step(SETTLE_STEPS)
+        self._initial_state = self.sim.client.saveState()
+        if self.sim.renderer == "egl" and cfg.camera.enabled:
+            # The first two EGL frames of a client are shaded differently from all later ones
+            # (its shadow state settles); discard them so every episode renders alike.
+            for _ in range(EGL_WARMUP_FRAMES):
+                self._render_camera()
+        self._image = np.zeros(self.observation_space["image"].shape, np.uint8)
+        self._frame_pan_tilt = np.zeros(2, np.float32)
+        self._frame_pose = np.eye(4)
+
+    # --- public geometry -------------------------------------------------------------------
+    @property
+    def camera_matrix(self) -> np.ndarray:
+        """3x3 intrinsic matrix K of ``obs["image"]`` (pixel centres at integer coordinates)."""
+        return self.camera.K
+
+    @property
+    def landmarks(self) -> list[Landmark]:
+        """Landmark ids and world coordinates of their squares' centres and corners."""
+        return self.world.landmarks
+
+    @property
+    def renderer(self) -> str:
+        """``"egl"``, ``"tiny"``, or ``"none"`` (camera off, no render mode): the renderer."""
+        return self.sim.renderer
+
+    @property
+    def odometry_calibration(self) -> OdometryCalibration:
+        """The robot's believed odometry parameters for this episode (not the truth)."""
+        return self.encoders.calibration
+
+    def robot_from_camera(self, pan: float, tilt: float) -> np.ndarray:
+        """Nominal robot-from-camera 4x4 (OpenCV axes) for mount angles (rad)."""
+        return self.robot.robot_from_camera(pan, tilt)
+
+    def landmarks_in_view(self, camera_pose: np.ndarray | None = None) -> list[int]:
+        """Ids of landmarks wholly inside the frame, facing the camera and not occluded.
+
+        Uses the true camera pose (``info["camera_pose"]`` by default): for evaluation only.
+        """
+        pose = self._frame_pose if camera_pose is None else camera_pose
+        eye = pose[:3, 3]
+        candidates = []
+        for landmark in self.world.landmarks:
+            if np.dot(landmark.normal, eye - landmark.centre) <= 0:
+                continue
+            uv = self.camera.project(pose, landmark.board_corners)
+            inside = np.all(
+                (uv >= -0.5) & (uv <= (self.camera.width - 0.5, self.camera.height - 0.5))
+            )
+            if inside and np.linalg.norm(landmark.centre - eye) < self.camera.far:
+                candidates.append(landmark)
+        if not candidates:
+            return []
+        hits = self.sim.client.rayTestBatch(
+            [eye.tolist()] * len(candidates), [lm.centre.tolist() for lm in candidates]
+        )
+        return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
+
+    # --- gymnasium API ----------------------------------------------------------------------
+    def _observation_space(self) -> spaces.Dict:
+        cfg = self.config
+        wheel_rate = (cfg.robot.max_speed + cfg.robot.max_yaw_rate * cfg.robot.wheelbase / 2) / (
+            cfg.robot.wheel_radius
+        )
+        self._max_ticks = math.ceil(
+            4 * wheel_rate * self.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
+        )
+        limits = np.radians([cfg.robot.pan_limit_deg, cfg.robot.tilt_limit_deg]).astype(np.float32)
+        return spaces.Dict(
+            {
+                "image": spaces.Box(0, 255, (cfg.camera.height, cfg.camera.width, 3), np.uint8),
+                "image_new": spaces.Discrete(2),
+                "camera_pan_tilt": spaces.Box(-limits - 0.05, limits + 0.05, (2,), np.float32),
+                "sonar": spaces.Box(
+                    cfg.sonar.min_range, cfg.sonar.max_range, (cfg.sonar.count,), np.float32
+                ),
+                "encoders": spaces.Box(-self._max_ticks, self._max_ticks, (2,), np.int64),
+            }
+        )
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        options = dict(options or {})
+        start = options.pop("start_pose", self.config.world.start)
+        if options:
+            raise ValueError(f"unknown reset option(s) {sorted(options)}; known: ['start_pose']")
+        start = np.asarray(start, dtype=float)
+        if start.shape != (3,) or not np.all(np.isfinite(start)):
+            raise ValueError(f"start_pose must be three finite numbers [x, y, yaw], got {start}")
+        self.sim.client.restoreState(self._initial_state)
+        self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
+        self.robot.reset(tuple(start), *self._mount_target)
+        self.encoders.reset(self.robot.wheel_angles(), self.np_random)
+        self._time = 0.0
+        self._distance = 0.0
+        self._pose = self.robot.floor_pose()
+        self._progress = self.task.progress(self._pose)
+        self._next_frame = 0.0
+        return self._observe(np.zeros(2, np.int64)), self._info(collision=False)
+
+    def step(self, action):
+        a = np.asarray(action, dtype=np.float64).ravel()
+        if a.shape != self.action_space.shape:
+            raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action contains NaN or infinite values: {a.tolist()}")
+        a = np.clip(a, -1.0, 1.0)
+        robot = self.config.robot
+        self.robot.drive(a[0] * robot.max_speed, a[1] * robot.max_yaw_rate)
+        if len(a) > 2:
+            self._mount_target[: len(a) - 2] = a[2:] * self.robot.pan_tilt_limits[: len(a) - 2]
+            self.robot.point_camera(*self._mount_target)
+        self.sim.step(self._substeps)
+        self._time += self.dt
+        pose = self.robot.floor_pose()
+        self._distance += float(np.hypot(*(pose[:2] - self._pose[:2])))
+        self._pose = pose
+        ticks = self.encoders.read(self.robot.wheel_angles(), self.np_random)
+        collision = self.robot.in_collision(ignore={self.world.floor})
+        progress = self.task.progress(pose)
+        reached = self.task.reached_goal(pose)
+        reward = self.task.reward(progress - self._progress, self.dt, reached, collision)
+        self._progress = progress
+        terminated = reached or collision
+        truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9
+        return self._observe(ticks), float(reward), terminated, truncated, self._info(collision)
+
+    def _observe(self, ticks: np.ndarray) -> dict:
+        new_frame = self._time >= self._next_frame - 1e-9
+        if new_frame:
+            self._next_frame += 1.0 / self.config.camera.rate_hz
+            self._frame_pose = self.robot.camera_pose()
+            self._frame_pan_tilt = self.robot.mount_angles().astype(np.float32)
+            if self.config.camera.enabled:
+                self._image = self._render_camera()
+        return {
+            "image": self._image.copy(),
+            "image_new": int(new_frame and self.config.camera.enabled),
+            "camera_pan_tilt": self._frame_pan_tilt.copy(),
+            "sonar": self.sonar.read(self.sim, self._pose, self.np_random),
+            "encoders": np.clip(ticks, -self._max_ticks, self._max_ticks).astype(np.int64),
+        }
+
+    def _render_camera(self) -> np.ndarray:
+        pose = self.robot.camera_pose()
+        return self.sim.render(
+            self.camera.width, self.camera.height, view_matrix(pose), self._projection
+        )
+
+    def _info(self, collision: bool) -> dict:
+        return {
+            "true_pose": self._pose.copy(),
+            "camera_pose": self._frame_pose.copy(),
+            "collision": bool(collision),
+            "distance_travelled": self._distance,
+            "progress": self._progress,
+            "sim_time": self._time,
+        }
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        cfg = self.config.render
+        x, y, yaw = self._pose
+        if cfg.view == "top":
+            centre = self.world.bounds.mean(axis=0)
+            extent = np.ptp(self.world.bounds, axis=0) / 2
+            half_fov = math.radians(RENDER_VFOV_DEG) / 2
+            height = max(extent[1], extent[0] * cfg.height / cfg.width) / math.tan(half_fov)
+            pose = look_at([*centre, height], [*centre, 0.0], np.array([0.0, 1.0, 0.0]))
+        else:
+            heading = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+            eye = np.array([x, y, 1.6]) - 1.8 * heading
+            pose = look_at(eye, np.array([x, y, 0.5]) + 1.0 * heading, np.array([0.0, 0.0, 1.0]))
+        view_camera = PinholeCamera(cfg.width, cfg.height, RENDER_VFOV_DEG, 0.05, 100.0)
+        return self.sim.render(
+            cfg.width, cfg.height, view_matrix(pose), view_camera.projection_matrix()
+        )
+
+    def close(self) -> None:
+        self.sim.close()

@@ -1,0 +1,185 @@
+"""The corridor world built from a :class:`~envs.config.WorldConfig`: floor, walls, clutter and
+textured landmark boards (the paper's Fig. 3 pattern as UV-mapped quads, drawn by both
+TinyRenderer and the EGL renderer).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from envs.config import LandmarkSpec, WorldConfig
+from envs.simulator import Simulator, cache_file
+from stsf_gym.vision.landmarks import (
+    board_corners,
+    landmark_image,
+    square_centres,
+    square_corners,
+)
+
+# A unit square in the x-y plane facing +z, texture coordinates spanning the whole image.
+QUAD_OBJ = """v -0.5 -0.5 0
+v 0.5 -0.5 0
+v 0.5 0.5 0
+v -0.5 0.5 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vn 0 0 1
+f 1/1/1 2/2/1 3/3/1
+f 1/1/1 3/3/1 4/4/1
+"""
+WALL_RGBA = (0.78, 0.76, 0.72, 1.0)
+FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
+OBSTACLE_RGBA = (0.55, 0.35, 0.2, 1.0)
+BOARD_OFFSET = 0.01  # landmark board in front of the wall face (m), clear of depth fighting
+
+
+@dataclass(frozen=True)
+class Landmark:
+    """A landmark board in world coordinates (metres).
+
+    ``right`` and ``up`` span the board plane as a viewer facing it sees them; ``normal``
+    points out of the wall. Square centres and corners follow
+    :func:`stsf_gym.vision.landmarks.square_centres` order.
+    """
+
+    id: int
+    centre: np.ndarray
+    normal: np.ndarray
+    right: np.ndarray
+    up: np.ndarray
+    square_centres: np.ndarray  # (M, 3)
+    square_corners: np.ndarray  # (M, 4, 3)
+    board_corners: np.ndarray  # (4, 3)
+
+    def to_world(self, plane_xy: np.ndarray) -> np.ndarray:
+        """World points of landmark-plane coordinates (..., 2)."""
+        return plane_to_world(self.centre, self.right, self.up, plane_xy)
+
+
+def plane_to_world(centre, right, up, plane_xy: np.ndarray) -> np.ndarray:
+    return centre + plane_xy[..., :1] * right + plane_xy[..., 1:2] * up
+
+
+def _landmark_frame(world: WorldConfig, spec: LandmarkSpec) -> tuple[np.ndarray, ...]:
+    yaw = math.radians(spec.facing_deg)
+    normal = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    up = np.array([0.0, 0.0, 1.0])
+    right = np.cross(up, normal)
+    offset = world.wall_thickness / 2 + BOARD_OFFSET
+    centre = np.array([*spec.at, world.landmark_height]) + offset * normal
+    return centre, normal, right, up
+
+
+class CorridorWorld:
+    """Static bodies of one world in one simulator, and the landmark geometry."""
+
+    def __init__(self, sim: Simulator, cfg: WorldConfig) -> None:
+        self.sim, self.cfg = sim, cfg
+        ids = [spec.id for spec in cfg.landmarks]
+        if len(set(ids)) != len(ids):
+            raise ValueError(f"world {cfg.name!r}: landmark ids must be unique, got {ids}")
+        xy = np.array([p for w in cfg.walls for p in (w[:2], w[2:])] + list(cfg.path))
+        self.bounds = np.array(
+            [xy.min(axis=0) - 1.0, xy.max(axis=0) + 1.0]
+        )  # [[xmin, ymin], [xmax, ymax]]
+        self.floor = self._box(
+            self.bounds.mean(axis=0), np.ptp(self.bounds, axis=0) / 2, 0.05, -0.05, 0.0, FLOOR_RGBA
+        )
+        self.walls = [self._wall(seg) for seg in cfg.walls]
+        self.obstacles = [self._obstacle(o) for o in cfg.obstacles]
+        self.landmarks = [self._landmark(spec) for spec in cfg.landmarks]
+
+    def _box(self, xy, half_xy, half_z: float, z: float, yaw: float, rgba) -> int:
+        c = self.sim.client
+        half = [half_xy[0], half_xy[1], half_z]
+        return c.createMultiBody(
+            baseMass=0,
+            baseCollisionShapeIndex=c.createCollisionShape(c.GEOM_BOX, halfExtents=half),
+            baseVisualShapeIndex=c.createVisualShape(c.GEOM_BOX, halfExtents=half, rgbaColor=rgba),
+            basePosition=[xy[0], xy[1], z],
+            baseOrientation=c.getQuaternionFromEuler([0, 0, yaw]),
+        )
+
+    def _wall(self, segment) -> int:
+        start, end = np.array(segment[:2]), np.array(segment[2:])
+        delta = end - start
+        length = float(np.hypot(*delta))
+        if length <= 0:
+            raise ValueError(f"world {self.cfg.name!r}: wall segment {list(segment)} has no length")
+        t, h = self.cfg.wall_thickness, self.cfg.wall_height
+        half = (length / 2 + t / 2, t / 2)
+        return self._box(
+            (start + end) / 2, half, h / 2, h / 2, math.atan2(delta[1], delta[0]), WALL_RGBA
+        )
+
+    def _obstacle(self, spec) -> int:
+        c = self.sim.client
+        if spec.shape == "box":
+            length, width, height = spec.size
+            return self._box(
+                spec.position,
+                (length / 2, width / 2),
+                height / 2,
+                height / 2,
+                math.radians(spec.yaw_deg),
+                OBSTACLE_RGBA,
+            )
+        radius, height = spec.size
+        return c.createMultiBody(
+            baseMass=0,
+            baseCollisionShapeIndex=c.createCollisionShape(
+                c.GEOM_CYLINDER, radius=radius, height=height
+            ),
+            baseVisualShapeIndex=c.createVisualShape(
+                c.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=OBSTACLE_RGBA
+            ),
+            basePosition=[*spec.position, height / 2],
+        )
+
+    def _landmark(self, spec: LandmarkSpec) -> Landmark:
+        pattern = self.cfg.landmark_pattern
+        centre, normal, right, up = _landmark_frame(self.cfg, spec)
+        c = self.sim.client
+        size = pattern.size
+        # One OBJ file per landmark: the EGL renderer shares a texture between all instances
+        # of a mesh file, so boards built from one file would all show the same id.
+        quad = cache_file(f"landmark{spec.id}.obj", f"# landmark {spec.id}\n{QUAD_OBJ}".encode())
+        visual = c.createVisualShape(c.GEOM_MESH, fileName=str(quad), meshScale=[size, size, 1.0])
+        rotation = np.column_stack([right, up, normal])
+        body = c.createMultiBody(
+            baseMass=0,
+            baseVisualShapeIndex=visual,
+            basePosition=centre.tolist(),
+            baseOrientation=_quaternion(rotation),
+        )
+        grey = landmark_image(spec.id, pattern)
+        _, png = cv2.imencode(".png", cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
+        texture = c.loadTexture(str(cache_file(f"landmark{spec.id}.png", png.tobytes())))
+        c.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
+        frame = (centre, right, up)
+        return Landmark(
+            spec.id,
+            centre,
+            normal,
+            right,
+            up,
+            plane_to_world(*frame, square_centres(spec.id, pattern)),
+            plane_to_world(*frame, square_corners(spec.id, pattern)),
+            plane_to_world(*frame, board_corners(pattern)),
+        )
+
+
+def _quaternion(rotation: np.ndarray) -> list[float]:
+    """Quaternion [x, y, z, w] of a proper rotation matrix."""
+    m = rotation
+    w = math.sqrt(max(0.0, 1 + m[0, 0] + m[1, 1] + m[2, 2])) / 2
+    x = math.copysign(math.sqrt(max(0.0, 1 + m[0, 0] - m[1, 1] - m[2, 2])) / 2, m[2, 1] - m[1, 2])
+    y = math.copysign(math.sqrt(max(0.0, 1 - m[0, 0] + m[1, 1] - m[2, 2])) / 2, m[0, 2] - m[2, 0])
+    z = math.copysign(math.sqrt(max(0.0, 1 - m[0, 0] - m[1, 1] + m[2, 2])) / 2, m[1, 0] - m[0, 1])
+    return [x, y, z, w]

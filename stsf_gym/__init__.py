@@ -1,0 +1,29 @@
+"""stsf-gym: a PyBullet corridor world and baselines for STSF sensor fusion.
+
+Importing the package registers the environments with Gymnasium (idempotently):
+
+- ``stsf_gym/Corridor-v0``: the IRL corridor (about 24 m with a turn, 8 landmarks).
+- ``stsf_gym/Straight10m-v0``: a straight 10 m corridor (the paper's Fig. 10).
+"""
+
+from gymnasium.envs.registration import register, registry
+
+__version__ = "0.1.0"
+
+#: Registered environment ids and the world each one loads from ``configs/worlds``.
+ENV_WORLDS: dict[str, str] = {
+    "stsf_gym/Corridor-v0": "irl_corridor",
+    "stsf_gym/Straight10m-v0": "straight_10m",
+}
+
+
+def register_envs() -> None:
+    """Register every stsf-gym id that is not registered yet."""
+    for env_id, world in ENV_WORLDS.items():
+        if env_id not in registry:
+            register(
+                id=env_id, entry_point="envs.corridor_env:CorridorEnv", kwargs={"world": world}
+            )
+
+
+register_envs()

@@ -1,0 +1,106 @@
+"""The ``stsf-gym`` command line. Every command takes ``--seed``, ``--out``, ``--config``,
+``--set key=value`` and ``--json`` (a machine-readable result on stdout)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from stsf_gym.config import ConfigError, parse_overrides
+
+
+def _common(parser: argparse.ArgumentParser, out: str) -> None:
+    parser.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
+    parser.add_argument("--out", type=Path, default=Path(out), help=f"output folder ({out})")
+    parser.add_argument("--config", help="world/sensor YAML merged over configs/default.yaml")
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override one config value, e.g. camera.width=640",
+    )
+    parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+
+
+def _demo(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.demo import run_demo
+
+    if args.seconds <= 0:
+        raise ConfigError(f"--seconds must be positive, got {args.seconds}")
+    summary = run_demo(
+        args.out,
+        seed=args.seed,
+        seconds=args.seconds,
+        env_id=args.env,
+        config=args.config,
+        **parse_overrides(args.overrides),
+    )
+    for key in ("trace", "last_image"):
+        summary.pop(key)
+    if not args.json:
+        from rich.console import Console
+        from rich.table import Table
+
+        table = Table(
+            title=f"stsf-gym demo: {summary['env_id']} (seed {summary['seed']}, "
+            f"renderer {summary['renderer']})"
+        )
+        for column in summary["rows"][0]:
+            table.add_column(column)
+        for row in summary["rows"]:
+            table.add_row(*(str(v) for v in row.values()))
+        console = Console()
+        console.print(table)
+        console.print(
+            f"{summary['sim_time_s']:.0f} s simulated in {summary['wall_time_s']:.1f} s "
+            f"({summary['real_time_factor']:.1f}x real time), outcome: {summary['outcome']}, "
+            f"dead-reckoning error {summary['odometry_error_m']:.3f} m. "
+            f"Wrote {args.out}/summary.md and {summary['figure']}"
+        )
+    return summary
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    demo = commands.add_parser("demo", help="a short drive down the IRL corridor, with a report")
+    _common(demo, "out/demo")
+    demo.add_argument("--seconds", type=float, default=90.0, help="simulated seconds (90)")
+    demo.add_argument("--env", default="stsf_gym/Corridor-v0", help="environment id")
+    demo.set_defaults(run=_demo)
+    return parser
+
+
+def _json_writer() -> Callable[[str], None]:
+    """Move fd 1 to stderr for the rest of the process and return a writer to the real stdout.
+
+    PyBullet's C code prints banners on stdout, some only at exit, so stdout stays moved:
+    the JSON result is then the only thing on it.
+    """
+    sys.stdout.flush()
+    out = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
+    return lambda text: (out.write(text + "\n"), out.flush())
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    emit = _json_writer() if args.json else print
+    try:
+        result = args.run(args)
+    except (ConfigError, ValueError) as err:
+        print(f"stsf-gym {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    if args.json:
+        emit(json.dumps(result, default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,18 @@
+"""Configuration entry points for users of the library (the schema lives in ``envs.config``)."""
+
+from envs.config import CONFIG_DIR, ConfigError, EnvConfig, load_config
+
+__all__ = ["CONFIG_DIR", "ConfigError", "EnvConfig", "load_config", "parse_overrides"]
+
+
+def parse_overrides(items: list[str]) -> dict:
+    """``["camera.width=640", "world=straight_10m"]`` to overrides; values parsed as YAML."""
+    import yaml
+
+    overrides = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(f"override {item!r} must look like section.key=value")
+        overrides[key.strip()] = yaml.safe_load(value)
+    return overrides

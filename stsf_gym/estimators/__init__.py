@@ -1,0 +1,1 @@
+"""Pose estimators: odometry, conventional fusion, STSF and EKF (one interface)."""

@@ -1,0 +1,91 @@
+"""SE(2) helpers for planar poses ``[x, y, theta]``.
+
+A pose ``a`` is the frame whose origin is ``(x, y)`` and whose x axis points at
+``theta``, expressed in some parent frame. Composition ``a (+) b`` places ``b``
+(given in frame ``a``) into the parent frame; ``(-) a`` is the parent frame seen
+from ``a``. These are the homogeneous transforms ``T`` of the paper's eq. 3.
+
+Every function accepts a single pose of shape ``(3,)`` or a stack ``(..., 3)``
+and broadcasts like numpy; Jacobians then have shape ``(..., 3, 3)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Array = NDArray[np.float64]
+
+
+def wrap_angle(angle: ArrayLike) -> Array:
+    """Wrap angles (radians) to the half-open interval ``(-pi, pi]``."""
+    angle = np.asarray(angle, dtype=float)
+    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+
+
+def rot2(theta: ArrayLike) -> Array:
+    """Rotation matrix ``R(theta) = [[c, -s], [s, c]]``, shape ``(..., 2, 2)``."""
+    theta = np.asarray(theta, dtype=float)
+    c, s = np.cos(theta), np.sin(theta)
+    rot = np.empty((*theta.shape, 2, 2))
+    rot[..., 0, 0], rot[..., 0, 1], rot[..., 1, 0], rot[..., 1, 1] = c, -s, s, c
+    return rot
+
+
+def compose(a: ArrayLike, b: ArrayLike) -> Array:
+    """``a (+) b``: pose ``b`` (given in frame ``a``) expressed in ``a``'s parent frame."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    xy = a[..., :2] + (rot2(a[..., 2]) @ b[..., :2, None])[..., 0]
+    return np.concatenate([xy, wrap_angle(a[..., 2] + b[..., 2])[..., None]], -1)
+
+
+def inverse(a: ArrayLike) -> Array:
+    """``(-) a``: the parent frame expressed in frame ``a``."""
+    a = np.asarray(a, dtype=float)
+    xy = -(np.swapaxes(rot2(a[..., 2]), -1, -2) @ a[..., :2, None])[..., 0]
+    return np.concatenate([xy, wrap_angle(-a[..., 2])[..., None]], -1)
+
+
+def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[Array, Array]:
+    """Jacobians ``(d(a (+) b)/da, d(a (+) b)/db)`` of :func:`compose`."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    shape = np.broadcast_shapes(a.shape, b.shape)[:-1]
+    rot = rot2(a[..., 2])
+    rb = (rot @ b[..., :2, None])[..., 0]  # b's offset, rotated into the parent
+    ja = np.broadcast_to(np.eye(3), (*shape, 3, 3)).copy()
+    ja[..., 0, 2] = -rb[..., 1]
+    ja[..., 1, 2] = rb[..., 0]
+    jb = np.zeros((*shape, 3, 3))
+    jb[..., :2, :2] = rot
+    jb[..., 2, 2] = 1.0
+    return ja, jb
+
+
+def inverse_jacobian(a: ArrayLike) -> Array:
+    """Jacobian ``d((-) a)/da`` of :func:`inverse`."""
+    a = np.asarray(a, dtype=float)
+    rot_t = np.swapaxes(rot2(a[..., 2]), -1, -2)
+    inv_xy = -(rot_t @ a[..., :2, None])[..., 0]  # as in inverse()
+    jac = np.zeros((*a.shape[:-1], 3, 3))
+    jac[..., :2, :2] = -rot_t
+    jac[..., 0, 2] = inv_xy[..., 1]
+    jac[..., 1, 2] = -inv_xy[..., 0]
+    jac[..., 2, 2] = -1.0
+    return jac
+
+
+def to_homogeneous(a: ArrayLike) -> Array:
+    """The 3x3 homogeneous matrix ``[[R(theta), (x, y)], [0, 0, 1]]`` of a pose."""
+    a = np.asarray(a, dtype=float)
+    mat = np.zeros((*a.shape[:-1], 3, 3))
+    mat[..., :2, :2] = rot2(a[..., 2])
+    mat[..., :2, 2] = a[..., :2]
+    mat[..., 2, 2] = 1.0
+    return mat
+
+
+def from_homogeneous(mat: ArrayLike) -> Array:
+    """The pose ``[x, y, theta]`` of a 3x3 homogeneous matrix."""
+    mat = np.asarray(mat, dtype=float)
+    theta = np.arctan2(mat[..., 1, 0], mat[..., 0, 0])
+    return np.concatenate([mat[..., :2, 2], wrap_angle(theta)[..., None]], -1)

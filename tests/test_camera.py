@@ -1,0 +1,97 @@
+import math
+import os
+
+import cv2
+import numpy as np
+import pytest
+
+VIEWS = [  # (world, start pose, pan in degrees): frontal, oblique, and with the mount panned
+    ("stsf_gym/Straight10m-v0", [8.5, 0.2, 0.05], 0.0),
+    ("stsf_gym/Straight10m-v0", [6.0, -0.6, 0.6], 0.0),
+    ("stsf_gym/Corridor-v0", [2.0, -0.3, 0.0], 45.0),
+]
+
+
+def square_blobs(image: np.ndarray, board: np.ndarray) -> np.ndarray:
+    """Intensity-weighted centroids of the bright squares inside a board's image polygon."""
+    grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(float)
+    mask = np.zeros(grey.shape, np.uint8)
+    cv2.fillConvexPoly(mask, np.round(board).astype(np.int32), 1)
+    mask = cv2.erode(mask, np.ones((5, 5), np.uint8))  # keep off the board's blurred edge
+    inside = grey[mask > 0]
+    threshold = (inside.min() + inside.max()) / 2
+    count, labels = cv2.connectedComponents(((grey > threshold) & (mask > 0)).astype(np.uint8))
+    centres = []
+    for label in range(1, count):
+        rows, cols = np.nonzero(labels == label)
+        weights = grey[rows, cols] - threshold
+        centres.append([cols @ weights / weights.sum(), rows @ weights / weights.sum()])
+    return np.array(centres).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("renderer", ["auto", "tiny"])
+@pytest.mark.parametrize(("env_id", "start", "pan_deg"), VIEWS)
+def test_squares_within_a_pixel_of_K_projection(make_env, renderer, env_id, start, pan_deg):
+    env = make_env(
+        env_id,
+        camera__renderer=renderer,
+        camera__width=640,
+        camera__height=480,
+        camera__pan_deg=pan_deg,
+    )
+    obs, info = env.reset(seed=0, options={"start_pose": start})
+    unwrapped = env.unwrapped
+    if renderer == "tiny":
+        assert unwrapped.renderer == "tiny"
+    visible = unwrapped.landmarks_in_view(info["camera_pose"])
+    assert visible, "the view must contain a landmark"
+    errors = []
+    for landmark in (lm for lm in unwrapped.landmarks if lm.id in visible):
+        project = lambda points: unwrapped.camera.project(info["camera_pose"], points)  # noqa: E731
+        blobs = square_blobs(obs["image"], project(landmark.board_corners))
+        assert len(blobs) == len(landmark.square_centres)
+        for point in project(landmark.square_centres):
+            errors.append(np.min(np.linalg.norm(blobs - point, axis=1)))
+    errors = np.array(errors)
+    assert len(errors) >= 17
+    assert np.max(errors) < 1.0, f"{unwrapped.renderer}: errors {np.round(errors, 2)}"
+
+
+def test_camera_matrix_matches_projection_and_image(make_env):
+    env = make_env(camera__width=320, camera__height=240, camera__vfov_deg=45.0)
+    K = env.unwrapped.camera_matrix
+    obs, _ = env.reset(seed=0)
+    assert obs["image"].shape == (240, 320, 3) and obs["image"].dtype == np.uint8
+    f = 120 / math.tan(math.radians(22.5))
+    np.testing.assert_allclose(K, [[f, 0, 159.5], [0, f, 119.5], [0, 0, 1]])
+
+
+def test_camera_pose_is_opencv_axes(make_env):
+    env = make_env(camera__enabled=False)
+    _, info = env.reset(seed=0, options={"start_pose": [1.0, 0.0, math.pi / 2]})
+    pose = info["camera_pose"]
+    np.testing.assert_allclose(pose[:3, 2], [0, 1, 0], atol=1e-3)  # z forward: the robot's heading
+    np.testing.assert_allclose(pose[:3, 1], [0, 0, -1], atol=1e-3)  # y down
+    np.testing.assert_allclose(pose[:3, 0], [1, 0, 0], atol=1e-3)  # x right
+    cfg = env.unwrapped.config.robot
+    np.testing.assert_allclose(pose[:3, 3], [1.0, cfg.camera_forward, cfg.camera_height], atol=2e-3)
+    nominal = env.unwrapped.robot_from_camera(0.0, 0.0)
+    np.testing.assert_allclose(nominal[:3, 3], [cfg.camera_forward, 0.0, cfg.camera_height])
+
+
+def test_frames_at_camera_rate_not_control_rate(make_env):
+    env = make_env(camera__rate_hz=5.0)  # control at 10 Hz
+    obs, _ = env.reset(seed=0)
+    flags = [obs["image_new"]]
+    for _ in range(10):
+        obs, *_ = env.step(np.float32([0.5, 0.0]))
+        flags.append(obs["image_new"])
+    assert flags == [1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1]
+
+
+def test_egl_renderer_used_when_expected(make_env):
+    """CI installs Mesa's EGL and sets STSF_EXPECT_EGL=1, so the EGL path is tested there."""
+    env = make_env()
+    assert env.unwrapped.renderer in ("egl", "tiny")
+    if os.environ.get("STSF_EXPECT_EGL") == "1":
+        assert env.unwrapped.renderer == "egl"
