@@ -101,6 +101,7 @@ class CameraConfig:
     pan_deg: float
     tilt_deg: float
     control: Literal["none", "pan", "pan_tilt"]
+    noise_std: float
 
 
 @dataclass(frozen=True)

@@ -254,7 +254,7 @@ class CorridorEnv(gym.Env):
             self._frame_pose = self.robot.camera_pose()
             self._frame_pan_tilt = self.robot.mount_angles().astype(np.float32)
             if self.config.camera.enabled:
-                self._image = self._render_camera()
+                self._image = self._sensor_noise(self._render_camera())
         return {
             "image": self._image.copy(),
             "image_new": int(new_frame and self.config.camera.enabled),
@@ -268,6 +268,14 @@ class CorridorEnv(gym.Env):
         return self.sim.render(
             self.camera.width, self.camera.height, view_matrix(pose), self._projection
         )
+
+    def _sensor_noise(self, image: np.ndarray) -> np.ndarray:
+        """Add the camera's Gaussian intensity noise (``camera.noise_std`` grey levels)."""
+        sigma = self.config.camera.noise_std
+        if sigma <= 0:
+            return image
+        noise = self.np_random.standard_normal(image.shape, dtype=np.float32) * sigma
+        return np.clip(image + noise, 0, 255).round().astype(np.uint8)
 
     def _info(self, collision: bool) -> dict:
         return {
