@@ -89,3 +89,13 @@ def from_homogeneous(mat: ArrayLike) -> Array:
     mat = np.asarray(mat, dtype=float)
     theta = np.arctan2(mat[..., 1, 0], mat[..., 0, 0])
     return np.concatenate([mat[..., :2, 2], wrap_angle(theta)[..., None]], -1)
+
+
+def to_se3(a: ArrayLike) -> Array:
+    """The 4x4 world-from-robot transform of a planar pose (robot frame on the floor, z up)."""
+    a = np.asarray(a, dtype=float)
+    mat = np.zeros((*a.shape[:-1], 4, 4))
+    mat[..., :2, :2] = rot2(a[..., 2])
+    mat[..., :2, 3] = a[..., :2]
+    mat[..., 2, 2] = mat[..., 3, 3] = 1.0
+    return mat
