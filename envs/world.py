@@ -36,7 +36,7 @@ f 1/1/1 3/3/1 4/4/1
 WALL_RGBA = (0.78, 0.76, 0.72, 1.0)
 FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
 OBSTACLE_RGBA = (0.55, 0.35, 0.2, 1.0)
-BOARD_OFFSET = 0.01  # landmark board in front of the wall face (m), clear of depth fighting
+BOARD_OFFSET = 0.02  # landmark board in front of the wall face (m), clear of depth fighting
 
 
 @dataclass(frozen=True)

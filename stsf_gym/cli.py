@@ -16,7 +16,7 @@ from stsf_gym.config import ConfigError, parse_overrides
 def _common(parser: argparse.ArgumentParser, out: str) -> None:
     parser.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     parser.add_argument("--out", type=Path, default=Path(out), help=f"output folder ({out})")
-    parser.add_argument("--config", help="world/sensor YAML merged over configs/default.yaml")
+    parser.add_argument("--config", help="YAML config (env: merged over configs/default.yaml)")
     parser.add_argument(
         "--set",
         dest="overrides",
@@ -66,6 +66,26 @@ def _demo(args: argparse.Namespace) -> dict:
     return summary
 
 
+def _reproduce(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.table1 import run_table1
+
+    if args.workers < 1:
+        raise ConfigError(f"--workers must be at least 1, got {args.workers}")
+    overrides = parse_overrides(args.overrides)
+    if args.seeds is not None:
+        if args.seeds < 1:
+            raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+        overrides["seeds"] = args.seeds
+    out = args.out / args.experiment
+    summary = run_table1(out, seed=args.seed, config=args.config, workers=args.workers, **overrides)
+    if not args.json:
+        from rich.console import Console
+
+        Console().print((out / "table1.md").read_text())
+        Console().print(f"Wrote {out}/table1.md, results.json and {summary['figure']}")
+    return summary
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -74,6 +94,12 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--seconds", type=float, default=90.0, help="simulated seconds (90)")
     demo.add_argument("--env", default="stsf_gym/Corridor-v0", help="environment id")
     demo.set_defaults(run=_demo)
+    reproduce = commands.add_parser("reproduce", help="the paper's experiments")
+    reproduce.add_argument("experiment", choices=["table1"], help="which experiment")
+    _common(reproduce, "out")
+    reproduce.add_argument("--seeds", type=int, help="number of seeds (config: 20)")
+    reproduce.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
+    reproduce.set_defaults(run=_reproduce)
     return parser
 
 

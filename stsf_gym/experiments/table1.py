@@ -1,0 +1,393 @@
+"""``stsf-gym reproduce table1``: distance to a landmark by conventional fusion and by STSF.
+
+The paper's sect. 4.2: one landmark seen from six places at 7.81, 7.02, 6.28, 5.06, 5.52 and
+6.32 m, ten frames per place. Here the robot sweeps sideways past the landmark at each
+distance, one frame a second at 12.2 cm/s, the camera panned onto the landmark from the
+odometry heading. For each pair of consecutive frames the detector's square centres give the
+plane distance ``D`` by motion stereo (eq. 8-20), with the camera motion from odometry.
+
+- Conventional fusion: ``D`` from the current two frames only.
+- STSF: every pair measured so far, carried into the current frame by odometry (eq. 3,
+  propagating its uncertainty) and fused with the significance weights of eq. 4-5 (eq. 2).
+
+A row's conventional error is over all pairs of that place; its STSF error is that of the
+estimate at the place's last frame. Errors are RMS over seeds, with the spread (std) beside,
+next to the paper's numbers and the bound ``sqrt(2) Z^2 sigma_px / (f b)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import stsf_gym  # noqa: F401 - registers the env ids
+from envs.config import CONFIG_DIR, build, load_config, read_yaml
+from stsf_gym.estimators.odometry import OdometryNoise, propagate
+from stsf_gym.fusion import (
+    DegenerateGeometryError,
+    motion_stereo_range,
+    motion_stereo_variance,
+    stereo_range_bound,
+    stsf_fuse,
+    transform_range_track,
+)
+from stsf_gym.geometry import to_se3, wrap_angle
+from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.vision.detector import LandmarkDetector
+
+#: Table I of the paper: world distance, conventional estimate and error, STSF estimate and error.
+PAPER_TABLE1 = [
+    (7.81, 8.24, 0.43, 8.24, 0.43),
+    (7.02, 7.36, 0.34, 7.30, 0.28),
+    (6.28, 6.53, 0.25, 6.48, 0.20),
+    (5.06, 4.89, 0.17, 4.92, 0.14),
+    (5.52, 5.39, 0.13, 5.63, 0.11),
+    (6.32, 6.46, 0.14, 6.43, 0.11),
+]
+
+
+@dataclass(frozen=True)
+class Table1Config:
+    env: dict
+    distances: tuple[float, ...]
+    frames_per_location: int
+    sweep_speed: float
+    sweep_start: float
+    turn_rate: float
+    sigma_px: float
+    weights: str
+    seeds: int
+
+
+def load_table1_config(path: str | Path | None = None, **overrides) -> Table1Config:
+    data = read_yaml(path or CONFIG_DIR / "experiments" / "table1.yaml")
+    return build(Table1Config, {**data, **overrides}, "table1")
+
+
+class _Odometry:
+    """Dead reckoning with covariance, in the frame where it was last :meth:`restart`-ed."""
+
+    def __init__(self, noise: OdometryNoise, wheelbase: float) -> None:
+        self.noise, self.wheelbase = noise, wheelbase
+        self.restart()
+
+    def restart(self) -> None:
+        self.pose, self.cov = np.zeros(3), np.zeros((3, 3))
+
+    def add(self, d_left: float, d_right: float) -> None:
+        self.pose, self.cov = propagate(
+            self.pose, self.cov, d_left, d_right, self.wheelbase, self.noise
+        )
+
+
+@dataclass
+class _Frame:
+    location: int
+    points: dict[int, np.ndarray]  # square index -> pixel
+    world_from_camera: np.ndarray  # believed: odometry pose and mount kinematics
+    heading: float  # odometry heading
+    motion_cov: np.ndarray  # odometry covariance of the motion since the previous frame
+
+
+@dataclass
+class SeedResult:
+    """Per frame: place index, true distance, conventional and STSF estimates (NaN: none)."""
+
+    location: list[int] = field(default_factory=list)
+    truth: list[float] = field(default_factory=list)
+    conventional: list[float] = field(default_factory=list)
+    stsf: list[float] = field(default_factory=list)
+
+
+class Table1Run:
+    """One seeded run of the experiment in its own env."""
+
+    def __init__(self, cfg: Table1Config, seed: int) -> None:
+        self.cfg, self.seed = cfg, seed
+        self.env = gym.make("stsf_gym/Corridor-v0", config=cfg.env)
+        u = self.env.unwrapped
+        self.robot_cfg = u.config.robot
+        self.landmark = u.landmarks[0]
+        self.K = u.camera_matrix
+        self.detector = LandmarkDetector(u.config.world.landmark_pattern)
+        enc = u.config.encoders
+        self.noise = OdometryNoise.from_encoders(
+            enc.slip_std, enc.radius_error_std, self.robot_cfg.wheel_radius
+        )
+        self.result = SeedResult()
+        self.frames: list[_Frame] = []
+        self.track: list[tuple[float, float]] = []  # (D, var) per measurement
+        self.steps: list[tuple[float, float]] = []  # (change of D, var) between measurements
+
+    # --- driving the rig (on the true pose: the experimenter places the robot) ---------------
+    def run(self) -> SeedResult:
+        cfg = self.cfg
+        start = [cfg.distances[0], -cfg.sweep_start, math.pi / 2]
+        _, self.info = self.env.reset(seed=self.seed, options={"start_pose": start})
+        self.calibration = self.env.unwrapped.odometry_calibration
+        self.pose = self.info["true_pose"].copy()  # odometry, started at the true start
+        self.since_frame = _Odometry(self.noise, self.calibration.wheelbase)
+        self.since_measurement = _Odometry(self.noise, self.calibration.wheelbase)
+        try:
+            for i, distance in enumerate(cfg.distances):
+                direction = 1.0 if i % 2 == 0 else -1.0
+                if i:
+                    self._turn(0.0 if distance > self.info["true_pose"][0] else math.pi)
+                    self._drive_to_x(distance)
+                self._turn(direction * math.pi / 2)
+                self._sweep(i, direction)
+        finally:
+            self.env.close()
+        return self.result
+
+    def _act(self, v: float, w: float, location: int | None = None) -> None:
+        """One env step; the camera pans onto the landmark from the odometry pose."""
+        x, y, yaw = self.pose
+        camera_xy = np.array([x, y]) + self.robot_cfg.camera_forward * np.array(
+            [math.cos(yaw), math.sin(yaw)]
+        )
+        to_landmark = self.landmark.centre[:2] - camera_xy
+        pan = wrap_angle(math.atan2(to_landmark[1], to_landmark[0]) - yaw)
+        scale = (
+            self.robot_cfg.max_speed,
+            self.robot_cfg.max_yaw_rate,
+            math.radians(self.robot_cfg.pan_limit_deg),
+        )
+        action = np.clip(np.array([v, w, pan]) / scale, -1, 1).astype(np.float32)
+        obs, _, terminated, truncated, self.info = self.env.step(action)
+        if terminated or truncated:
+            raise RuntimeError(f"table1 rig stopped early (collision: {self.info['collision']})")
+        d_left, d_right = self.calibration.wheel_travel(obs["encoders"])
+        self.pose = propagate(
+            self.pose, np.zeros((3, 3)), d_left, d_right, self.calibration.wheelbase, self.noise
+        )[0]
+        self.since_frame.add(d_left, d_right)
+        self.since_measurement.add(d_left, d_right)
+        if location is not None and obs["image_new"]:
+            self._frame(obs, location)
+
+    def _turn(self, heading: float) -> None:
+        while abs(err := wrap_angle(heading - self.info["true_pose"][2])) > 0.01:
+            self._act(0.0, float(np.clip(2.0 * err, -self.cfg.turn_rate, self.cfg.turn_rate)))
+
+    def _drive_to_x(self, x: float) -> None:
+        heading = self.info["true_pose"][2]
+        sign = math.cos(heading)
+        while (x - self.info["true_pose"][0]) * sign > 0.005:
+            v = min(self.cfg.sweep_speed, 0.5 * abs(x - self.info["true_pose"][0]) + 0.02)
+            self._act(v, -2.0 * wrap_angle(self.info["true_pose"][2] - heading))
+
+    def _sweep(self, location: int, direction: float) -> None:
+        heading = direction * math.pi / 2
+        self.since_frame.restart()
+        count = len(self.frames)
+        while len(self.frames) - count < self.cfg.frames_per_location:
+            steer = -2.0 * wrap_angle(self.info["true_pose"][2] - heading)
+            self._act(self.cfg.sweep_speed, steer, location)
+
+    # --- measuring ----------------------------------------------------------------------------
+    def _frame(self, obs: dict, location: int) -> None:
+        pan, tilt = obs["camera_pan_tilt"]
+        robot_from_camera = self.env.unwrapped.robot_from_camera(pan, tilt)
+        frame = _Frame(
+            location,
+            self._detect(obs["image"]),
+            to_se3(self.pose) @ robot_from_camera,
+            float(self.pose[2]),
+            self.since_frame.cov.copy(),
+        )
+        self.since_frame.restart()
+        previous = self.frames[-1] if self.frames else None
+        self.frames.append(frame)
+        camera = self.info["camera_pose"][:3, 3]
+        truth = float(np.dot(self.landmark.normal, camera - self.landmark.centre))
+        conventional = stsf = math.nan
+        if previous is not None and previous.location == location:
+            measured = self._motion_stereo(previous, frame)
+            if measured is not None:
+                conventional = measured[0]
+                stsf = self._stsf(frame, *measured)
+        for column, value in (
+            ("location", location),
+            ("truth", truth),
+            ("conventional", conventional),
+            ("stsf", stsf),
+        ):
+            getattr(self.result, column).append(value)
+
+    def _detect(self, image: np.ndarray) -> dict[int, np.ndarray]:
+        for detection in self.detector.detect(image):
+            if detection.landmark_id == self.landmark.id:
+                return dict(zip(detection.indices.tolist(), detection.image_points, strict=True))
+        return {}
+
+    def _motion_stereo(self, a: _Frame, b: _Frame) -> tuple[float, float] | None:
+        """``D`` and its variance from frames ``a`` (k-1) and ``b`` (k), eq. 8-20."""
+        common = sorted(a.points.keys() & b.points.keys())
+        if len(common) < 4:
+            return None
+        f, centre = self.K[0, 0], self.K[:2, 2]
+
+        def rays(frame: _Frame) -> np.ndarray:
+            uv = np.array([frame.points[i] for i in common]) - centre
+            return np.column_stack([uv, np.full(len(common), f)])
+
+        prev_from_curr = np.linalg.inv(a.world_from_camera) @ b.world_from_camera
+        R, t = prev_from_curr[:3, :3], prev_from_curr[:3, 3]
+        world_from_camera = b.world_from_camera[:3, :3]
+        n = world_from_camera.T @ -self.landmark.normal  # unit normal towards the plane, camera k
+        # odometry error of the baseline, expressed in camera axes (robot z is the turn axis)
+        camera_from_robot = world_from_camera.T @ to_se3(np.array([0, 0, b.heading]))[:3, :3]
+        cov_xy = np.zeros((3, 3))
+        cov_xy[:2, :2] = b.motion_cov[:2, :2]
+        cov_t = camera_from_robot @ cov_xy @ camera_from_robot.T
+        axis = camera_from_robot[:, 2]
+        cov_rot = b.motion_cov[2, 2] * np.outer(axis, axis)
+        q_prev, q_curr = rays(a), rays(b)
+        try:
+            D = motion_stereo_range(q_prev, q_curr, R, t, n)
+            var = motion_stereo_variance(q_prev, q_curr, R, t, n, self.cfg.sigma_px, cov_t, cov_rot)
+        except DegenerateGeometryError:
+            return None
+        return D, var
+
+    def _stsf(self, frame: _Frame, D: float, var: float) -> float:
+        """Eq. 2-5 over every measurement so far, carried into this frame by odometry (eq. 3)."""
+        if self.track:
+            self.steps.append(self._range_step(self.last_heading))
+        self.track.append((D, var))
+        self.last_heading = frame.heading
+        self.since_measurement.restart()
+        ranges, variances = zip(*self.track, strict=True)
+        steps, step_variances = zip(*self.steps, strict=True) if self.steps else ((), ())
+        ts, cov = transform_range_track(ranges, variances, steps, step_variances)
+        return float(stsf_fuse(ts, cov, method=self.cfg.weights).x[0])
+
+    def _range_step(self, heading: float) -> tuple[float, float]:
+        """Change of the plane distance since the last measurement, from odometry, and its
+        variance: ``n . (camera now - camera then)`` with the motion ``u`` in that frame."""
+        u, Q = self.since_measurement.pose, self.since_measurement.cov
+        normal = to_se3(np.array([0, 0, heading]))[:2, :2].T @ self.landmark.normal[:2]
+        c = self.robot_cfg.camera_forward
+        moved = u[:2] + c * np.array([math.cos(u[2]), math.sin(u[2])]) - (c, 0.0)
+        gradient = np.array(
+            [normal[0], normal[1], c * (normal[1] * math.cos(u[2]) - normal[0] * math.sin(u[2]))]
+        )
+        return float(normal @ moved), float(gradient @ Q @ gradient)
+
+
+# --- many seeds, the table, the figure ---------------------------------------------------------
+def _run_seed(args: tuple[Table1Config, int]) -> SeedResult:
+    return Table1Run(*args).run()
+
+
+def run_table1(
+    out: str | Path, seed: int = 0, config: str | Path | None = None, workers: int = 1, **overrides
+) -> dict:
+    """Run ``cfg.seeds`` seeds from ``seed``; write results.json, table1.md and table1.png."""
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    from tqdm import tqdm
+
+    cfg = load_table1_config(config, **overrides)
+    jobs = [(cfg, seed + i) for i in range(cfg.seeds)]
+    if workers > 1:
+        with ProcessPoolExecutor(workers, mp_context=get_context("forkserver")) as pool:
+            results = list(tqdm(pool.map(_run_seed, jobs), total=len(jobs), desc="table1 seeds"))
+    else:
+        results = [_run_seed(job) for job in tqdm(jobs, desc="table1 seeds")]
+    rows = summarise(cfg, results)
+    out = Path(out)
+    summary = {"config": cfg.__dict__, "seeds": [seed, seed + cfg.seeds - 1], "rows": rows}
+    write_json(out / "results.json", summary)
+    write_atomic(out / "table1.md", _markdown(rows, cfg))
+    summary["figure"] = str(_plot(cfg, results, out / "table1.png"))
+    return summary
+
+
+def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
+    """One row per place: our estimates and errors beside the paper's and the bound."""
+    env_cfg = load_config(cfg.env)
+    focal = env_cfg.camera.height / 2 / math.tan(math.radians(env_cfg.camera.vfov_deg) / 2)
+    baseline = cfg.sweep_speed / env_cfg.camera.rate_hz
+    rows = []
+    paper = {row[0]: row for row in PAPER_TABLE1}
+    for i, distance in enumerate(cfg.distances):
+        conv_err, conv_est, stsf_err, stsf_est = [], [], [], []
+        for r in results:
+            at = [k for k, loc in enumerate(r.location) if loc == i]
+            pairs = [k for k in at if not math.isnan(r.conventional[k])]
+            conv_err += [r.conventional[k] - r.truth[k] for k in pairs]
+            conv_est += [r.conventional[k] for k in pairs]
+            last = [k for k in at if not math.isnan(r.stsf[k])][-1:]
+            stsf_err += [r.stsf[k] - r.truth[k] for k in last]
+            stsf_est += [r.stsf[k] for k in last]
+        rows.append(
+            {
+                "row": i + 1,
+                "world (m)": distance,
+                "conventional (m)": float(np.mean(conv_est)),
+                "conventional error (m)": _rms(conv_err),
+                "conventional spread (m)": float(np.std(np.abs(conv_err))),
+                "STSF (m)": float(np.mean(stsf_est)),
+                "STSF error (m)": _rms(stsf_err),
+                "STSF spread (m)": float(np.std(np.abs(stsf_err))),
+                "bound (m)": float(
+                    stereo_range_bound(cfg.distances[i], focal, baseline, cfg.sigma_px)
+                ),
+                "paper conventional error (m)": paper[1],
+                "paper STSF error (m)": paper[3],
+                "pairs": len(conv_err),
+            }
+        )
+    return rows
+
+
+def _rms(errors: list[float]) -> float:
+    return float(np.sqrt(np.mean(np.square(errors)))) if errors else math.nan
+
+
+def _markdown(rows: list[dict], cfg: Table1Config) -> str:
+    head = (
+        "# Table I reproduced: distance to a landmark, conventional fusion vs STSF\n\n"
+        f"{cfg.seeds} seeds, {cfg.frames_per_location} frames per place, baseline "
+        f"{cfg.sweep_speed * 100:.1f} cm between frames, STSF weights: {cfg.weights}. Errors are "
+        "RMS over seeds (conventional: over every pair at the place; STSF: at its last frame); "
+        f"bound: sqrt(2) Z^2 sigma_px / (f b) with sigma_px = {cfg.sigma_px}.\n\n"
+    )
+    return head + markdown_table(rows)
+
+
+def _plot(cfg: Table1Config, results: list[SeedResult], path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = min(len(r.truth) for r in results)
+    truth = np.array([r.truth[:n] for r in results])
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    for name, color in (("conventional", "tab:orange"), ("stsf", "tab:blue")):
+        errors = np.abs(np.array([getattr(r, name)[:n] for r in results]) - truth)
+        mean = np.nanmean(errors, axis=0)
+        label = "STSF" if name == "stsf" else "conventional"
+        ax.plot(np.arange(1, n + 1), mean, "o-", ms=3, color=color, label=f"{label} (mean |error|)")
+    location = np.array(results[0].location[:n])
+    for i in range(1, len(cfg.distances)):
+        ax.axvline(np.argmax(location == i) + 0.5, color="0.8", lw=1)
+    ax.set_xlabel("frame")
+    ax.set_ylabel("distance error (m)")
+    ax.set_title(
+        f"Table I: error vs frame over {len(results)} seeds "
+        f"(places at {', '.join(f'{d:g}' for d in cfg.distances)} m)"
+    )
+    ax.legend()
+    try:
+        return save_figure(fig, path)
+    finally:
+        plt.close(fig)
