@@ -17,6 +17,7 @@ next to the paper's numbers and the bound ``sqrt(2) Z^2 sigma_px / (f b)``.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -288,21 +289,33 @@ def _run_seed(args: tuple[Table1Config, int]) -> SeedResult:
 def run_table1(
     out: str | Path, seed: int = 0, config: str | Path | None = None, workers: int = 1, **overrides
 ) -> dict:
-    """Run ``cfg.seeds`` seeds from ``seed``; write results.json, table1.md and table1.png."""
+    """Run ``cfg.seeds`` seeds from ``seed``; write results.json, table1.md and table1.png.
+
+    Each seed's result is saved in ``out/seeds/`` as it finishes and reused by a rerun with
+    the same config, so an interrupted run loses nothing.
+    """
     from concurrent.futures import ProcessPoolExecutor
     from multiprocessing import get_context
 
     from tqdm import tqdm
 
     cfg = load_table1_config(config, **overrides)
-    jobs = [(cfg, seed + i) for i in range(cfg.seeds)]
-    if workers > 1:
-        with ProcessPoolExecutor(workers, mp_context=get_context("forkserver")) as pool:
-            results = list(tqdm(pool.map(_run_seed, jobs), total=len(jobs), desc="table1 seeds"))
-    else:
-        results = [_run_seed(job) for job in tqdm(jobs, desc="table1 seeds")]
-    rows = summarise(cfg, results)
     out = Path(out)
+    cache = SeedCache(out / "seeds", cfg.__dict__)
+    todo = [(cfg, s) for s in range(seed, seed + cfg.seeds) if cache.load(s) is None]
+    progress = tqdm(total=cfg.seeds, initial=cfg.seeds - len(todo), desc="table1 seeds")
+    with progress:
+        if workers > 1 and len(todo) > 1:
+            with ProcessPoolExecutor(workers, mp_context=get_context("forkserver")) as pool:
+                for (_, s), result in zip(todo, pool.map(_run_seed, todo), strict=True):
+                    cache.save(s, result)
+                    progress.update()
+        else:
+            for job in todo:
+                cache.save(job[1], _run_seed(job))
+                progress.update()
+    results = [cache.load(s) for s in range(seed, seed + cfg.seeds)]
+    rows = summarise(cfg, results)
     summary = {"config": cfg.__dict__, "seeds": [seed, seed + cfg.seeds - 1], "rows": rows}
     write_json(out / "results.json", summary)
     write_atomic(out / "table1.md", _markdown(rows, cfg))
@@ -310,13 +323,35 @@ def run_table1(
     return summary
 
 
+class SeedCache:
+    """Per-seed results on disk, valid only for the config they were made with."""
+
+    def __init__(self, folder: Path, config: dict) -> None:
+        self.folder, self.config = folder, json.loads(json.dumps(config))
+
+    def _path(self, seed: int) -> Path:
+        return self.folder / f"seed_{seed}.json"
+
+    def load(self, seed: int) -> SeedResult | None:
+        path = self._path(seed)
+        if not path.is_file():
+            return None
+        data = json.loads(path.read_text())
+        if data.get("config") != self.config:
+            return None
+        return SeedResult(**data["result"])
+
+    def save(self, seed: int, result: SeedResult) -> None:
+        write_json(self._path(seed), {"config": self.config, "result": result.__dict__})
+
+
 def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
     """One row per place: our estimates and errors beside the paper's and the bound."""
     env_cfg = load_config(cfg.env)
     focal = env_cfg.camera.height / 2 / math.tan(math.radians(env_cfg.camera.vfov_deg) / 2)
     baseline = cfg.sweep_speed / env_cfg.camera.rate_hz
-    rows = []
     paper = {row[0]: row for row in PAPER_TABLE1}
+    rows = []
     for i, distance in enumerate(cfg.distances):
         conv_err, conv_est, stsf_err, stsf_est = [], [], [], []
         for r in results:
@@ -331,17 +366,17 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
             {
                 "row": i + 1,
                 "world (m)": distance,
-                "conventional (m)": float(np.mean(conv_est)),
+                "conventional (m)": float(np.mean(conv_est)) if conv_est else math.nan,
                 "conventional error (m)": _rms(conv_err),
-                "conventional spread (m)": float(np.std(np.abs(conv_err))),
-                "STSF (m)": float(np.mean(stsf_est)),
+                "conventional spread (m)": float(np.std(np.abs(conv_err)))
+                if conv_err
+                else math.nan,
+                "STSF (m)": float(np.mean(stsf_est)) if stsf_est else math.nan,
                 "STSF error (m)": _rms(stsf_err),
-                "STSF spread (m)": float(np.std(np.abs(stsf_err))),
-                "bound (m)": float(
-                    stereo_range_bound(cfg.distances[i], focal, baseline, cfg.sigma_px)
-                ),
-                "paper conventional error (m)": paper[1],
-                "paper STSF error (m)": paper[3],
+                "STSF spread (m)": float(np.std(np.abs(stsf_err))) if stsf_err else math.nan,
+                "bound (m)": float(stereo_range_bound(distance, focal, baseline, cfg.sigma_px)),
+                "paper conventional error (m)": paper[distance][2] if distance in paper else "-",
+                "paper STSF error (m)": paper[distance][4] if distance in paper else "-",
                 "pairs": len(conv_err),
             }
         )
