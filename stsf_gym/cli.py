@@ -7,7 +7,6 @@ import argparse
 import json
 import os
 import sys
-from collections.abc import Callable
 from pathlib import Path
 
 from stsf_gym.config import ConfigError, parse_overrides
@@ -103,28 +102,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _json_writer() -> Callable[[str], None]:
-    """Move fd 1 to stderr for the rest of the process and return a writer to the real stdout.
-
-    PyBullet's C code prints banners on stdout, some only at exit, so stdout stays moved:
-    the JSON result is then the only thing on it.
-    """
+def _silence_c_stdout() -> None:
+    """Send file descriptor 1 to /dev/null for the rest of the process, keeping Python's
+    ``sys.stdout`` on the real stdout: PyBullet's C code prints banners there (some only at
+    exit, some in worker processes), which would garble tables and ``--json`` output."""
     sys.stdout.flush()
-    out = os.fdopen(os.dup(1), "w")
-    os.dup2(2, 1)
-    return lambda text: (out.write(text + "\n"), out.flush())
+    real = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    os.close(devnull)
+    sys.stdout = os.fdopen(real, "w", buffering=1)
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    emit = _json_writer() if args.json else print
+    _silence_c_stdout()
     try:
         result = args.run(args)
     except (ConfigError, ValueError) as err:
         print(f"stsf-gym {args.command}: error: {err}", file=sys.stderr)
         return 2
     if args.json:
-        emit(json.dumps(result, default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v)))
+        print(json.dumps(result, default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v)))
     return 0
 
 

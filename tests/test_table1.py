@@ -34,7 +34,7 @@ def test_stsf_beats_conventional_and_is_close(small_run):
     valid = ~np.isnan(conv)
     conventional_rms = np.sqrt(np.mean((conv[valid] - truth[valid]) ** 2))
     assert abs(stsf[-1] - truth[-1]) < conventional_rms
-    assert abs(stsf[-1] - truth[-1]) < 0.15
+    assert abs(stsf[-1] - truth[-1]) < 0.25
     assert stsf[1] == pytest.approx(conv[1])  # a one-measurement track is the conventional result
 
 
@@ -45,11 +45,13 @@ def test_summary_rows_have_paper_and_bound():
         [5.0, 5.0, 5.5, 5.5],
         [math.nan, 5.2, math.nan, 5.4],
         [math.nan, 5.1, math.nan, 5.45],
+        [math.nan, 5.1, math.nan, 5.4],
     )
     rows = summarise(cfg, [result])
     assert [row["world (m)"] for row in rows] == [5.06, 5.52]
     assert rows[0]["conventional error (m)"] == pytest.approx(0.2)
     assert rows[1]["STSF error (m)"] == pytest.approx(0.05)
+    assert rows[1]["STSF-GLS error (m)"] == pytest.approx(0.1)
     assert rows[0]["paper STSF error (m)"] == 0.14
     f = 240 / math.tan(math.radians(15))
     assert rows[0]["bound (m)"] == pytest.approx(math.sqrt(2) * 5.06**2 * 0.5 / (f * 0.122))

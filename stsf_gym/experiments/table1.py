@@ -8,7 +8,8 @@ plane distance ``D`` by motion stereo (eq. 8-20), with the camera motion from od
 
 - Conventional fusion: ``D`` from the current two frames only.
 - STSF: every pair measured so far, carried into the current frame by odometry (eq. 3,
-  propagating its uncertainty) and fused with the significance weights of eq. 4-5 (eq. 2).
+  propagating its uncertainty) and fused (eq. 2) in inverse range with the significance
+  weights of eq. 4-5; the same fused with generalised-least-squares weights for comparison.
 
 A row's conventional error is over all pairs of that place; its STSF error is that of the
 estimate at the place's last frame. Errors are RMS over seeds, with the spread (std) beside,
@@ -34,6 +35,7 @@ from stsf_gym.fusion import (
     motion_stereo_variance,
     stereo_range_bound,
     stsf_fuse,
+    to_inverse_range,
     transform_range_track,
 )
 from stsf_gym.geometry import to_se3, wrap_angle
@@ -60,7 +62,6 @@ class Table1Config:
     sweep_start: float
     turn_rate: float
     sigma_px: float
-    weights: str
     seeds: int
 
 
@@ -101,7 +102,8 @@ class SeedResult:
     location: list[int] = field(default_factory=list)
     truth: list[float] = field(default_factory=list)
     conventional: list[float] = field(default_factory=list)
-    stsf: list[float] = field(default_factory=list)
+    stsf: list[float] = field(default_factory=list)  # significance weights (eq. 4-5)
+    stsf_gls: list[float] = field(default_factory=list)  # generalised least squares weights
 
 
 class Table1Run:
@@ -206,7 +208,7 @@ class Table1Run:
         self.frames.append(frame)
         camera = self.info["camera_pose"][:3, 3]
         truth = float(np.dot(self.landmark.normal, camera - self.landmark.centre))
-        conventional = stsf = math.nan
+        conventional, stsf = math.nan, {"significance": math.nan, "gls": math.nan}
         if previous is not None and previous.location == location:
             measured = self._motion_stereo(previous, frame)
             if measured is not None:
@@ -216,7 +218,8 @@ class Table1Run:
             ("location", location),
             ("truth", truth),
             ("conventional", conventional),
-            ("stsf", stsf),
+            ("stsf", stsf["significance"]),
+            ("stsf_gls", stsf["gls"]),
         ):
             getattr(self.result, column).append(value)
 
@@ -256,8 +259,9 @@ class Table1Run:
             return None
         return D, var
 
-    def _stsf(self, frame: _Frame, D: float, var: float) -> float:
-        """Eq. 2-5 over every measurement so far, carried into this frame by odometry (eq. 3)."""
+    def _stsf(self, frame: _Frame, D: float, var: float) -> dict[str, float]:
+        """Eq. 2-5 over every measurement so far, carried into this frame by odometry (eq. 3)
+        and fused in inverse range, with the paper's significance weights and with GLS."""
         if self.track:
             self.steps.append(self._range_step(self.last_heading))
         self.track.append((D, var))
@@ -265,8 +269,13 @@ class Table1Run:
         self.since_measurement.restart()
         ranges, variances = zip(*self.track, strict=True)
         steps, step_variances = zip(*self.steps, strict=True) if self.steps else ((), ())
-        ts, cov = transform_range_track(ranges, variances, steps, step_variances)
-        return float(stsf_fuse(ts, cov, method=self.cfg.weights).x[0])
+        rho, cov = to_inverse_range(
+            *transform_range_track(ranges, variances, steps, step_variances)
+        )
+        return {
+            method: 1.0 / float(stsf_fuse(rho, cov, method=method).x[0])
+            for method in ("significance", "gls")
+        }
 
     def _range_step(self, heading: float) -> tuple[float, float]:
         """Change of the plane distance since the last measurement, from odometry, and its
@@ -353,15 +362,16 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
     paper = {row[0]: row for row in PAPER_TABLE1}
     rows = []
     for i, distance in enumerate(cfg.distances):
-        conv_err, conv_est, stsf_err, stsf_est = [], [], [], []
+        conv_err, conv_est, stsf_err, stsf_est, gls_err = [], [], [], [], []
         for r in results:
             at = [k for k, loc in enumerate(r.location) if loc == i]
             pairs = [k for k in at if not math.isnan(r.conventional[k])]
             conv_err += [r.conventional[k] - r.truth[k] for k in pairs]
             conv_est += [r.conventional[k] for k in pairs]
-            last = [k for k in at if not math.isnan(r.stsf[k])][-1:]
+            last = pairs[-1:]
             stsf_err += [r.stsf[k] - r.truth[k] for k in last]
             stsf_est += [r.stsf[k] for k in last]
+            gls_err += [r.stsf_gls[k] - r.truth[k] for k in last]
         rows.append(
             {
                 "row": i + 1,
@@ -374,6 +384,7 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
                 "STSF (m)": float(np.mean(stsf_est)) if stsf_est else math.nan,
                 "STSF error (m)": _rms(stsf_err),
                 "STSF spread (m)": float(np.std(np.abs(stsf_err))) if stsf_err else math.nan,
+                "STSF-GLS error (m)": _rms(gls_err),
                 "bound (m)": float(stereo_range_bound(distance, focal, baseline, cfg.sigma_px)),
                 "paper conventional error (m)": paper[distance][2] if distance in paper else "-",
                 "paper STSF error (m)": paper[distance][4] if distance in paper else "-",
@@ -391,7 +402,7 @@ def _markdown(rows: list[dict], cfg: Table1Config) -> str:
     head = (
         "# Table I reproduced: distance to a landmark, conventional fusion vs STSF\n\n"
         f"{cfg.seeds} seeds, {cfg.frames_per_location} frames per place, baseline "
-        f"{cfg.sweep_speed * 100:.1f} cm between frames, STSF weights: {cfg.weights}. Errors are "
+        f"{cfg.sweep_speed * 100:.1f} cm between frames. Errors are "
         "RMS over seeds (conventional: over every pair at the place; STSF: at its last frame); "
         f"bound: sqrt(2) Z^2 sigma_px / (f b) with sigma_px = {cfg.sigma_px}.\n\n"
     )
@@ -407,11 +418,14 @@ def _plot(cfg: Table1Config, results: list[SeedResult], path: Path) -> Path:
     n = min(len(r.truth) for r in results)
     truth = np.array([r.truth[:n] for r in results])
     fig, ax = plt.subplots(figsize=(9, 4.5))
-    for name, color in (("conventional", "tab:orange"), ("stsf", "tab:blue")):
+    for name, label, color in (
+        ("conventional", "conventional", "tab:orange"),
+        ("stsf", "STSF (significance)", "tab:blue"),
+        ("stsf_gls", "STSF (GLS)", "tab:green"),
+    ):
         errors = np.abs(np.array([getattr(r, name)[:n] for r in results]) - truth)
-        mean = np.nanmean(errors, axis=0)
-        label = "STSF" if name == "stsf" else "conventional"
-        ax.plot(np.arange(1, n + 1), mean, "o-", ms=3, color=color, label=f"{label} (mean |error|)")
+        rms = np.sqrt(np.nanmean(errors**2, axis=0))
+        ax.plot(np.arange(1, n + 1), rms, "o-", ms=3, color=color, label=f"{label}, RMS error")
     location = np.array(results[0].location[:n])
     for i in range(1, len(cfg.distances)):
         ax.axvline(np.argmax(location == i) + 0.5, color="0.8", lw=1)

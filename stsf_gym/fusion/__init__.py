@@ -19,7 +19,12 @@ from stsf_gym.fusion.motion_stereo import (
 )
 from stsf_gym.fusion.spatial import inverse_variance_weights, spatial_fusion
 from stsf_gym.fusion.temporal import STSFResult, significance, stsf_fuse
-from stsf_gym.fusion.track import STSFTrack, transform_pose_track, transform_range_track
+from stsf_gym.fusion.track import (
+    STSFTrack,
+    to_inverse_range,
+    transform_pose_track,
+    transform_range_track,
+)
 
 __all__ = [
     "DegenerateGeometryError",
@@ -36,6 +41,7 @@ __all__ = [
     "spatial_fusion",
     "stereo_range_bound",
     "stsf_fuse",
+    "to_inverse_range",
     "transform_pose_track",
     "transform_range_track",
 ]

@@ -111,6 +111,21 @@ def transform_range_track(
     return (ranges + carried)[:, None], cov
 
 
+def to_inverse_range(ts: ArrayLike, cov: TrackCovariance) -> tuple[Array, TrackCovariance]:
+    """A range track (:func:`transform_range_track`) in inverse range ``rho = 1 / D``.
+
+    Motion-stereo errors are nearly Gaussian in ``rho`` (linear in pixel and rotation
+    errors) and their variance does not grow with ``D``, so fusing there avoids the
+    heavy ``1/x`` tail of ``D`` and weights that favour short ranges. First order:
+    ``d rho = -d D / D^2`` scales each set's measurement and odometry terms.
+    """
+    ranges = np.asarray(ts, dtype=float)
+    if np.any(ranges <= 0):
+        raise ValueError("inverse range needs positive ranges")
+    jac = (-1.0 / ranges**2)[:, :, None]  # (k, 1, 1)
+    return 1.0 / ranges, TrackCovariance(meas=cov.meas * jac**2, h=cov.h * jac, gammas=cov.gammas)
+
+
 class STSFTrack:
     """A landmark track for STSF: pose measurements with odometry in between.
 
