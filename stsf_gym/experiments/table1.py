@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 import stsf_gym  # noqa: F401 - registers the env ids
-from envs.config import CONFIG_DIR, build, load_config, read_yaml
+from envs.config import CONFIG_DIR, build, deep_merge, load_config, overrides_to_tree, read_yaml
 from stsf_gym.estimators.odometry import OdometryNoise, propagate
 from stsf_gym.fusion import (
     DegenerateGeometryError,
@@ -66,8 +66,10 @@ class Table1Config:
 
 
 def load_table1_config(path: str | Path | None = None, **overrides) -> Table1Config:
+    """``configs/experiments/table1.yaml`` (or ``path``) with overrides such as
+    ``seeds=5`` or ``env__camera__width=800``; unknown keys fail by name."""
     data = read_yaml(path or CONFIG_DIR / "experiments" / "table1.yaml")
-    return build(Table1Config, {**data, **overrides}, "table1")
+    return build(Table1Config, deep_merge(data, overrides_to_tree(overrides)), "table1")
 
 
 class _Odometry:
