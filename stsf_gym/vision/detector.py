@@ -2,23 +2,9 @@
 
 The detector runs in two stages.
 
-1. **Candidates by template matching** (paper eq. 6-7). The paper scores how well a template
-   ``g(m, n)`` fits the image ``f(i, j)`` at ``(i, j)`` by the distance
-   ``d = sum_G (f - g)^2`` (eq. 6), whose minimum is the maximum of the cross-correlation
-   ``M(i, j) = sum_m sum_n f(i + m, j + n) g(m, n)`` (eq. 7). Plain eq. 7 depends on the image's
-   brightness and contrast, so we use its normalised form, the correlation coefficient
-   (OpenCV ``TM_CCOEFF_NORMED``)::
-
-       M'(i, j) = sum (f(i+m, j+n) - mean f) (g(m, n) - mean g)
-                  / sqrt(sum (f - mean f)^2 * sum (g - mean g)^2)      in [-1, 1]
-
-   which is eq. 7 after removing the local mean and dividing by the local energy; its
-   maximum is the minimum of eq. 6 under an affine change of grey levels. The template is
-   the board of :mod:`stsf_gym.vision.landmarks` with the ring and centre squares white and
-   the id cells half grey (their mean over all ids), in a light margin, blurred. It is
-   matched at two sizes per octave of a box-filtered image pyramid, so the cost stays that
-   of a few small correlations on a small image; local maxima above ``ncc_threshold`` are
-   the candidate regions.
+1. **Candidates by template matching** (paper eq. 6-7): local maxima of the normalised
+   cross-correlation with a blurred board template over an image pyramid, see
+   :mod:`stsf_gym.vision.template`.
 
 2. **Geometry** on the full-resolution image around each candidate: the board is the dark
    connected region enclosing the most bright holes; the white squares are the bright blobs
@@ -44,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -53,17 +40,14 @@ from stsf_gym.vision.landmarks import (
     board_corners,
     cell_centre,
     decode_landmark_id,
-    landmark_image,
     lit_cells,
 )
+from stsf_gym.vision.template import Candidate, TemplateMatcher
 
 __all__ = ["Detection", "LandmarkDetector"]
 
-TEMPLATE_MARGIN = 0.15  # wall around the board in the template, in board sides
-TEMPLATE_WALL = 0.6  # its grey level (fraction of white): walls are lighter than the board
 MIN_HOLES = 4  # a dark region enclosing fewer bright blobs is not worth a closer look
 DARK_FRACTION = 0.3  # board pixels: below this fraction of the way from black to bright
-BLUR_PER_PX = 0.1  # Gaussian sigma of template and image, per pixel of the smallest template
 
 
 @dataclass(frozen=True)
@@ -91,12 +75,21 @@ class Detection:
         return _apply_homography(self.homography, np.asarray(plane_xy, dtype=np.float64))
 
 
-@dataclass(frozen=True)
-class _Candidate:
-    cx: float  # full-resolution pixels
-    cy: float
-    size: float  # board side, full-resolution pixels
-    score: float
+class _Board(NamedTuple):
+    """The board's dark region in a region of interest."""
+
+    dark: np.ndarray  # uint8, 1 where darker than the board threshold
+    labels: np.ndarray  # 8-connected components of ``dark``
+    label: int  # the board's component
+    box: np.ndarray  # its bounding box: x, y, width, height
+
+
+class _Squares(NamedTuple):
+    """The white squares inside the board's outline."""
+
+    hull_mask: np.ndarray  # uint8, 1 inside the convex hull of the board's dark region
+    boxes: np.ndarray  # (N, 4) bounding boxes of the blobs: x, y, width, height
+    centres: np.ndarray  # (N, 2) blob centroids, pixels
 
 
 def _apply_homography(h: np.ndarray, xy: np.ndarray) -> np.ndarray:
@@ -156,14 +149,14 @@ class LandmarkDetector:
         valid_ids: set[int] | None = None,
     ) -> None:
         self.pattern = pattern or LandmarkPattern()
-        if template_px < 6:
-            raise ValueError(f"template_px must be at least 6, got {template_px}")
-        if min_board_px < template_px:
-            raise ValueError(f"min_board_px ({min_board_px}) must be >= template_px")
-        self.ncc_threshold = float(ncc_threshold)
-        self.min_board_px = float(min_board_px)
-        self.max_board_px = None if max_board_px is None else float(max_board_px)
-        self.template_px = int(template_px)
+        self.matcher = TemplateMatcher(
+            self.pattern,
+            ncc_threshold=ncc_threshold,
+            min_board_px=min_board_px,
+            max_board_px=max_board_px,
+            template_px=template_px,
+            max_peaks=4 * int(max_candidates),
+        )
         self.max_candidates = int(max_candidates)
         self.max_reprojection_px = float(max_reprojection_px)
         self.valid_ids = None if valid_ids is None else {int(i) for i in valid_ids}
@@ -184,120 +177,32 @@ class LandmarkDetector:
         self._corner_xy = np.array([[-half, half], [half, half], [half, -half], [-half, -half]])
         self._board_xy = board_corners(p)
         self._lit_index_cache: dict[int, dict[tuple[int, int], int]] = {}
-        self._templates = self._make_templates()
         self._trace: list[str] | None = None  # rejection reasons, when debugging
-        self._plan_cache: dict[tuple[int, int], tuple[float, list[list[int]]]] = {}
 
-    # --- stage 1: template matching (eq. 6-7) -----------------------------------------------
-    def _make_templates(self) -> dict[int, tuple[np.ndarray, int]]:
-        """Templates by board side ``s`` (pixels): ``(uint8 template, template side)``.
+    @property
+    def ncc_threshold(self) -> float:
+        """Minimum NCC of a candidate region."""
+        return self.matcher.ncc_threshold
 
-        The board (ring and centre white, id cells half grey: their mean over all ids) sits
-        in a margin of ``TEMPLATE_MARGIN`` board sides of light grey (the wall) and is blurred
-        by ``BLUR_PER_PX * s``: at these sizes the squares are barely resolved, and the blur
-        makes the correlation peak tolerant to the scale step, perspective and pixel phase.
-        """
-        p = self.pattern
-        px_per_m = 40.0 / p.pitch  # 40 px per pitch: fine enough for any template size
-        base = landmark_image(0, p, px_per_m).astype(np.float32)
-        full = landmark_image(p.max_id, p, px_per_m).astype(np.float32)
-        n = base.shape[0]
-        m = round(TEMPLATE_MARGIN * n)
-        hires = np.full((n + 2 * m, n + 2 * m), TEMPLATE_WALL * 255.0, np.float32)
-        hires[m : m + n, m : m + n] = base + 0.5 * (full - base)
-        out = {}
-        for s in sorted({self.template_px, round(self.template_px * math.sqrt(2))}):
-            side = round(s * (n + 2 * m) / n)
-            tpl = cv2.resize(hires, (side, side), interpolation=cv2.INTER_AREA)
-            tpl = cv2.GaussianBlur(tpl, (0, 0), BLUR_PER_PX * self.template_px)
-            out[s] = (np.rint(tpl).astype(np.uint8), side)
-        return out
+    @property
+    def min_board_px(self) -> float:
+        """Smallest board side searched, pixels."""
+        return self.matcher.min_board_px
 
-    def _plan(self, shape: tuple[int, int]) -> tuple[float, list[list[int]]]:
-        """For an image shape: first shrink factor and the board sizes matched per octave."""
-        key = (int(shape[0]), int(shape[1]))
-        if key not in self._plan_cache:
-            h, w = key
-            max_board = self.max_board_px or min(h, w)
-            shrink = max(1.0, self.min_board_px / self.template_px)
-            octaves: list[list[int]] = []
-            scale = shrink
-            short = min(h, w) / shrink
-            while self.template_px * scale <= max_board * 1.15:
-                sizes = [
-                    s
-                    for s, (_, side) in self._templates.items()
-                    if s * scale <= max_board * 1.2 and side < short
-                ]
-                if not sizes:
-                    break
-                octaves.append(sizes)
-                scale *= 2
-                short /= 2
-            self._plan_cache[key] = (shrink, octaves)
-        return self._plan_cache[key]
+    @property
+    def max_board_px(self) -> float | None:
+        """Largest board side searched, pixels (None: the image's shorter side)."""
+        return self.matcher.max_board_px
 
-    def candidates(self, grey: np.ndarray) -> list[_Candidate]:
-        """Candidate board regions: local maxima of the normalised eq. 7 over scales.
+    @property
+    def template_px(self) -> int:
+        """Side of the smallest template, pixels at its pyramid level."""
+        return self.matcher.template_px
 
-        Returns candidates with NCC at least ``ncc_threshold``, best first, with overlapping
-        ones (centres closer than half a board) suppressed.
-        """
-        h, w = grey.shape
-        shrink, octaves = self._plan(grey.shape)
-        if shrink > 1.0:
-            size = (max(1, round(w / shrink)), max(1, round(h / shrink)))
-            level = cv2.resize(grey, size, interpolation=cv2.INTER_AREA)
-        else:
-            level = grey
-        sigma = BLUR_PER_PX * self.template_px
-        found: list[_Candidate] = []
-        for k, sizes in enumerate(octaves):
-            if k:
-                level = cv2.resize(
-                    level,
-                    (max(1, level.shape[1] // 2), max(1, level.shape[0] // 2)),
-                    interpolation=cv2.INTER_AREA,
-                )
-            blurred = cv2.GaussianBlur(level, (0, 0), sigma)
-            sx, sy = w / level.shape[1], h / level.shape[0]
-            for s in sizes:
-                tpl, side = self._templates[s]
-                if side >= min(level.shape):
-                    continue
-                ncc = cv2.matchTemplate(blurred, tpl, cv2.TM_CCOEFF_NORMED)
-                found.extend(self._peaks(ncc, s, side, sx, sy))
-        found.sort(key=lambda c: -c.score)
-        kept: list[_Candidate] = []
-        for c in found:
-            if all(
-                (c.cx - k.cx) ** 2 + (c.cy - k.cy) ** 2 > (0.5 * min(c.size, k.size)) ** 2
-                for k in kept
-            ):
-                kept.append(c)
-        return kept
+    def candidates(self, grey: np.ndarray) -> list[Candidate]:
+        """Candidate board regions of stage 1 (eq. 6-7) in a uint8 grey image, best first."""
+        return self.matcher.candidates(grey)
 
-    def _peaks(self, ncc: np.ndarray, s: int, side: int, sx: float, sy: float) -> list[_Candidate]:
-        """Local maxima of an NCC map as candidates (board side ``s``, template ``side``)."""
-        if ncc.size == 0:
-            return []
-        k = max(3, (s // 2) | 1)
-        local_max = cv2.dilate(ncc, np.ones((k, k), np.uint8))
-        ys, xs = np.nonzero((ncc >= local_max) & (ncc >= self.ncc_threshold))
-        if len(xs) > 4 * self.max_candidates:
-            best = np.argsort(ncc[ys, xs])[::-1][: 4 * self.max_candidates]
-            ys, xs = ys[best], xs[best]
-        return [
-            _Candidate(
-                (x + side / 2) * sx - 0.5,
-                (y + side / 2) * sy - 0.5,
-                s * 0.5 * (sx + sy),
-                float(ncc[y, x]),
-            )
-            for y, x in zip(ys.tolist(), xs.tolist(), strict=True)
-        ]
-
-    # --- stage 2: geometry ------------------------------------------------------------------
     def detect(self, image: np.ndarray) -> list[Detection]:
         """Landmarks in ``image`` (HxW grey or HxWx3 RGB, uint8), best NCC score first."""
         grey = _to_grey(image)
@@ -318,7 +223,8 @@ class LandmarkDetector:
             detections.append(det)
         return detections
 
-    def _verify(self, grey: np.ndarray, cand: _Candidate) -> Detection | None:
+    def _verify(self, grey: np.ndarray, cand: Candidate) -> Detection | None:
+        """The landmark around a candidate, growing the region while the board touches its edge."""
         h, w = grey.shape
         half = 0.9 * cand.size + 2
         for _ in range(3):
@@ -338,50 +244,115 @@ class LandmarkDetector:
         return None
 
     def _fit_roi(self, roi: np.ndarray, score: float) -> Detection | str | None:
-        """Find the board in a region of interest; coordinates relative to the region."""
+        """Find the board in a region of interest; coordinates relative to the region.
+
+        Returns ``"grow"`` when the board touches the region's edge, None when rejected.
+        """
+        board = self._find_board(roi)
+        if board is None:
+            return None
+        dx, dy, dw, dh = board.box
+        if dx == 0 or dy == 0 or dx + dw >= roi.shape[1] or dy + dh >= roi.shape[0]:
+            return "grow"
+        squares = self._find_squares(board)
+        if squares is None:
+            return None
+        grid = self._assign_cells(squares.centres)
+        if grid is None:
+            return None
+        cell, pitch_px = grid
+        landmark_id = decode_landmark_id({self._cells[i] for i in cell.tolist()}, self.pattern)
+        if self.valid_ids is not None and landmark_id not in self.valid_ids:
+            return self._fail("id not valid")
+        index_of = self._lit_index(landmark_id)
+        indices = np.array([index_of[self._cells[i]] for i in cell.tolist()], dtype=np.int64)
+        order = np.argsort(indices)
+        squares = squares._replace(boxes=squares.boxes[order], centres=squares.centres[order])
+        plane = self._cell_xy[cell[order]]
+        pts = self._square_centres(roi, board, squares, pitch_px)
+        fit = self._fit_homography(plane, pts, pitch_px)
+        if fit is None:
+            return None
+        hom, rms = fit
+        return Detection(
+            landmark_id=landmark_id,
+            image_points=pts,
+            plane_points=plane,
+            indices=indices[order],
+            score=score,
+            homography=hom,
+            reprojection_rms=rms,
+            corners=_apply_homography(hom, self._board_xy),
+        )
+
+    def _find_board(self, roi: np.ndarray) -> _Board | None:
+        """The board's dark region; a black board on a lighter wall is the darkest thing around."""
         rh, rw = roi.shape
-        # Black level of the board and bright level of squares and wall; the board is the
-        # darkest thing around (a black board on a lighter wall).
+        # Black level of the board and bright level of squares and wall.
         sample = roi[:: max(1, rh // 24), :: max(1, rw // 24)].ravel()
         k1, k90 = len(sample) // 100, (9 * len(sample)) // 10
         lo, hi = (float(v) for v in np.partition(sample, (k1, k90))[[k1, k90]])
         if hi - lo < 30:
             return self._fail("flat region")
-        t_dark = lo + DARK_FRACTION * (hi - lo)
-        dark = (roi <= t_dark).astype(np.uint8)
-        n_d, lab_d, st_d, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
+        dark = (roi <= lo + DARK_FRACTION * (hi - lo)).astype(np.uint8)
+        n_d, labels, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
         if n_d < 2:
             return self._fail("no dark region")
-        board, holes = self._board_label(dark, lab_d, st_d, roi.shape)
+        label, holes = self._board_label(dark, labels, n_d)
         if holes < MIN_HOLES:
             return self._fail("no dark region with squares")
-        dx, dy, dw, dh, _ = st_d[board]
-        if dx == 0 or dy == 0 or dx + dw >= rw or dy + dh >= rh:
-            return "grow"
-        # The board's outline: convex hull of its dark region. The white squares are the
-        # bright blobs inside it (the black border can be thinner than a pixel far away, so
-        # the outer squares are not always holes of the dark region).
-        mask = (lab_d[dy : dy + dh, dx : dx + dw] == board).astype(np.uint8)
+        return _Board(dark, labels, label, stats[label, :4])
+
+    @staticmethod
+    def _board_label(dark: np.ndarray, labels: np.ndarray, n_labels: int) -> tuple[int, int]:
+        """The board's dark region: the label enclosing most bright blobs, and their count."""
+        rh, rw = dark.shape
+        _, _, st_b, cen_b = cv2.connectedComponentsWithStats(1 - dark, connectivity=4)
+        bx, by, bw, bh = (st_b[1:, i] for i in range(4))
+        interior = (bx > 0) & (by > 0) & (bx + bw < rw) & (by + bh < rh)
+        if not np.any(interior):
+            return 0, 0
+        row = np.clip(np.rint(cen_b[1:, 1]).astype(int), 0, rh - 1)
+        enclosing = labels[row[interior], np.maximum(bx[interior] - 1, 0)]
+        counts = np.bincount(enclosing, minlength=n_labels)
+        counts[0] = 0
+        board = int(np.argmax(counts))
+        return board, int(counts[board])
+
+    def _find_squares(self, board: _Board) -> _Squares | None:
+        """White squares: the bright blobs inside the convex hull of the board's dark region.
+
+        Far away the black border can be thinner than a pixel, so the outer squares are not
+        always holes of the dark region.
+        """
+        dx, dy, dw, dh = board.box
+        mask = (board.labels[dy : dy + dh, dx : dx + dw] == board.label).astype(np.uint8)
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         hull = cv2.convexHull(np.concatenate(contours) + np.array([dx, dy], np.int32))
-        hull_mask = np.zeros_like(dark)
+        hull_mask = np.zeros_like(board.dark)
         cv2.fillConvexPoly(hull_mask, hull, 1)
-        # Squares: bright pixels inside the hull shrunk by a pixel, so that slivers of wall
-        # cut by the hull's slanted edges are left out.
-        inside = np.zeros_like(dark)
+        # Bright pixels inside the hull shrunk by a pixel, so that slivers of wall cut by the
+        # hull's slanted edges are left out.
+        inside = np.zeros_like(board.dark)
         cv2.fillConvexPoly(inside, _shrink(hull.reshape(-1, 2), 1.0), 1)
-        inside &= 1 - dark
-        n_b, _, st_b, cen_b = cv2.connectedComponentsWithStats(inside, connectivity=4)
-        area = st_b[1:, 4]
+        inside &= 1 - board.dark
+        n_b, _, stats, centres = cv2.connectedComponentsWithStats(inside, connectivity=4)
+        area = stats[1:, 4]
         # Slivers of wall where the hull's edge cuts a pixel are far smaller than a square.
         sel = np.nonzero(area >= 0.3 * np.median(area))[0] if n_b > 1 else np.arange(0)
         if len(sel) < int(self._required.sum()):
             return self._fail("too few squares")
         if len(sel) > len(self._cells):
             return self._fail("too many squares")
-        cen = cen_b[1:]
-        pts = cen[sel]
-        # Corner squares of the ring: extreme along the image diagonals.
+        return _Squares(hull_mask, stats[1:, :4][sel], centres[1:][sel])
+
+    def _assign_cells(self, pts: np.ndarray) -> tuple[np.ndarray, float] | None:
+        """Grid cell of each square centre ``pts`` and the smallest cell pitch in pixels.
+
+        The ring's corner squares, extreme along the image diagonals, give a first homography
+        that predicts each cell's centre; every square must be near one, all ring cells and
+        the centre must be present and no cell may be used twice.
+        """
         s, d = pts[:, 0] + pts[:, 1], pts[:, 0] - pts[:, 1]
         corner_idx = [int(np.argmin(s)), int(np.argmax(d)), int(np.argmax(s)), int(np.argmin(d))]
         if len(set(corner_idx)) < 4:
@@ -395,31 +366,33 @@ class LandmarkDetector:
         pitch_px = self._min_pitch(pred)
         dist2 = ((pts[:, None, :] - pred[None, :, :]) ** 2).sum(axis=2)
         cell = np.argmin(dist2, axis=1)
-        if np.any(dist2[np.arange(len(sel)), cell] > (0.35 * pitch_px) ** 2):
+        if np.any(dist2[np.arange(len(pts)), cell] > (0.35 * pitch_px) ** 2):
             return self._fail("blob off the grid")
         if len(np.unique(cell)) != len(cell) or not np.all(
             np.isin(np.nonzero(self._required)[0], cell)
         ):
             return self._fail("ring incomplete or cell reused")
-        lit = {self._cells[i] for i in cell.tolist()}
-        landmark_id = decode_landmark_id(lit, self.pattern)
-        if self.valid_ids is not None and landmark_id not in self.valid_ids:
-            return self._fail("id not valid")
-        index_of = self._lit_index(landmark_id)
-        indices = np.array([index_of[self._cells[i]] for i in cell.tolist()], dtype=np.int64)
-        order = np.argsort(indices)
-        indices, sel, cell = indices[order], sel[order], cell[order]
-        plane = self._cell_xy[cell]
-        # Sub-pixel centres: intensity-weighted centroids around each blob.
+        return cell, pitch_px
+
+    def _square_centres(
+        self, roi: np.ndarray, board: _Board, squares: _Squares, pitch_px: float
+    ) -> np.ndarray:
+        """Sub-pixel square centres: intensity-weighted centroids above the board's black."""
         gap_px = pitch_px * (1.0 - self.pattern.square_size / self.pattern.pitch)
         margin = int(np.clip(round(0.4 * gap_px), 1, 4))
-        black = self._black_level(roi, lab_d, board)
-        ci = np.rint(cen[sel]).astype(int)
+        vals = roi[board.labels == board.label]
+        black = float(np.median(vals[:: max(1, len(vals) // 512)])) if len(vals) else 0.0
+        ci = np.rint(squares.centres).astype(int)
         peak = float(np.median(roi[ci[:, 1], ci[:, 0]]))
         floor = black + max(0.15 * (peak - black), 4.0)
-        pts = _weighted_centroids(
-            roi, hull_mask, st_b[sel + 1, :4], margin, floor, fallback=cen[sel]
+        return _weighted_centroids(
+            roi, squares.hull_mask, squares.boxes, margin, floor, fallback=squares.centres
         )
+
+    def _fit_homography(
+        self, plane: np.ndarray, pts: np.ndarray, pitch_px: float
+    ) -> tuple[np.ndarray, float] | None:
+        """Least-squares homography plane -> image and its RMS error, unless that is too large."""
         hom, _ = cv2.findHomography(plane, pts, 0)
         if hom is None:
             return self._fail("homography fit failed")
@@ -430,33 +403,7 @@ class LandmarkDetector:
             or resid.max() > 3 * max(rms, 0.2) + 0.1 * pitch_px
         ):
             return self._fail("reprojection error")
-        return Detection(
-            landmark_id=landmark_id,
-            image_points=pts,
-            plane_points=plane.copy(),
-            indices=indices,
-            score=score,
-            homography=hom,
-            reprojection_rms=rms,
-            corners=_apply_homography(hom, self._board_xy),
-        )
-
-    def _board_label(
-        self, dark: np.ndarray, lab_d: np.ndarray, st_d: np.ndarray, shape: tuple[int, int]
-    ) -> tuple[int, int]:
-        """The board's dark region: the label enclosing most bright blobs, and their count."""
-        rh, rw = shape
-        _, _, st_b, cen_b = cv2.connectedComponentsWithStats(1 - dark, connectivity=4)
-        bx, by, bw, bh = (st_b[1:, i] for i in range(4))
-        interior = (bx > 0) & (by > 0) & (bx + bw < rw) & (by + bh < rh)
-        if not np.any(interior):
-            return 0, 0
-        row = np.clip(np.rint(cen_b[1:, 1]).astype(int), 0, rh - 1)
-        enclosing = lab_d[row[interior], np.maximum(bx[interior] - 1, 0)]
-        counts = np.bincount(enclosing, minlength=len(st_d))
-        counts[0] = 0
-        board = int(np.argmax(counts))
-        return board, int(counts[board])
+        return hom, rms
 
     def _fail(self, reason: str) -> None:
         if self._trace is not None:
@@ -468,11 +415,6 @@ class LandmarkDetector:
         dx = np.linalg.norm(np.diff(grid, axis=1), axis=2).min()
         dy = np.linalg.norm(np.diff(grid, axis=0), axis=2).min()
         return float(min(dx, dy))
-
-    @staticmethod
-    def _black_level(roi: np.ndarray, lab_d: np.ndarray, board: int) -> float:
-        vals = roi[lab_d == board]
-        return float(np.median(vals[:: max(1, len(vals) // 512)])) if len(vals) else 0.0
 
     def _lit_index(self, landmark_id: int) -> dict[tuple[int, int], int]:
         if landmark_id not in self._lit_index_cache:

@@ -1,0 +1,185 @@
+"""Candidate landmark regions by template matching (paper sect. 3.1, eq. 6-7).
+
+The paper scores how well a template ``g(m, n)`` fits the image ``f(i, j)`` at ``(i, j)`` by
+the distance ``d = sum_G (f - g)^2`` (eq. 6), whose minimum is the maximum of the
+cross-correlation ``M(i, j) = sum_m sum_n f(i + m, j + n) g(m, n)`` (eq. 7). Plain eq. 7
+depends on the image's brightness and contrast, so we use its normalised form, the
+correlation coefficient (OpenCV ``TM_CCOEFF_NORMED``)::
+
+    M'(i, j) = sum (f(i+m, j+n) - mean f) (g(m, n) - mean g)
+               / sqrt(sum (f - mean f)^2 * sum (g - mean g)^2)      in [-1, 1]
+
+which is eq. 7 after removing the local mean and dividing by the local energy; its maximum
+is the minimum of eq. 6 under an affine change of grey levels. The template is the board of
+:mod:`stsf_gym.vision.landmarks` with the ring and centre squares white and the id cells half
+grey (their mean over all ids), in a light margin, blurred. It is matched at two sizes per
+octave of a box-filtered image pyramid, so the cost stays that of a few small correlations
+on a small image; local maxima above ``ncc_threshold`` are the candidate regions, which
+:class:`~stsf_gym.vision.detector.LandmarkDetector` then verifies.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from stsf_gym.vision.landmarks import LandmarkPattern, landmark_image
+
+__all__ = ["Candidate", "TemplateMatcher"]
+
+TEMPLATE_MARGIN = 0.15  # wall around the board in the template, in board sides
+TEMPLATE_WALL = 0.6  # its grey level (fraction of white): walls are lighter than the board
+BLUR_PER_PX = 0.1  # Gaussian sigma of template and image, per pixel of the smallest template
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A region that may hold a board, in full-resolution pixels."""
+
+    cx: float  # centre, pixels
+    cy: float
+    size: float  # board side, pixels
+    score: float  # NCC (eq. 7, normalised)
+
+
+class TemplateMatcher:
+    """Local maxima of the normalised eq. 7 over positions and board sizes.
+
+    ``ncc_threshold``, ``min_board_px``, ``max_board_px`` and ``template_px`` are those of
+    :class:`~stsf_gym.vision.detector.LandmarkDetector`; at most ``max_peaks`` local maxima
+    (best first) are kept per NCC map.
+    """
+
+    def __init__(
+        self,
+        pattern: LandmarkPattern,
+        *,
+        ncc_threshold: float,
+        min_board_px: float,
+        max_board_px: float | None,
+        template_px: int,
+        max_peaks: int,
+    ) -> None:
+        if template_px < 6:
+            raise ValueError(f"template_px must be at least 6, got {template_px}")
+        if min_board_px < template_px:
+            raise ValueError(f"min_board_px ({min_board_px}) must be >= template_px")
+        self.pattern = pattern
+        self.ncc_threshold = float(ncc_threshold)
+        self.min_board_px = float(min_board_px)
+        self.max_board_px = None if max_board_px is None else float(max_board_px)
+        self.template_px = int(template_px)
+        self.max_peaks = int(max_peaks)
+        self._templates = self._make_templates()
+        self._plan_cache: dict[tuple[int, int], tuple[float, list[list[int]]]] = {}
+
+    def _make_templates(self) -> dict[int, tuple[np.ndarray, int]]:
+        """Templates by board side ``s`` (pixels): ``(uint8 template, template side)``.
+
+        The board (ring and centre white, id cells half grey: their mean over all ids) sits
+        in a margin of ``TEMPLATE_MARGIN`` board sides of light grey (the wall) and is blurred
+        by ``BLUR_PER_PX * s``: at these sizes the squares are barely resolved, and the blur
+        makes the correlation peak tolerant to the scale step, perspective and pixel phase.
+        """
+        p = self.pattern
+        px_per_m = 40.0 / p.pitch  # 40 px per pitch: fine enough for any template size
+        base = landmark_image(0, p, px_per_m).astype(np.float32)
+        full = landmark_image(p.max_id, p, px_per_m).astype(np.float32)
+        n = base.shape[0]
+        m = round(TEMPLATE_MARGIN * n)
+        hires = np.full((n + 2 * m, n + 2 * m), TEMPLATE_WALL * 255.0, np.float32)
+        hires[m : m + n, m : m + n] = base + 0.5 * (full - base)
+        out = {}
+        for s in sorted({self.template_px, round(self.template_px * math.sqrt(2))}):
+            side = round(s * (n + 2 * m) / n)
+            tpl = cv2.resize(hires, (side, side), interpolation=cv2.INTER_AREA)
+            tpl = cv2.GaussianBlur(tpl, (0, 0), BLUR_PER_PX * self.template_px)
+            out[s] = (np.rint(tpl).astype(np.uint8), side)
+        return out
+
+    def _plan(self, shape: tuple[int, int]) -> tuple[float, list[list[int]]]:
+        """For an image shape: first shrink factor and the board sizes matched per octave."""
+        key = (int(shape[0]), int(shape[1]))
+        if key not in self._plan_cache:
+            h, w = key
+            max_board = self.max_board_px or min(h, w)
+            shrink = max(1.0, self.min_board_px / self.template_px)
+            octaves: list[list[int]] = []
+            scale = shrink
+            short = min(h, w) / shrink
+            while self.template_px * scale <= max_board * 1.15:
+                sizes = [
+                    s
+                    for s, (_, side) in self._templates.items()
+                    if s * scale <= max_board * 1.2 and side < short
+                ]
+                if not sizes:
+                    break
+                octaves.append(sizes)
+                scale *= 2
+                short /= 2
+            self._plan_cache[key] = (shrink, octaves)
+        return self._plan_cache[key]
+
+    def candidates(self, grey: np.ndarray) -> list[Candidate]:
+        """Candidate board regions in a uint8 grey image, best NCC first.
+
+        Returns candidates with NCC at least ``ncc_threshold``, with overlapping ones
+        (centres closer than half a board) suppressed.
+        """
+        h, w = grey.shape
+        shrink, octaves = self._plan(grey.shape)
+        if shrink > 1.0:
+            size = (max(1, round(w / shrink)), max(1, round(h / shrink)))
+            level = cv2.resize(grey, size, interpolation=cv2.INTER_AREA)
+        else:
+            level = grey
+        sigma = BLUR_PER_PX * self.template_px
+        found: list[Candidate] = []
+        for k, sizes in enumerate(octaves):
+            if k:
+                level = cv2.resize(
+                    level,
+                    (max(1, level.shape[1] // 2), max(1, level.shape[0] // 2)),
+                    interpolation=cv2.INTER_AREA,
+                )
+            blurred = cv2.GaussianBlur(level, (0, 0), sigma)
+            sx, sy = w / level.shape[1], h / level.shape[0]
+            for s in sizes:
+                tpl, side = self._templates[s]
+                if side >= min(level.shape):
+                    continue
+                ncc = cv2.matchTemplate(blurred, tpl, cv2.TM_CCOEFF_NORMED)
+                found.extend(self._peaks(ncc, s, side, sx, sy))
+        found.sort(key=lambda c: -c.score)
+        kept: list[Candidate] = []
+        for c in found:
+            if all(
+                (c.cx - k.cx) ** 2 + (c.cy - k.cy) ** 2 > (0.5 * min(c.size, k.size)) ** 2
+                for k in kept
+            ):
+                kept.append(c)
+        return kept
+
+    def _peaks(self, ncc: np.ndarray, s: int, side: int, sx: float, sy: float) -> list[Candidate]:
+        """Local maxima of an NCC map as candidates (board side ``s``, template ``side``)."""
+        if ncc.size == 0:
+            return []
+        k = max(3, (s // 2) | 1)
+        local_max = cv2.dilate(ncc, np.ones((k, k), np.uint8))
+        ys, xs = np.nonzero((ncc >= local_max) & (ncc >= self.ncc_threshold))
+        if len(xs) > self.max_peaks:
+            best = np.argsort(ncc[ys, xs])[::-1][: self.max_peaks]
+            ys, xs = ys[best], xs[best]
+        return [
+            Candidate(
+                (x + side / 2) * sx - 0.5,
+                (y + side / 2) * sy - 0.5,
+                s * 0.5 * (sx + sy),
+                float(ncc[y, x]),
+            )
+            for y, x in zip(ys.tolist(), xs.tolist(), strict=True)
+        ]
