@@ -17,6 +17,11 @@ ENV_WORLDS: dict[str, str] = {
 }
 
 
+#: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-Odometry-v0``: the
+#: env wrapped in :class:`stsf_gym.wrappers.PoseEstimateWrapper`.
+ESTIMATOR_IDS: dict[str, str] = {"Odometry": "odometry"}
+
+
 def register_envs() -> None:
     """Register every stsf-gym id that is not registered yet."""
     for env_id, world in ENV_WORLDS.items():
@@ -24,6 +29,14 @@ def register_envs() -> None:
             register(
                 id=env_id, entry_point="envs.corridor_env:CorridorEnv", kwargs={"world": world}
             )
+        for suffix, estimator in ESTIMATOR_IDS.items():
+            estimating_id = env_id.replace("-v0", f"-{suffix}-v0")
+            if estimating_id not in registry:
+                register(
+                    id=estimating_id,
+                    entry_point="stsf_gym.wrappers:make_estimating_env",
+                    kwargs={"world": world, "estimator": estimator},
+                )
 
 
 register_envs()

@@ -1,0 +1,105 @@
+"""What every pose estimator shares: the robot's sensor model and one interface.
+
+An estimator never reads ``info``: what it knows comes from the observation and from a
+:class:`SensorModel`, the robot's own (believed) description of its sensors and the landmark
+map, rebuilt at each reset because the believed odometry calibration changes per episode.
+"""
+
+from __future__ import annotations
+
+import time
+from abc import ABC, abstractmethod
+from collections import defaultdict
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from envs.sensors.encoders import OdometryCalibration
+from stsf_gym.estimators.odometry import OdometryNoise
+
+
+@dataclass(frozen=True)
+class MapLandmark:
+    """A landmark of the map: id, board centre and outward normal, square centres (world)."""
+
+    id: int
+    centre: np.ndarray
+    normal: np.ndarray
+    square_centres: np.ndarray
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map."""
+
+    calibration: OdometryCalibration
+    odometry_noise: OdometryNoise
+    camera_matrix: np.ndarray
+    image_size: tuple[int, int]  # width, height
+    robot_from_camera: Callable[[float, float], np.ndarray]
+    landmarks: dict[int, MapLandmark]
+    pattern: object  # stsf_gym.vision.landmarks.LandmarkPattern
+
+    @classmethod
+    def from_env(cls, env) -> SensorModel:
+        """The model of ``env``'s robot for the current episode (call after each reset)."""
+        u = env.unwrapped
+        cfg = u.config
+        return cls(
+            calibration=u.odometry_calibration,
+            odometry_noise=OdometryNoise.from_encoders(
+                cfg.encoders.slip_std, cfg.encoders.radius_error_std, cfg.robot.wheel_radius
+            ),
+            camera_matrix=u.camera_matrix,
+            image_size=(cfg.camera.width, cfg.camera.height),
+            robot_from_camera=u.robot_from_camera,
+            landmarks={
+                lm.id: MapLandmark(lm.id, lm.centre, lm.normal, lm.square_centres)
+                for lm in u.landmarks
+            },
+            pattern=cfg.world.landmark_pattern,
+        )
+
+
+class PoseEstimator(ABC):
+    """``reset(model, initial_pose, initial_cov)`` then ``update(obs, dt) -> (mean, cov)``.
+
+    ``mean`` is ``[x, y, yaw]`` in the world frame, ``cov`` its 3x3 covariance.
+    :attr:`timings` sums the wall time of each stage; :attr:`counters` counts events
+    (frames, landmark matches, rejected measurements).
+    """
+
+    name: str = ""
+
+    def __init__(self) -> None:
+        self.timings: dict[str, float] = defaultdict(float)
+        self.counters: dict[str, int] = defaultdict(int)
+        self.model: SensorModel | None = None
+        self.mean, self.cov = np.zeros(3), np.eye(3)
+
+    def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
+        self.model = model
+        self.mean = np.asarray(initial_pose, dtype=float).copy()
+        self.cov = np.asarray(initial_cov, dtype=float).copy()
+        self.timings.clear()
+        self.counters.clear()
+
+    @abstractmethod
+    def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Fold in one step's observation; return the pose estimate and its covariance."""
+
+    def timed(self, stage: str):
+        """Context manager adding the wall time of a block to ``timings[stage]``."""
+        return _Timer(self.timings, stage)
+
+
+class _Timer:
+    def __init__(self, timings: dict[str, float], stage: str) -> None:
+        self.timings, self.stage = timings, stage
+
+    def __enter__(self) -> None:
+        self.start = time.perf_counter()
+
+    def __exit__(self, *exc) -> None:
+        self.timings[self.stage] += time.perf_counter() - self.start
