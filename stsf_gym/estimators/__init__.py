@@ -5,14 +5,17 @@ Options come from ``configs/estimators/<name>.yaml`` (when present) and keyword 
 
 from __future__ import annotations
 
+import importlib
 import inspect
 
 from envs.config import CONFIG_DIR, ConfigError, read_yaml
 from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 
-#: Estimators by name.
-ESTIMATORS: dict[str, type[PoseEstimator]] = {"odometry": OdometryEstimator}
+#: Estimators by name: "module:class", imported when first made.
+ESTIMATORS: dict[str, str] = {
+    "odometry": "stsf_gym.estimators.dead_reckoning:OdometryEstimator",
+    "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
+}
 
 __all__ = ["ESTIMATORS", "MapLandmark", "PoseEstimator", "SensorModel", "make_estimator"]
 
@@ -21,7 +24,8 @@ def make_estimator(name: str, **options) -> PoseEstimator:
     """A fresh estimator ``name`` with options from its YAML file overridden by ``options``."""
     if name not in ESTIMATORS:
         raise ValueError(f"unknown estimator {name!r}; known: {', '.join(sorted(ESTIMATORS))}")
-    cls = ESTIMATORS[name]
+    module, _, class_name = ESTIMATORS[name].partition(":")
+    cls = getattr(importlib.import_module(module), class_name)
     path = CONFIG_DIR / "estimators" / f"{name}.yaml"
     merged = {**(read_yaml(path) if path.is_file() else {}), **options}
     known = set(inspect.signature(cls.__init__).parameters) - {"self"}

@@ -29,10 +29,8 @@ import numpy as np
 import stsf_gym  # noqa: F401 - registers the env ids
 from envs.config import CONFIG_DIR, build, deep_merge, load_config, overrides_to_tree, read_yaml
 from stsf_gym.estimators.odometry import OdometryNoise, propagate
+from stsf_gym.estimators.pair_range import pair_range
 from stsf_gym.fusion import (
-    DegenerateGeometryError,
-    motion_stereo_range,
-    motion_stereo_variance,
     stereo_range_bound,
     stsf_fuse,
     to_inverse_range,
@@ -233,33 +231,17 @@ class Table1Run:
 
     def _motion_stereo(self, a: _Frame, b: _Frame) -> tuple[float, float] | None:
         """``D`` and its variance from frames ``a`` (k-1) and ``b`` (k), eq. 8-20."""
-        common = sorted(a.points.keys() & b.points.keys())
-        if len(common) < 4:
-            return None
-        f, centre = self.K[0, 0], self.K[:2, 2]
-
-        def rays(frame: _Frame) -> np.ndarray:
-            uv = np.array([frame.points[i] for i in common]) - centre
-            return np.column_stack([uv, np.full(len(common), f)])
-
-        prev_from_curr = np.linalg.inv(a.world_from_camera) @ b.world_from_camera
-        R, t = prev_from_curr[:3, :3], prev_from_curr[:3, 3]
         world_from_camera = b.world_from_camera[:3, :3]
-        n = world_from_camera.T @ -self.landmark.normal  # unit normal towards the plane, camera k
-        # odometry error of the baseline, expressed in camera axes (robot z is the turn axis)
-        camera_from_robot = world_from_camera.T @ to_se3(np.array([0, 0, b.heading]))[:3, :3]
-        cov_xy = np.zeros((3, 3))
-        cov_xy[:2, :2] = b.motion_cov[:2, :2]
-        cov_t = camera_from_robot @ cov_xy @ camera_from_robot.T
-        axis = camera_from_robot[:, 2]
-        cov_rot = b.motion_cov[2, 2] * np.outer(axis, axis)
-        q_prev, q_curr = rays(a), rays(b)
-        try:
-            D = motion_stereo_range(q_prev, q_curr, R, t, n)
-            var = motion_stereo_variance(q_prev, q_curr, R, t, n, self.cfg.sigma_px, cov_t, cov_rot)
-        except DegenerateGeometryError:
-            return None
-        return D, var
+        return pair_range(
+            a.points,
+            b.points,
+            self.K,
+            np.linalg.inv(a.world_from_camera) @ b.world_from_camera,
+            world_from_camera.T @ -self.landmark.normal,  # towards the plane, camera k
+            b.motion_cov,
+            world_from_camera.T @ to_se3(np.array([0, 0, b.heading]))[:3, :3],
+            self.cfg.sigma_px,
+        )
 
     def _stsf(self, frame: _Frame, D: float, var: float) -> dict[str, float]:
         """Eq. 2-5 over every measurement so far, carried into this frame by odometry (eq. 3)

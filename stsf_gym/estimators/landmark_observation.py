@@ -1,0 +1,95 @@
+"""From a detected landmark board to its pose in the robot frame, with covariance.
+
+The board's pose relative to the camera comes from the known square layout (planar PnP,
+OpenCV's IPPE); its covariance from the Gauss-Newton normal matrix of the reprojection,
+``sigma_px^2 (J^T J)^-1``. Mapped into the robot frame through the mount kinematics, the
+measurement is ``z = [x, y, phi]``: the board centre on the floor plane and the yaw of its
+outward normal, the SE(2) pose of the landmark relative to the robot.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from stsf_gym.estimators.base import MapLandmark, SensorModel
+from stsf_gym.vision.landmarks import square_centres
+
+
+@dataclass(frozen=True)
+class LandmarkObservation:
+    """One detected map landmark in one frame."""
+
+    landmark: MapLandmark
+    indices: np.ndarray  # square indices (square_centres order)
+    image_points: np.ndarray  # (N, 2) pixels
+    robot_from_camera: np.ndarray  # 4x4, nominal mount kinematics at the frame's pan/tilt
+    z: np.ndarray  # [x, y, phi]: landmark pose in the robot frame
+    cov: np.ndarray  # 3x3 covariance of z
+
+    @property
+    def range_bearing(self) -> np.ndarray:
+        """[range, bearing] of the board centre from the robot origin."""
+        return np.array([math.hypot(self.z[0], self.z[1]), math.atan2(self.z[1], self.z[0])])
+
+
+def _board_pose(params: np.ndarray, robot_from_camera: np.ndarray) -> np.ndarray:
+    """z = [x, y, phi] from PnP parameters (rvec, tvec) of camera-from-board."""
+    rotation, _ = cv2.Rodrigues(params[:3])
+    centre = robot_from_camera[:3, :3] @ params[3:] + robot_from_camera[:3, 3]
+    normal = robot_from_camera[:3, :3] @ rotation[:, 2]  # board z: out of the board
+    return np.array([centre[0], centre[1], math.atan2(normal[1], normal[0])])
+
+
+def observe(
+    detection, model: SensorModel, pan: float, tilt: float, sigma_px: float
+) -> LandmarkObservation | None:
+    """The observation of a detection, or ``None`` for an unknown id or a failed fit."""
+    landmark = model.landmarks.get(detection.landmark_id)
+    if landmark is None or len(detection.indices) < 4:
+        return None
+    plane = square_centres(detection.landmark_id, model.pattern)[detection.indices]
+    object_points = np.column_stack([plane, np.zeros(len(plane))])
+    image_points = np.asarray(detection.image_points, dtype=np.float64)
+    ok, rvec, tvec = cv2.solvePnP(
+        object_points, image_points, model.camera_matrix, None, flags=cv2.SOLVEPNP_IPPE
+    )
+    if not ok or tvec[2, 0] <= 0:
+        return None
+    params = np.concatenate([rvec.ravel(), tvec.ravel()])
+    _, jac = cv2.projectPoints(object_points, rvec, tvec, model.camera_matrix, None)
+    normal_matrix = jac[:, :6].T @ jac[:, :6]
+    try:
+        params_cov = sigma_px**2 * np.linalg.inv(normal_matrix)
+    except np.linalg.LinAlgError:
+        return None
+    robot_from_camera = model.robot_from_camera(pan, tilt)
+    z = _board_pose(params, robot_from_camera)
+    G = np.empty((3, 6))  # dz/dparams by central differences
+    for i in range(6):
+        step = np.zeros(6)
+        step[i] = 1e-6
+        diff = _board_pose(params + step, robot_from_camera) - _board_pose(
+            params - step, robot_from_camera
+        )
+        diff[2] = math.remainder(diff[2], math.tau)
+        G[:, i] = diff / 2e-6
+    cov = G @ params_cov @ G.T
+    return LandmarkObservation(
+        landmark,
+        np.asarray(detection.indices),
+        image_points,
+        robot_from_camera,
+        z,
+        (cov + cov.T) / 2,
+    )
+
+
+def landmark_world_pose(landmark: MapLandmark) -> np.ndarray:
+    """The map landmark as an SE(2) pose: board centre and the yaw of its outward normal."""
+    return np.array(
+        [landmark.centre[0], landmark.centre[1], math.atan2(landmark.normal[1], landmark.normal[0])]
+    )

@@ -1,0 +1,57 @@
+"""Motion stereo between two frames of the moving camera, with the camera motion from odometry.
+
+Wraps :func:`stsf_gym.fusion.motion_stereo_range` (eq. 8-20) for matched landmark squares:
+builds the image rays, takes the relative camera pose the robot believes, and turns the
+odometry covariance of that motion into the baseline and rotation covariances of
+:func:`stsf_gym.fusion.motion_stereo_variance`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stsf_gym.fusion import DegenerateGeometryError, motion_stereo_range, motion_stereo_variance
+
+
+def pair_range(
+    points_prev: dict[int, np.ndarray],
+    points_curr: dict[int, np.ndarray],
+    camera_matrix: np.ndarray,
+    prev_from_curr: np.ndarray,
+    normal: np.ndarray,
+    motion_cov: np.ndarray,
+    camera_from_robot: np.ndarray,
+    sigma_px: float,
+    min_points: int = 4,
+) -> tuple[float, float] | None:
+    """Plane distance ``D`` from camera k and its variance, or ``None`` when not measurable.
+
+    Args:
+        points_prev, points_curr: pixel of each square index in frames k-1 and k.
+        prev_from_curr: 4x4 pose of camera k in camera k-1 (``X_prev = R X_k + t``).
+        normal: unit plane normal in camera-k axes, pointing towards the plane.
+        motion_cov: 3x3 odometry covariance of the robot motion [x, y, yaw] between frames.
+        camera_from_robot: 3x3 rotation from robot to camera-k axes (robot z is the turn axis).
+    """
+    common = sorted(points_prev.keys() & points_curr.keys())
+    if len(common) < min_points:
+        return None
+    f, centre = camera_matrix[0, 0], camera_matrix[:2, 2]
+
+    def rays(points: dict[int, np.ndarray]) -> np.ndarray:
+        uv = np.array([points[i] for i in common]) - centre
+        return np.column_stack([uv, np.full(len(common), f)])
+
+    R, t = prev_from_curr[:3, :3], prev_from_curr[:3, 3]
+    cov_xy = np.zeros((3, 3))
+    cov_xy[:2, :2] = motion_cov[:2, :2]
+    cov_t = camera_from_robot @ cov_xy @ camera_from_robot.T
+    axis = camera_from_robot[:, 2]
+    cov_rot = motion_cov[2, 2] * np.outer(axis, axis)
+    q_prev, q_curr = rays(points_prev), rays(points_curr)
+    try:
+        D = motion_stereo_range(q_prev, q_curr, R, t, normal)
+        var = motion_stereo_variance(q_prev, q_curr, R, t, normal, sigma_px, cov_t, cov_rot)
+    except DegenerateGeometryError:
+        return None
+    return D, var
