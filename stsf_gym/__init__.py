@@ -17,9 +17,13 @@ ENV_WORLDS: dict[str, str] = {
 }
 
 
-#: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-Odometry-v0``: the
-#: env wrapped in :class:`stsf_gym.wrappers.PoseEstimateWrapper`.
-ESTIMATOR_IDS: dict[str, str] = {"Odometry": "odometry"}
+#: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-STSF-v0``: the env
+#: wrapped in :class:`stsf_gym.wrappers.PoseEstimateWrapper`, which points the camera.
+ESTIMATOR_IDS: dict[str, str] = {
+    "Odometry": "odometry",
+    "Conventional": "conventional",
+    "STSF": "stsf",
+}
 
 
 def register_envs() -> None:
@@ -35,7 +39,8 @@ def register_envs() -> None:
                 register(
                     id=estimating_id,
                     entry_point="stsf_gym.wrappers:make_estimating_env",
-                    kwargs={"world": world, "estimator": estimator},
+                    # the wrapper keeps the pan camera on a landmark
+                    kwargs={"world": world, "estimator": estimator, "camera__control": "pan"},
                 )
 
 

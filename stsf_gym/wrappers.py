@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
+
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
 from stsf_gym.estimators import SensorModel, make_estimator
+from stsf_gym.estimators.camera_pointing import LandmarkPointer
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
@@ -23,6 +26,9 @@ class PoseEstimateWrapper(gym.Wrapper):
 
     The estimator starts each episode at the commanded start pose (the world's ``start`` or
     ``options["start_pose"]``) with standard deviations ``start_std``; it never sees ``info``.
+    When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
+    landmark from the pose estimate and the map (:class:`LandmarkPointer`) and the agent's
+    action stays ``[v, w]``.
 
     Args:
         env: a stsf-gym env.
@@ -34,6 +40,14 @@ class PoseEstimateWrapper(gym.Wrapper):
     def __init__(self, env: gym.Env, estimator: str = "odometry", start_std=START_STD, **options):
         super().__init__(env)
         self.estimator = make_estimator(estimator, **options)
+        robot = env.unwrapped.config.robot
+        self.pointer = None
+        if env.unwrapped.config.camera.control == "pan":
+            # the wrapper points the camera; the agent keeps the (v, w) action
+            self.pointer = LandmarkPointer(
+                {}, robot.camera_forward, math.radians(robot.pan_limit_deg)
+            )
+            self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
         lo, hi = env.unwrapped.world.bounds[0] - 50.0, env.unwrapped.world.bounds[1] + 50.0
         pose_space = spaces.Box(
@@ -49,10 +63,17 @@ class PoseEstimateWrapper(gym.Wrapper):
     def reset(self, *, seed=None, options=None):
         obs, info = self.env.reset(seed=seed, options=options)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
-        self.estimator.reset(SensorModel.from_env(self.env), start, self.start_cov)
+        model = SensorModel.from_env(self.env)
+        self.estimator.reset(model, start, self.start_cov)
+        if self.pointer is not None:
+            self.pointer.landmarks = model.landmarks
+            self.pointer.reset()
         return self._with_pose(obs, self.estimator.mean, self.estimator.cov), info
 
     def step(self, action):
+        if self.pointer is not None:
+            pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
+            action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
         obs, reward, terminated, truncated, info = self.env.step(action)
         mean, cov = self.estimator.update(obs, self.env.unwrapped.dt)
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info

@@ -11,12 +11,17 @@ from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.odometry import integrate_wheel_travel
 from stsf_gym.wrappers import PoseEstimateWrapper
 
-ESTIMATING_IDS = ["stsf_gym/Corridor-Odometry-v0", "stsf_gym/Straight10m-Odometry-v0"]
+ESTIMATING_IDS = [
+    "stsf_gym/Corridor-Odometry-v0",
+    "stsf_gym/Straight10m-Odometry-v0",
+    "stsf_gym/Corridor-STSF-v0",
+    "stsf_gym/Corridor-Conventional-v0",
+]
 
 
 @pytest.mark.parametrize("env_id", ESTIMATING_IDS)
 def test_estimating_ids_pass_both_checkers(env_id):
-    env = gym.make(env_id, camera__enabled=False)
+    env = gym.make(env_id)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")

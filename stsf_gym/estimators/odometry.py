@@ -20,9 +20,19 @@ class OdometryNoise:
     scale_std: float
 
     @classmethod
-    def from_encoders(cls, slip_std: float, radius_error_std: float, wheel_radius: float):
-        """Matching the env's encoder model: slip ``slip_std`` rad per sqrt(rad) of rotation."""
-        return cls(slip_std**2 * wheel_radius, radius_error_std)
+    def from_encoders(
+        cls,
+        slip_std: float,
+        radius_error_std: float,
+        wheel_radius: float,
+        calibration_length: float = 5.0,
+    ):
+        """Matching the env's encoder model: slip ``slip_std`` rad per sqrt(rad) of rotation,
+        and a wheel-radius error of relative std ``radius_error_std`` that the robot cannot
+        know. That error is systematic; it is modelled as a random walk with the same variance
+        after ``calibration_length`` metres, which keeps the covariance from being
+        over-confident over tens of metres without making it useless over a few."""
+        return cls(slip_std**2 * wheel_radius + radius_error_std**2 * calibration_length, 0.0)
 
     def wheel_variances(self, d_left: float, d_right: float) -> np.ndarray:
         d = np.array([d_left, d_right])

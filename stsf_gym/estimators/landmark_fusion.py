@@ -1,0 +1,267 @@
+"""The paper's estimators: conventional fusion (two frames) and STSF (all frames of a track).
+
+Every step starts with the odometry prediction. On each camera frame, every detected map
+landmark seen in the previous frame too gives a measurement of its pose relative to the robot,
+``z = [x, y, phi]``:
+
+- its range by motion stereo between the two frames (eq. 8-20), the camera motion taken from
+  odometry and the plane normal from the board's measured orientation;
+- its bearing and orientation from the board's image (planar PnP,
+  :mod:`stsf_gym.estimators.landmark_observation`).
+
+**Conventional** fusion uses that measurement of the current two frames. **STSF** keeps the
+landmark's track: each earlier measurement is carried into the current frame by the odometry
+between frames (eq. 3, with its uncertainty and the correlation between reused frames) and
+all are fused with the significance weights of eq. 4-5 (eq. 2). Either result becomes a
+measurement of the robot's pose through the landmark's map pose, which is merged with the
+odometry prediction by eq. 23-24 after a Mahalanobis gate (chi-square, 3 dof), so a wrong
+detection is rejected rather than fused. STSF's fused track reuses frames whose information
+is already in the prediction; merging it as if independent would count them again and again
+(over-confidence, measured as NEES far above 3), so STSF merges by covariance intersection
+(eq. 23-24 on scaled covariances), consistent whatever that correlation. A track is dropped
+after ``max_gap_frames`` frames without the landmark.
+
+The two frames of a pair are the current frame and the landmark's last key frame at least
+``min_baseline`` metres of odometry earlier: at 5 Hz and 12 cm/s consecutive frames are
+2.4 cm apart, too little parallax for motion stereo. A range whose predicted standard
+deviation exceeds ``max_relative_range_std`` of itself is dropped: its first-order variance
+no longer describes its error.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import gammaincinv
+
+from stsf_gym.estimators.base import SensorModel
+from stsf_gym.estimators.dead_reckoning import OdometryEstimator
+from stsf_gym.estimators.landmark_observation import (
+    LandmarkObservation,
+    landmark_world_pose,
+    observe,
+)
+from stsf_gym.estimators.odometry import propagate
+from stsf_gym.estimators.pair_range import pair_range
+from stsf_gym.fusion import STSFTrack, merge_gaussians
+from stsf_gym.geometry import compose, compose_jacobians, inverse, inverse_jacobian, to_se3
+from stsf_gym.vision.detector import LandmarkDetector
+
+CI_WEIGHTS = np.linspace(0.05, 0.95, 19)
+
+
+class _Seen:
+    """The last frame a landmark was seen in, and the odometry since then."""
+
+    def __init__(self, observation: LandmarkObservation) -> None:
+        self.observation = observation
+        self.motion, self.motion_cov = np.zeros(3), np.zeros((3, 3))
+        self.missed = 0
+
+    def move(self, u: np.ndarray, q: np.ndarray) -> None:
+        """Compose one step's odometry increment ``u`` (covariance ``q``) onto the motion."""
+        j_a, j_b = compose_jacobians(self.motion, u)
+        self.motion = compose(self.motion, u)
+        self.motion_cov = j_a @ self.motion_cov @ j_a.T + j_b @ q @ j_b.T
+
+
+class LandmarkFusionEstimator(OdometryEstimator):
+    """Shared machinery of :class:`ConventionalEstimator` and :class:`STSFEstimator`."""
+
+    def __init__(
+        self,
+        sigma_px: float = 0.15,
+        gate_probability: float = 0.99,
+        max_gap_frames: int = 5,
+        max_range: float = 9.0,
+        min_baseline: float = 0.1,
+        max_relative_range_std: float = 0.25,
+        orientation_std_floor: float = 0.03,
+        position_std_floor: float = 0.01,
+        position_std_per_m: float = 0.005,
+    ) -> None:
+        super().__init__()
+        if not 0 < gate_probability < 1:
+            raise ValueError(f"gate_probability must be in (0, 1), got {gate_probability}")
+        self.sigma_px, self.max_gap_frames, self.max_range = sigma_px, max_gap_frames, max_range
+        self.min_baseline, self.max_relative_range_std = min_baseline, max_relative_range_std
+        self.orientation_var_floor = orientation_std_floor**2
+        self.position_std_floor, self.position_std_per_m = position_std_floor, position_std_per_m
+        self.gate = 2 * gammaincinv(1.5, gate_probability)  # chi-square quantile, 3 dof
+        self.detector: LandmarkDetector | None = None
+
+    def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
+        super().reset(model, initial_pose, initial_cov)
+        self.detector = LandmarkDetector(model.pattern, valid_ids=set(model.landmarks))
+        self.seen: dict[int, _Seen] = {}
+        self.tracks: dict[int, STSFTrack] = {}
+
+    def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        with self.timed("odometry"):
+            self.predict(obs)
+            calibration = self.model.calibration
+            step = propagate(
+                np.zeros(3),
+                np.zeros((3, 3)),
+                *calibration.wheel_travel(obs["encoders"]),
+                calibration.wheelbase,
+                self.model.odometry_noise,
+            )
+            for seen in self.seen.values():
+                seen.move(*step)
+            for track in self.tracks.values():
+                track.move(*step)
+        if obs["image_new"]:
+            self._frame(obs)
+        return self.mean, self.cov
+
+    def _frame(self, obs: dict) -> None:
+        self.counters["frames"] += 1
+        with self.timed("detect"):
+            detections = self.detector.detect(obs["image"])
+        pan, tilt = (float(a) for a in obs["camera_pan_tilt"])
+        observed = set()
+        for detection in detections:
+            with self.timed("observe"):
+                current = observe(detection, self.model, pan, tilt, self.sigma_px)
+            if current is None or current.range_bearing[0] > self.max_range:
+                continue
+            observed.add(current.landmark.id)
+            previous = self.seen.get(current.landmark.id)
+            if previous is not None:
+                previous.missed = 0
+                if np.hypot(*previous.motion[:2]) < self.min_baseline:
+                    continue  # too short a baseline yet: keep the earlier frame
+            self.seen[current.landmark.id] = _Seen(current)
+            if previous is None:
+                continue
+            with self.timed("motion_stereo"):
+                measured = self._pair_measurement(previous, current)
+            if measured is None:
+                continue
+            with self.timed("fusion"):
+                z, cov = self.fuse_landmark(current.landmark.id, *measured)
+                self._merge(current, z, cov)
+        self.counters["frames_matched"] += bool(observed)
+        for landmark_id in set(self.seen) - observed:
+            self.seen[landmark_id].missed += 1
+            if self.seen[landmark_id].missed > self.max_gap_frames:
+                del self.seen[landmark_id]
+                self.tracks.pop(landmark_id, None)
+
+    def _pair_measurement(
+        self, previous: _Seen, current: LandmarkObservation
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """``z`` with its range from motion stereo between the two frames, and covariance."""
+        prev_obs = previous.observation
+        camera_from_robot = current.robot_from_camera[:3, :3].T
+        phi = current.z[2]
+        normal = camera_from_robot @ -np.array([np.cos(phi), np.sin(phi), 0.0])
+        prev_from_curr = (
+            np.linalg.inv(prev_obs.robot_from_camera)
+            @ to_se3(previous.motion)
+            @ current.robot_from_camera
+        )
+        measured = pair_range(
+            dict(zip(prev_obs.indices.tolist(), prev_obs.image_points, strict=True)),
+            dict(zip(current.indices.tolist(), current.image_points, strict=True)),
+            self.model.camera_matrix,
+            prev_from_curr,
+            normal,
+            previous.motion_cov,
+            camera_from_robot,
+            self.sigma_px,
+        )
+        if measured is None:
+            return None
+        D, var_D = measured
+        if var_D > (self.max_relative_range_std * D) ** 2:
+            self.counters["imprecise"] += 1  # beyond where the first-order variance holds
+            return None
+        # the board centre along its PnP ray, at the plane distance D from the camera
+        centre_cam = np.linalg.inv(current.robot_from_camera) @ np.append(
+            [*current.z[:2], self.model.landmarks[current.landmark.id].centre[2]], 1.0
+        )
+        ray = centre_cam[:3] / np.linalg.norm(centre_cam[:3])
+        if normal @ ray <= 1e-3:
+            return None
+        scale = 1.0 / float(normal @ ray)
+        centre_robot = current.robot_from_camera[:3, :3] @ (D * scale * ray)
+        centre_robot += current.robot_from_camera[:3, 3]
+        z = np.array([centre_robot[0], centre_robot[1], phi])
+        radial = (current.robot_from_camera[:3, :3] @ ray)[:2]  # the camera ray, on the floor
+        radial /= np.linalg.norm(radial)
+        project_out = np.eye(3)
+        project_out[:2, :2] -= np.outer(radial, radial)
+        cov = project_out @ current.cov @ project_out.T  # keep bearing and orientation
+        cov[:2, :2] += var_D * scale**2 * np.outer(radial, radial)  # range from motion stereo
+        # errors the model leaves out (the body's pitch and roll on its casters, the mount's
+        # play): independent floors, which also keep the PnP covariance from being singular
+        position_std = self.position_std_floor + self.position_std_per_m * np.hypot(*z[:2])
+        cov += np.diag([position_std**2, position_std**2, self.orientation_var_floor])
+        return z, cov
+
+    def fuse_landmark(self, landmark_id: int, z: np.ndarray, cov: np.ndarray):
+        """The landmark's relative pose to merge: conventional or STSF."""
+        raise NotImplementedError
+
+    def _merge(self, current: LandmarkObservation, z: np.ndarray, cov: np.ndarray) -> None:
+        """Robot pose from the landmark's map pose, gated, merged by eq. 23-24."""
+        landmark_pose = landmark_world_pose(current.landmark)
+        z_inv = inverse(z)
+        pose = compose(landmark_pose, z_inv)
+        _, j_b = compose_jacobians(landmark_pose, z_inv)
+        jac = j_b @ inverse_jacobian(z)
+        pose_cov = jac @ cov @ jac.T
+        innovation = pose - self.mean
+        innovation[2] = np.arctan2(np.sin(innovation[2]), np.cos(innovation[2]))
+        if innovation @ np.linalg.solve(self.cov + pose_cov, innovation) > self.gate:
+            self.counters["gated_out"] += 1
+            self.tracks.pop(current.landmark.id, None)
+            return
+        prior_cov, pose_cov = self.merge_covariances(self.cov, pose_cov)
+        self.mean, self.cov = merge_gaussians(self.mean, prior_cov, pose, pose_cov, angle_index=[2])
+        self.counters["landmark_updates"] += 1
+
+    def merge_covariances(self, prior: np.ndarray, measured: np.ndarray):
+        """Covariances to merge with (eq. 23-24): as they are, for independent errors."""
+        return prior, measured
+
+
+class ConventionalEstimator(LandmarkFusionEstimator):
+    """Conventional sensor fusion: the landmark measured from the current two frames."""
+
+    name = "conventional"
+
+    def fuse_landmark(self, landmark_id: int, z: np.ndarray, cov: np.ndarray):
+        return z, cov
+
+
+class STSFEstimator(LandmarkFusionEstimator):
+    """STSF: every frame of the landmark's track carried into the current one and fused."""
+
+    name = "stsf"
+
+    def __init__(self, weights: str = "significance", max_track_frames: int = 50, **options):
+        super().__init__(**options)
+        if weights not in ("significance", "gls"):
+            raise ValueError(f"stsf weights must be 'significance' or 'gls', got {weights!r}")
+        self.weights, self.max_track_frames = weights, max_track_frames
+
+    def fuse_landmark(self, landmark_id: int, z: np.ndarray, cov: np.ndarray):
+        track = self.tracks.setdefault(landmark_id, STSFTrack(self.max_track_frames))
+        track.add(z, cov)
+        fused = track.fuse(self.weights)
+        return fused.x, fused.cov
+
+    def merge_covariances(self, prior: np.ndarray, measured: np.ndarray):
+        """Covariance intersection: the fused track reuses frames already merged into the
+        prior, so the two are correlated by an unknown amount. Eq. 23-24 on ``prior / w`` and
+        ``measured / (1 - w)`` is consistent for any such correlation; ``w`` minimises the
+        merged covariance's trace."""
+        best = None
+        for w in CI_WEIGHTS:
+            a, b = prior / w, measured / (1 - w)
+            merged = a - a @ np.linalg.solve(a + b, a)
+            if best is None or np.trace(merged) < best[0]:
+                best = (np.trace(merged), a, b)
+        return best[1], best[2]

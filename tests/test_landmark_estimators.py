@@ -1,0 +1,80 @@
+"""Conventional and STSF estimators through the wrapper, with the camera pointed by it."""
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from agents.follower import PathFollower
+from stsf_gym.estimators.camera_pointing import LandmarkPointer
+from stsf_gym.estimators.landmark_fusion import ConventionalEstimator
+from stsf_gym.wrappers import PoseEstimateWrapper
+
+STEPS = 450  # about 5 m at 12.2 cm/s
+
+
+def run(estimator: str, seed: int = 3):
+    env = PoseEstimateWrapper(gym.make("stsf_gym/Straight10m-v0", camera__control="pan"), estimator)
+    follower = PathFollower.for_env(env)
+    obs, info = env.reset(seed=seed)
+    assert env.action_space.shape == (2,)  # the wrapper points the camera
+    nees = []
+    for _ in range(STEPS):
+        obs, _, terminated, truncated, info = env.step(follower.act(info["true_pose"]))
+        error = obs["pose"].astype(float) - info["true_pose"]
+        error[2] = math.remainder(error[2], math.tau)
+        cov = obs["pose_cov"].reshape(3, 3).astype(float)
+        assert np.all(np.linalg.eigvalsh(cov) > 0)
+        nees.append(error @ np.linalg.solve(cov, error))
+        assert not (terminated or truncated)
+    counters = dict(env.estimator.counters)
+    env.close()
+    return float(np.hypot(*error[:2])), float(np.mean(nees)), counters
+
+
+@pytest.fixture(scope="module")
+def odometry_error():
+    return run("odometry")[0]
+
+
+@pytest.mark.parametrize("estimator", ["conventional", "stsf"])
+def test_landmarks_correct_the_drift(estimator, odometry_error):
+    error, nees, counters = run(estimator)
+    assert counters["landmark_updates"] >= 10
+    assert counters["frames_matched"] >= 0.8 * counters["frames"]
+    assert error < 0.5 * odometry_error and error < 0.2
+    assert nees < 10  # not wildly over-confident (3 is ideal; see the issue notes)
+
+
+def test_wrong_landmark_is_gated_out():
+    estimator = ConventionalEstimator()
+    estimator.mean, estimator.cov = np.array([2.0, 0.0, 0.0]), np.diag([1e-4, 1e-4, 1e-5])
+    estimator.counters.clear()
+
+    class Seen:  # a map landmark 3 m ahead, measured 1 m off
+        landmark = type(
+            "L",
+            (),
+            {"centre": np.array([5.0, 0.0, 0.9]), "normal": np.array([-1.0, 0.0, 0.0]), "id": 1},
+        )()
+
+    estimator.tracks = {}
+    estimator._merge(Seen, np.array([2.0, 0.0, math.pi]), np.diag([1e-4, 1e-4, 1e-4]))
+    assert estimator.counters["gated_out"] == 1
+    np.testing.assert_array_equal(estimator.mean, [2.0, 0.0, 0.0])
+    estimator._merge(Seen, np.array([3.0, 0.01, math.pi]), np.diag([1e-4, 1e-4, 1e-4]))
+    assert estimator.counters["landmark_updates"] == 1
+
+
+def test_pointer_keeps_a_facing_landmark_in_reach():
+    landmark = type(
+        "L",
+        (),
+        {"centre": np.array([5.0, 1.2, 0.9]), "normal": np.array([0.0, -1.0, 0.0]), "id": 7},
+    )()
+    pointer = LandmarkPointer({7: landmark}, camera_forward=0.0, pan_limit=math.radians(170))
+    assert pointer.pan(np.array([4.0, 0.0, 0.0])) == pytest.approx(math.atan2(1.2, 1.0))
+    assert pointer.target == 7
+    assert pointer.pan(np.array([4.0, 2.0, 0.0])) == 0.0  # behind the board: none qualifies
+    assert pointer.target is None
