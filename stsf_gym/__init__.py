@@ -23,6 +23,7 @@ ESTIMATOR_IDS: dict[str, str] = {
     "Odometry": "odometry",
     "Conventional": "conventional",
     "STSF": "stsf",
+    "EKF": "ekf",
 }
 
 

@@ -16,6 +16,7 @@ ESTIMATING_IDS = [
     "stsf_gym/Straight10m-Odometry-v0",
     "stsf_gym/Corridor-STSF-v0",
     "stsf_gym/Corridor-Conventional-v0",
+    "stsf_gym/Straight10m-EKF-v0",
 ]
 
 
