@@ -14,6 +14,8 @@ from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
 #: Estimators by name: "module:class", imported when first made.
 ESTIMATORS: dict[str, str] = {
     "odometry": "stsf_gym.estimators.dead_reckoning:OdometryEstimator",
+    "conventional": "stsf_gym.estimators.landmark_fusion:ConventionalEstimator",
+    "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
 }
 
@@ -28,10 +30,23 @@ def make_estimator(name: str, **options) -> PoseEstimator:
     cls = getattr(importlib.import_module(module), class_name)
     path = CONFIG_DIR / "estimators" / f"{name}.yaml"
     merged = {**(read_yaml(path) if path.is_file() else {}), **options}
-    known = set(inspect.signature(cls.__init__).parameters) - {"self"}
+    known = _options(cls)
     unknown = sorted(set(merged) - known)
     if unknown:
         raise ConfigError(
             f"unknown option {name}.{unknown[0]}; known: {', '.join(sorted(known)) or 'none'}"
         )
     return cls(**merged)
+
+
+def _options(cls: type) -> set[str]:
+    """Keyword options of ``cls.__init__``, following ``**options`` up to the base classes."""
+    known: set[str] = set()
+    for klass in cls.__mro__:
+        if "__init__" not in vars(klass):
+            continue
+        parameters = inspect.signature(klass.__init__).parameters.values()
+        known |= {p.name for p in parameters if p.kind == p.POSITIONAL_OR_KEYWORD} - {"self"}
+        if not any(p.kind == p.VAR_KEYWORD for p in parameters):
+            break
+    return known
