@@ -65,23 +65,68 @@ def _demo(args: argparse.Namespace) -> dict:
     return summary
 
 
-def _reproduce(args: argparse.Namespace) -> dict:
-    from stsf_gym.experiments.table1 import run_table1
+def _check_counts(args: argparse.Namespace) -> None:
+    for flag in ("workers", "seeds"):
+        value = getattr(args, flag, None)
+        if value is not None and value < 1:
+            raise ConfigError(f"--{flag} must be at least 1, got {value}")
 
-    if args.workers < 1:
-        raise ConfigError(f"--workers must be at least 1, got {args.workers}")
-    overrides = parse_overrides(args.overrides)
-    if args.seeds is not None:
-        if args.seeds < 1:
-            raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
-        overrides["seeds"] = args.seeds
-    out = args.out / args.experiment
-    summary = run_table1(out, seed=args.seed, config=args.config, workers=args.workers, **overrides)
+
+def _print_markdown(args: argparse.Namespace, path: Path) -> None:
     if not args.json:
         from rich.console import Console
 
-        Console().print((out / "table1.md").read_text())
-        Console().print(f"Wrote {out}/table1.md, results.json and {summary['figure']}")
+        Console().print(path.read_text())
+        Console().print(f"Wrote {path.parent}/")
+
+
+def _env_overrides(args: argparse.Namespace) -> dict:
+    """Env settings from ``--config FILE`` and ``--set key=value`` (later wins)."""
+    from envs.config import deep_merge, overrides_to_tree, read_yaml
+
+    base = read_yaml(args.config) if args.config else {}
+    return deep_merge(base, overrides_to_tree(parse_overrides(args.overrides)))
+
+
+def _evaluate(args: argparse.Namespace) -> dict:
+    from stsf_gym.estimators import ESTIMATORS
+    from stsf_gym.experiments.evaluate import evaluate
+
+    _check_counts(args)
+    estimators = [e.strip() for e in args.estimators.split(",") if e.strip()]
+    for name in estimators:
+        if name not in ESTIMATORS:
+            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(ESTIMATORS)}")
+    summary, _ = evaluate(
+        args.out,
+        estimators,
+        args.seeds,
+        args.seed,
+        args.world,
+        args.agent,
+        args.workers,
+        parse_overrides(args.overrides),
+    )
+    _print_markdown(args, args.out / "results.md")
+    return summary
+
+
+def _reproduce(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.figures import fig10, fig11
+    from stsf_gym.experiments.table1 import run_table1
+
+    _check_counts(args)
+    out = args.out / args.experiment
+    if args.experiment in ("fig10", "fig11"):
+        run = fig10 if args.experiment == "fig10" else fig11
+        summary = run(out, args.seeds or 10, args.seed, args.workers, _env_overrides(args))
+        _print_markdown(args, out / f"{args.experiment}.md")
+        return summary
+    overrides = parse_overrides(args.overrides)
+    if args.seeds is not None:
+        overrides["seeds"] = args.seeds
+    summary = run_table1(out, seed=args.seed, config=args.config, workers=args.workers, **overrides)
+    _print_markdown(args, out / "table1.md")
     return summary
 
 
@@ -94,11 +139,23 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--env", default="stsf_gym/Corridor-v0", help="environment id")
     demo.set_defaults(run=_demo)
     reproduce = commands.add_parser("reproduce", help="the paper's experiments")
-    reproduce.add_argument("experiment", choices=["table1"], help="which experiment")
+    reproduce.add_argument("experiment", choices=["table1", "fig10", "fig11"])
     _common(reproduce, "out")
-    reproduce.add_argument("--seeds", type=int, help="number of seeds (config: 20)")
+    reproduce.add_argument("--seeds", type=int, help="seeds (table1: config, 20; figs: 10)")
     reproduce.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
     reproduce.set_defaults(run=_reproduce)
+    evaluate = commands.add_parser("evaluate", help="an agent on each estimator, many seeds")
+    _common(evaluate, "out/evaluate")
+    evaluate.add_argument("--agent", default="follower", help="agent (follower)")
+    evaluate.add_argument(
+        "--estimators",
+        default="odometry,conventional,stsf,ekf",
+        help="comma-separated estimator names",
+    )
+    evaluate.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    evaluate.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")
+    evaluate.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
+    evaluate.set_defaults(run=_evaluate)
     return parser
 
 

@@ -137,7 +137,7 @@ def _plot(env, summary: dict, path: Path) -> Path:
 
     trace = summary["trace"]
     fig, (ax_map, ax_img) = plt.subplots(1, 2, figsize=(13, 5), width_ratios=[1.5, 1])
-    draw_world(ax_map, env)
+    draw_world_config(ax_map, env.config.world)
     ax_map.plot(*trace["true"][:, :2].T, color="tab:green", label="true")
     ax_map.plot(*trace["odometry"][:, :2].T, color="tab:red", ls="--", label="dead reckoning")
     pose, ranges = trace["true"][-1], trace["sonar"][-1]
@@ -160,9 +160,8 @@ def _plot(env, summary: dict, path: Path) -> Path:
         plt.close(fig)
 
 
-def draw_world(ax, env) -> None:
-    """Walls, obstacles, path, goal and landmarks of ``env``'s world on a top-down axis."""
-    world = env.config.world
+def draw_world_config(ax, world) -> None:
+    """Walls, obstacles, path, goal and landmarks of a world config on a top-down axis."""
     for x1, y1, x2, y2 in world.walls:
         ax.plot([x1, x2], [y1, y2], color="0.3", lw=3, solid_capstyle="butt")
     for obstacle in world.obstacles:
@@ -170,15 +169,13 @@ def draw_world(ax, env) -> None:
     path = np.asarray(world.path)
     ax.plot(*path.T, color="0.6", ls=":", label="path")
     ax.scatter(*world.goal, marker="*", s=150, color="gold", zorder=5, label="goal")
-    for landmark in env.landmarks:
-        ax.scatter(*landmark.centre[:2], marker="s", s=30, color="k", zorder=5)
-        ax.annotate(
-            str(landmark.id),
-            landmark.centre[:2] + 0.35 * landmark.normal[:2],
-            ha="center",
-            va="center",
-            fontsize=8,
+    for landmark in world.landmarks:
+        at = np.asarray(landmark.at)
+        normal = np.array(
+            [np.cos(np.radians(landmark.facing_deg)), np.sin(np.radians(landmark.facing_deg))]
         )
+        ax.scatter(*at, marker="s", s=30, color="k", zorder=5)
+        ax.annotate(str(landmark.id), at + 0.4 * normal, ha="center", va="center", fontsize=8)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

@@ -18,7 +18,6 @@ next to the paper's numbers and the bound ``sqrt(2) Z^2 sigma_px / (f b)``.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +29,7 @@ import stsf_gym  # noqa: F401 - registers the env ids
 from envs.config import CONFIG_DIR, build, deep_merge, load_config, overrides_to_tree, read_yaml
 from stsf_gym.estimators.odometry import OdometryNoise, propagate
 from stsf_gym.estimators.pair_range import pair_range
+from stsf_gym.experiments.cache import run_cached
 from stsf_gym.fusion import (
     stereo_range_bound,
     stsf_fuse,
@@ -275,8 +275,8 @@ class Table1Run:
 
 
 # --- many seeds, the table, the figure ---------------------------------------------------------
-def _run_seed(args: tuple[Table1Config, int]) -> SeedResult:
-    return Table1Run(*args).run()
+def _run_seed(job: dict) -> SeedResult:
+    return Table1Run(load_table1_config(**job["config"]), job["seed"]).run()
 
 
 def run_table1(
@@ -287,55 +287,26 @@ def run_table1(
     Each seed's result is saved in ``out/seeds/`` as it finishes and reused by a rerun with
     the same config, so an interrupted run loses nothing.
     """
-    from concurrent.futures import ProcessPoolExecutor
-    from multiprocessing import get_context
-
-    from tqdm import tqdm
-
     cfg = load_table1_config(config, **overrides)
     out = Path(out)
-    cache = SeedCache(out / "seeds", cfg.__dict__)
-    todo = [(cfg, s) for s in range(seed, seed + cfg.seeds) if cache.load(s) is None]
-    progress = tqdm(total=cfg.seeds, initial=cfg.seeds - len(todo), desc="table1 seeds")
-    with progress:
-        if workers > 1 and len(todo) > 1:
-            with ProcessPoolExecutor(workers, mp_context=get_context("forkserver")) as pool:
-                for (_, s), result in zip(todo, pool.map(_run_seed, todo), strict=True):
-                    cache.save(s, result)
-                    progress.update()
-        else:
-            for job in todo:
-                cache.save(job[1], _run_seed(job))
-                progress.update()
-    results = [cache.load(s) for s in range(seed, seed + cfg.seeds)]
+    jobs = [{"config": cfg.__dict__, "seed": s} for s in range(seed, seed + cfg.seeds)]
+    results = [
+        SeedResult(**r)
+        for r in run_cached(
+            _run_seed,
+            jobs,
+            out / "seeds",
+            lambda job: f"seed_{job['seed']}",
+            workers,
+            "table1 seeds",
+        )
+    ]
     rows = summarise(cfg, results)
     summary = {"config": cfg.__dict__, "seeds": [seed, seed + cfg.seeds - 1], "rows": rows}
     write_json(out / "results.json", summary)
     write_atomic(out / "table1.md", _markdown(rows, cfg))
     summary["figure"] = str(_plot(cfg, results, out / "table1.png"))
     return summary
-
-
-class SeedCache:
-    """Per-seed results on disk, valid only for the config they were made with."""
-
-    def __init__(self, folder: Path, config: dict) -> None:
-        self.folder, self.config = folder, json.loads(json.dumps(config))
-
-    def _path(self, seed: int) -> Path:
-        return self.folder / f"seed_{seed}.json"
-
-    def load(self, seed: int) -> SeedResult | None:
-        path = self._path(seed)
-        if not path.is_file():
-            return None
-        data = json.loads(path.read_text())
-        if data.get("config") != self.config:
-            return None
-        return SeedResult(**data["result"])
-
-    def save(self, seed: int, result: SeedResult) -> None:
-        write_json(self._path(seed), {"config": self.config, "result": result.__dict__})
 
 
 def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:

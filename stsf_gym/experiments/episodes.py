@@ -1,0 +1,137 @@
+"""One seeded episode of an agent driving on an estimator's pose, and what it measured.
+
+The agent sees the wrapped observation (``obs["pose"]`` is the estimate); the true pose from
+``info`` is used only to score the run. A run of many episodes keeps each finished episode
+in its own JSON file, so an interrupted run resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import stsf_gym  # noqa: F401 - registers the env ids
+from stsf_gym.experiments.cache import run_cached
+from stsf_gym.wrappers import PoseEstimateWrapper
+
+TRACE_EVERY = 10  # steps between stored trajectory samples
+
+
+@dataclass(frozen=True)
+class EpisodeSpec:
+    """What to run: world, estimator, agent, seed and env overrides (JSON-friendly)."""
+
+    world: str
+    estimator: str
+    seed: int
+    agent: str = "follower"
+    env: dict = field(default_factory=dict)
+
+    @property
+    def key(self) -> str:
+        return f"{self.world}-{self.estimator}-{self.agent}-{self.seed}"
+
+
+@dataclass
+class EpisodeResult:
+    spec: dict
+    outcome: str  # goal | collision | time
+    distance: float  # metres driven (true)
+    sim_time: float
+    steps: int
+    errors: list[float]  # position error per stored sample (m)
+    heading_errors: list[float]  # rad, per stored sample
+    travelled: list[float]  # distance driven at each sample (m)
+    true_xy: list[list[float]]
+    estimate_xy: list[list[float]]
+    covariances: list[list[float]]  # 2x2 position covariance per sample, flattened
+    nees: float  # time average of the 3-dof NEES
+    frames: int
+    frames_matched: int
+    landmark_updates: int
+    gated_out: int
+    stage_ms_per_step: dict[str, float]
+
+
+def make_agent(name: str, env):
+    if name != "follower":
+        raise ValueError(f"unknown agent {name!r}; known: follower")
+    from agents.follower import PathFollower
+
+    follower = PathFollower.for_env(env)
+    return lambda obs: follower.act(obs["pose"])
+
+
+def run_episode(spec: EpisodeSpec) -> EpisodeResult:
+    """Drive one episode to its end; score the estimate against the true pose."""
+    env = PoseEstimateWrapper(
+        gym.make(
+            "stsf_gym/Corridor-v0", world=spec.world, **{"camera__control": "pan", **spec.env}
+        ),
+        spec.estimator,
+    )
+    try:
+        act = make_agent(spec.agent, env)
+        obs, info = env.reset(seed=spec.seed)
+        samples: dict[str, list] = {k: [] for k in ("e", "h", "d", "t", "x", "c")}
+        nees, steps, terminated, truncated = [], 0, False, False
+        while not (terminated or truncated):
+            obs, _, terminated, truncated, info = env.step(act(obs))
+            steps += 1
+            error = obs["pose"].astype(float) - info["true_pose"]
+            error[2] = math.remainder(error[2], math.tau)
+            cov = obs["pose_cov"].reshape(3, 3).astype(float)
+            nees.append(float(error @ np.linalg.solve(cov, error)))
+            if steps % TRACE_EVERY == 0 or terminated or truncated:
+                samples["e"].append(float(np.hypot(*error[:2])))
+                samples["h"].append(float(error[2]))
+                samples["d"].append(float(info["distance_travelled"]))
+                samples["t"].append(info["true_pose"][:2].tolist())
+                samples["x"].append(obs["pose"][:2].astype(float).tolist())
+                samples["c"].append(cov[:2, :2].ravel().tolist())
+        counters = env.estimator.counters
+        outcome = "collision" if info["collision"] else "goal" if terminated else "time"
+        return EpisodeResult(
+            spec=asdict(spec),
+            outcome=outcome,
+            distance=float(info["distance_travelled"]),
+            sim_time=float(info["sim_time"]),
+            steps=steps,
+            errors=samples["e"],
+            heading_errors=samples["h"],
+            travelled=samples["d"],
+            true_xy=samples["t"],
+            estimate_xy=samples["x"],
+            covariances=samples["c"],
+            nees=float(np.mean(nees)),
+            frames=counters.get("frames", 0),
+            frames_matched=counters.get("frames_matched", 0),
+            landmark_updates=counters.get("landmark_updates", 0),
+            gated_out=counters.get("gated_out", 0),
+            stage_ms_per_step={k: 1000 * v / steps for k, v in env.estimator.timings.items()},
+        )
+    finally:
+        env.close()
+
+
+def _run(job: dict) -> EpisodeResult:
+    return run_episode(EpisodeSpec(**job))
+
+
+def run_episodes(
+    specs: list[EpisodeSpec], folder: Path, workers: int = 1, desc: str = "episodes"
+) -> list[EpisodeResult]:
+    """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``."""
+    results = run_cached(
+        _run,
+        [asdict(spec) for spec in specs],
+        folder,
+        lambda job: EpisodeSpec(**job).key,
+        workers,
+        desc,
+    )
+    return [EpisodeResult(**result) for result in results]
