@@ -128,7 +128,7 @@ class EKFEstimator(OdometryEstimator):
         inflated = replace(noise, slip_var_per_m=noise.slip_var_per_m + self.wheel_drift_std**2)
         super().reset(replace(model, odometry_noise=inflated), initial_pose, initial_cov)
         if self.detector is None or self.detector.pattern != model.pattern:
-            self.detector = LandmarkDetector(model.pattern)
+            self.detector = LandmarkDetector(model.pattern, valid_ids=set(model.landmarks))
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
@@ -140,6 +140,7 @@ class EKFEstimator(OdometryEstimator):
                 detections = self.detector.detect(obs["image"])
             with self.timed("update"):
                 pan, tilt = (float(a) for a in obs["camera_pan_tilt"])
+                self.counters["frames_matched"] += bool(detections)  # the detector keeps map ids
                 for detection in detections:
                     self.counters["detections"] += 1
                     observation = observe(detection, self.model, pan, tilt, self.sigma_px)
