@@ -30,37 +30,26 @@ def _common(parser: argparse.ArgumentParser, out: str) -> None:
 def _demo(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.demo import run_demo
 
-    if args.seconds <= 0:
-        raise ConfigError(f"--seconds must be positive, got {args.seconds}")
-    summary = run_demo(
-        args.out,
-        seed=args.seed,
-        seconds=args.seconds,
-        env_id=args.env,
-        config=args.config,
-        **parse_overrides(args.overrides),
-    )
-    for key in ("trace", "last_image"):
-        summary.pop(key)
+    _check_counts(args)
+    env = _env_overrides(args)
+    if args.seconds is not None:
+        if args.seconds <= 0:
+            raise ConfigError(f"--seconds must be positive, got {args.seconds}")
+        env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
+    summary = run_demo(args.out, seed=args.seed, workers=args.workers, env=env)
     if not args.json:
         from rich.console import Console
         from rich.table import Table
 
-        table = Table(
-            title=f"stsf-gym demo: {summary['env_id']} (seed {summary['seed']}, "
-            f"renderer {summary['renderer']})"
-        )
-        for column in summary["rows"][0]:
+        table = Table(title=f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})")
+        for column in summary["table"][0]:
             table.add_column(column)
-        for row in summary["rows"]:
-            table.add_row(*(str(v) for v in row.values()))
+        for row in summary["table"]:
+            table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row.values()))
         console = Console()
         console.print(table)
         console.print(
-            f"{summary['sim_time_s']:.0f} s simulated in {summary['wall_time_s']:.1f} s "
-            f"({summary['real_time_factor']:.1f}x real time), outcome: {summary['outcome']}, "
-            f"dead-reckoning error {summary['odometry_error_m']:.3f} m. "
-            f"Wrote {args.out}/summary.md and {summary['figure']}"
+            f"Wrote {args.out}/results.md, results.json and {', '.join(summary['figures'])}"
         )
     return summary
 
@@ -133,10 +122,10 @@ def _reproduce(args: argparse.Namespace) -> dict:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    demo = commands.add_parser("demo", help="a short drive down the IRL corridor, with a report")
+    demo = commands.add_parser("demo", help="the follower on each estimator, IRL corridor")
     _common(demo, "out/demo")
-    demo.add_argument("--seconds", type=float, default=90.0, help="simulated seconds (90)")
-    demo.add_argument("--env", default="stsf_gym/Corridor-v0", help="environment id")
+    demo.add_argument("--seconds", type=float, help="simulated time limit per episode")
+    demo.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
     demo.set_defaults(run=_demo)
     reproduce = commands.add_parser("reproduce", help="the paper's experiments")
     reproduce.add_argument("experiment", choices=["table1", "fig10", "fig11"])

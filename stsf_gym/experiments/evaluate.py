@@ -98,7 +98,7 @@ def _pyplot():
 def plot_trajectories(world: str, by_estimator: dict, path: Path) -> Path:
     """True and estimated paths of the first episode per estimator, over the map."""
     from envs.config import load_config
-    from stsf_gym.experiments.demo import draw_world_config
+    from stsf_gym.experiments.plots import draw_world_config
 
     plt = _pyplot()
     cfg = load_config(world=world)
