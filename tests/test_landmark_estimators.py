@@ -78,3 +78,40 @@ def test_pointer_keeps_a_facing_landmark_in_reach():
     assert pointer.target == 7
     assert pointer.pan(np.array([4.0, 2.0, 0.0])) == 0.0  # behind the board: none qualifies
     assert pointer.target is None
+
+
+@pytest.fixture(scope="module")
+def recorded():
+    """Observations and true poses of a drive with the camera pointed by the STSF wrapper."""
+    env = PoseEstimateWrapper(gym.make("stsf_gym/Straight10m-v0", camera__control="pan"), "stsf")
+    follower = PathFollower.for_env(env)
+    obs, info = env.reset(seed=3)
+    model, history = env.estimator.model, []
+    for _ in range(STEPS):
+        obs, *_, info = env.step(follower.act(info["true_pose"]))
+        history.append((obs, info["true_pose"].copy()))
+    env.close()
+    return model, history
+
+
+@pytest.mark.parametrize("estimator", ["conventional", "stsf", "ekf"])
+def test_recovers_after_a_long_gap_and_ignores_bad_frames(recorded, estimator):
+    from stsf_gym.estimators import make_estimator
+
+    model, history = recorded
+    est = make_estimator(estimator)
+    est.reset(model, history[0][1], np.diag([1e-4, 1e-4, 1e-5]))
+    rng = np.random.default_rng(0)
+    for k, (obs, truth) in enumerate(history):
+        obs = dict(obs)
+        if 100 <= k < 300:
+            obs["image_new"] = 0  # 20 s without a frame
+        elif k % 7 == 0 and obs["image_new"]:
+            obs["image"] = rng.integers(0, 255, obs["image"].shape, dtype=np.uint8)  # garbage
+        mean, cov = est.update(obs, 0.1)
+        assert np.all(np.isfinite(mean)) and np.all(np.linalg.eigvalsh(cov) > 0)
+        if k == 299:
+            gap_error = np.hypot(*(mean[:2] - truth[:2]))
+    final_error = np.hypot(*(mean[:2] - truth[:2]))
+    assert final_error < 0.15 and final_error <= gap_error + 0.02
+    assert est.counters["landmark_updates"] > 0

@@ -30,6 +30,7 @@ class EpisodeSpec:
     seed: int
     agent: str = "follower"
     env: dict = field(default_factory=dict)
+    options: dict = field(default_factory=dict)  # estimator options (part of the cache key)
 
     @property
     def key(self) -> str:
@@ -73,6 +74,7 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             "stsf_gym/Corridor-v0", world=spec.world, **{"camera__control": "pan", **spec.env}
         ),
         spec.estimator,
+        **spec.options,
     )
     try:
         act = make_agent(spec.agent, env)

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import chi2
 
+from envs.config import CONFIG_DIR, read_yaml
 from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
 
@@ -34,7 +35,7 @@ def evaluate(
     """
     out = Path(out)
     specs = [
-        EpisodeSpec(world, estimator, s, agent, env or {})
+        EpisodeSpec(world, estimator, s, agent, env or {}, estimator_options(estimator))
         for estimator in estimators
         for s in range(seed, seed + seeds)
     ]
@@ -49,6 +50,12 @@ def evaluate(
         str(plot_errors(by_estimator, out / "errors.png")),
     ]
     return summary, by_estimator
+
+
+def estimator_options(name: str) -> dict:
+    """The options in ``configs/estimators/<name>.yaml``, recorded with every episode."""
+    path = CONFIG_DIR / "estimators" / f"{name}.yaml"
+    return read_yaml(path) if path.is_file() else {}
 
 
 def summarise(estimator: str, episodes: list[EpisodeResult]) -> dict:
