@@ -145,7 +145,15 @@ def error_curves(episodes: list[EpisodeResult], grid: np.ndarray):
         position.append(np.where(inside, np.interp(grid, e.travelled, e.errors), np.nan))
         h = np.degrees(np.abs(e.heading_errors))
         heading.append(np.where(inside, np.interp(grid, e.travelled, h), np.nan))
-    return np.nanmean(position, axis=0), np.nanmean(heading, axis=0)
+    return _mean_over_episodes(position), _mean_over_episodes(heading)
+
+
+def _mean_over_episodes(curves: list[np.ndarray]) -> np.ndarray:
+    """Mean of the curves where at least one episode got that far (NaN elsewhere)."""
+    stacked = np.array(curves)
+    count = np.sum(~np.isnan(stacked), axis=0)
+    total = np.nansum(stacked, axis=0)
+    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
 
 
 def plot_errors(by_estimator: dict, path: Path) -> Path:

@@ -44,7 +44,10 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
         episodes = by_estimator[name]
         axis = [_axis_errors(e) for e in episodes]
         after5 = [
-            max(err for err, d in zip(e.errors, e.travelled, strict=True) if d >= 5.0)
+            max(
+                (err for err, d in zip(e.errors, e.travelled, strict=True) if d >= 5.0),
+                default=np.nan,
+            )
             for e in episodes
         ]
         rows.append(
