@@ -19,6 +19,7 @@ from stsf_gym.experiments.cache import run_cached
 from stsf_gym.wrappers import PoseEstimateWrapper
 
 TRACE_EVERY = 10  # steps between stored trajectory samples
+RESULT_VERSION = 2  # bumped when EpisodeResult changes, so older episode files are rerun
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,8 @@ class EpisodeResult:
     covariances: list[list[float]]  # 2x2 position covariance per sample, flattened
     nees: float  # time average of the 3-dof NEES
     frames: int
+    camera_frames: int
+    frames_in_view: int  # camera frames with a landmark wholly in view (true camera pose)
     frames_matched: int
     landmark_updates: int
     gated_out: int
@@ -80,10 +83,13 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
         act = make_agent(spec.agent, env)
         obs, info = env.reset(seed=spec.seed)
         samples: dict[str, list] = {k: [] for k in ("e", "h", "d", "t", "x", "c")}
-        nees, steps, terminated, truncated = [], 0, False, False
+        nees, steps, frames, in_view, terminated, truncated = [], 0, 0, 0, False, False
         while not (terminated or truncated):
             obs, _, terminated, truncated, info = env.step(act(obs))
             steps += 1
+            if obs["image_new"]:
+                frames += 1
+                in_view += bool(env.unwrapped.landmarks_in_view())
             error = obs["pose"].astype(float) - info["true_pose"]
             error[2] = math.remainder(error[2], math.tau)
             cov = obs["pose_cov"].reshape(3, 3).astype(float)
@@ -111,6 +117,8 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             covariances=samples["c"],
             nees=float(np.mean(nees)),
             frames=counters.get("frames", 0),
+            camera_frames=frames,
+            frames_in_view=in_view,
             frames_matched=counters.get("frames_matched", 0),
             landmark_updates=counters.get("landmark_updates", 0),
             gated_out=counters.get("gated_out", 0),
@@ -120,20 +128,22 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
         env.close()
 
 
+def _spec(job: dict) -> EpisodeSpec:
+    return EpisodeSpec(**{k: v for k, v in job.items() if k != "version"})
+
+
 def _run(job: dict) -> EpisodeResult:
-    return run_episode(EpisodeSpec(**job))
+    return run_episode(_spec(job))
+
+
+def _name(job: dict) -> str:
+    return _spec(job).key
 
 
 def run_episodes(
     specs: list[EpisodeSpec], folder: Path, workers: int = 1, desc: str = "episodes"
 ) -> list[EpisodeResult]:
     """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``."""
-    results = run_cached(
-        _run,
-        [asdict(spec) for spec in specs],
-        folder,
-        lambda job: EpisodeSpec(**job).key,
-        workers,
-        desc,
-    )
+    jobs = [{"version": RESULT_VERSION, **asdict(spec)} for spec in specs]
+    results = run_cached(_run, jobs, folder, _name, workers, desc)
     return [EpisodeResult(**result) for result in results]

@@ -81,6 +81,8 @@ def summarise(estimator: str, episodes: list[EpisodeResult]) -> dict:
         "RMS heading error (deg)": _mean_std(np.degrees(heading)),
         "NEES": float(np.mean([e.nees for e in episodes])),
         "NEES 95% bounds": f"{lo:.2f}-{hi:.2f}",
+        "landmark in view": sum(e.frames_in_view for e in episodes)
+        / max(1, sum(e.camera_frames for e in episodes)),
         "landmark match rate": sum(e.frames_matched for e in episodes) / frames if frames else "-",
         "ms per step": ", ".join(
             f"{k} {np.mean([e.stage_ms_per_step.get(k, 0.0) for e in episodes]):.2f}"

@@ -87,6 +87,7 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
                 "distance before failure (m)": row["distance before failure (m)"],
                 f"mean error after {LATTER_PART_M:g} m (m)": _ms(latter),
                 "RMS heading error (deg)": row["RMS heading error (deg)"],
+                "landmark in view": row["landmark in view"],
                 "landmark match rate": row["landmark match rate"],
                 "NEES (95% bounds)": f"{row['NEES']:.2f} ({row['NEES 95% bounds']})",
                 "paper": FIG11_PAPER.get(name, "-"),
