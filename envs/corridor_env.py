@@ -22,6 +22,11 @@ MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
 RENDER_VFOV_DEG = 60.0
 EGL_WARMUP_FRAMES = 2
 SETTLE_STEPS = 30
+RAY_CLEARANCE = 0.1  # m
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
 
 
 class CorridorEnv(gym.Env):
@@ -173,8 +178,10 @@ class CorridorEnv(gym.Env):
                 candidates.append(landmark)
         if not candidates:
             return []
+        # rays start a little ahead of the optical centre, which sits on the robot's own mast
+        starts = [eye + RAY_CLEARANCE * _unit(lm.centre - eye) for lm in candidates]
         hits = self.sim.client.rayTestBatch(
-            [eye.tolist()] * len(candidates), [lm.centre.tolist() for lm in candidates]
+            [p.tolist() for p in starts], [lm.centre.tolist() for lm in candidates]
         )
         return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
 
