@@ -45,7 +45,7 @@ class PoseEstimateWrapper(gym.Wrapper):
         if env.unwrapped.config.camera.control == "pan":
             # the wrapper points the camera; the agent keeps the (v, w) action
             self.pointer = LandmarkPointer(
-                {}, robot.camera_forward, math.radians(robot.pan_limit_deg)
+                {}, np.zeros((0, 4)), robot.camera_forward, math.radians(robot.pan_limit_deg)
             )
             self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
@@ -66,7 +66,7 @@ class PoseEstimateWrapper(gym.Wrapper):
         model = SensorModel.from_env(self.env)
         self.estimator.reset(model, start, self.start_cov)
         if self.pointer is not None:
-            self.pointer.landmarks = model.landmarks
+            self.pointer.landmarks, self.pointer.walls = model.landmarks, model.walls
             self.pointer.reset()
         return self._with_pose(obs, self.estimator.mean, self.estimator.cov), info
 

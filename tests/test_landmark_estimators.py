@@ -73,11 +73,15 @@ def test_pointer_keeps_a_facing_landmark_in_reach():
         (),
         {"centre": np.array([5.0, 1.2, 0.9]), "normal": np.array([0.0, -1.0, 0.0]), "id": 7},
     )()
-    pointer = LandmarkPointer({7: landmark}, camera_forward=0.0, pan_limit=math.radians(170))
+    pointer = LandmarkPointer(
+        {7: landmark}, np.zeros((0, 4)), camera_forward=0.0, pan_limit=math.radians(170)
+    )
     assert pointer.pan(np.array([4.0, 0.0, 0.0])) == pytest.approx(math.atan2(1.2, 1.0))
     assert pointer.target == 7
     assert pointer.pan(np.array([4.0, 2.0, 0.0])) == 0.0  # behind the board: none qualifies
     assert pointer.target is None
+    pointer.walls = np.array([[4.3, -1.0, 4.3, 1.0]])  # a wall between robot and board
+    assert pointer.pan(np.array([4.0, 0.0, 0.0])) == 0.0 and pointer.target is None
 
 
 @pytest.fixture(scope="module")

@@ -40,6 +40,7 @@ class SensorModel:
     robot_from_camera: Callable[[float, float], np.ndarray]
     landmarks: dict[int, MapLandmark]
     pattern: object  # stsf_gym.vision.landmarks.LandmarkPattern
+    walls: np.ndarray  # (K, 4) wall centre-line segments x1, y1, x2, y2 of the map
 
     @classmethod
     def from_env(cls, env) -> SensorModel:
@@ -59,6 +60,7 @@ class SensorModel:
                 for lm in u.landmarks
             },
             pattern=cfg.world.landmark_pattern,
+            walls=np.array(cfg.world.walls, dtype=float).reshape(-1, 4),
         )
 
 
