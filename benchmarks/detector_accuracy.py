@@ -160,33 +160,25 @@ def run(args) -> dict:
                         per_distance_err[distance].append(err)
                     views.append((distance, angle, bool(good), wrong))
         # Frames with no landmark in view: random poses in the room.
-        empty_frames = []
-        tries = 0
-        while len(empty_frames) < args.empty // 2 and tries < 20 * args.empty:
-            tries += 1
-            pose = [rng.uniform(0, 13), rng.uniform(-6.5, 6.5), rng.uniform(-math.pi, math.pi)]
-            obs, info = env.reset(seed=int(rng.integers(2**31)), options={"start_pose": pose})
-            if u.landmarks_in_view(info["camera_pose"]) or _any_board_in_frame(u, info):
-                continue
-            empty_frames.append(obs["image"])
+        empty_frames = _empty_frames(
+            env,
+            rng,
+            args.empty // 2,
+            lambda: [rng.uniform(0, 13), rng.uniform(-6.5, 6.5), rng.uniform(-math.pi, math.pi)],
+        )
     finally:
         env.close()
     # ... and along the IRL corridor, where the walls, turn and floor make other clutter.
     env = make_env(args, env_id="stsf_gym/Corridor-v0")
     try:
-        u = env.unwrapped
-        path = np.asarray(u.config.world.path, dtype=float)
-        tries = 0
-        n_room = len(empty_frames)
-        while len(empty_frames) - n_room < args.empty - args.empty // 2 and tries < 20 * args.empty:
-            tries += 1
+        path = np.asarray(env.unwrapped.config.world.path, dtype=float)
+
+        def on_path() -> list[float]:
             k = rng.integers(len(path) - 1)
             xy = path[k] + rng.uniform() * (path[k + 1] - path[k])
-            pose = [*xy, rng.uniform(-math.pi, math.pi)]
-            obs, info = env.reset(seed=int(rng.integers(2**31)), options={"start_pose": pose})
-            if u.landmarks_in_view(info["camera_pose"]) or _any_board_in_frame(u, info):
-                continue
-            empty_frames.append(obs["image"])
+            return [*xy, rng.uniform(-math.pi, math.pi)]
+
+        empty_frames += _empty_frames(env, rng, args.empty - args.empty // 2, on_path)
     finally:
         env.close()
     false_detections = sum(len(detector.detect(f)) for f in empty_frames)
@@ -249,6 +241,18 @@ def run(args) -> dict:
             "frames": len(all_frames),
         },
     }
+
+
+def _empty_frames(env, rng, count: int, sample_pose) -> list[np.ndarray]:
+    """Up to ``count`` frames from random poses with no landmark board in view."""
+    u, frames = env.unwrapped, []
+    for _ in range(20 * max(count, 1)):
+        if len(frames) >= count:
+            break
+        obs, info = env.reset(seed=int(rng.integers(2**31)), options={"start_pose": sample_pose()})
+        if not (u.landmarks_in_view(info["camera_pose"]) or _any_board_in_frame(u, info)):
+            frames.append(obs["image"])
+    return frames
 
 
 def _any_board_in_frame(u, info) -> bool:

@@ -99,3 +99,10 @@ def to_se3(a: ArrayLike) -> Array:
     mat[..., :2, 3] = a[..., :2]
     mat[..., 2, 2] = mat[..., 3, 3] = 1.0
     return mat
+
+
+def compose_gaussian(a: ArrayLike, cov_a: ArrayLike, b: ArrayLike, cov_b: ArrayLike):
+    """``a (+) b`` with first-order covariance ``J_a C_a J_a^T + J_b C_b J_b^T``
+    (independent ``a`` and ``b``): e.g. an odometry increment added to a motion."""
+    j_a, j_b = compose_jacobians(a, b)
+    return compose(a, b), j_a @ np.asarray(cov_a) @ j_a.T + j_b @ np.asarray(cov_b) @ j_b.T

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import gammaincinv
 
 from envs.sensors.encoders import OdometryCalibration
 from stsf_gym.estimators.odometry import OdometryNoise
@@ -62,6 +63,13 @@ class SensorModel:
             pattern=cfg.world.landmark_pattern,
             walls=np.array(cfg.world.walls, dtype=float).reshape(-1, 4),
         )
+
+
+def chi_square_gate(probability: float, dof: int) -> float:
+    """The squared Mahalanobis distance that keeps ``probability`` of consistent measurements."""
+    if not 0 < probability < 1:
+        raise ValueError(f"gate_probability must be in (0, 1), got {probability}")
+    return float(2 * gammaincinv(dof / 2, probability))
 
 
 class PoseEstimator(ABC):

@@ -68,7 +68,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from stsf_gym.estimators.base import MapLandmark, SensorModel
+from stsf_gym.estimators.base import MapLandmark, SensorModel, chi_square_gate
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.landmark_observation import LandmarkObservation, observe
 from stsf_gym.geometry import wrap_angle
@@ -103,8 +103,6 @@ class EKFEstimator(OdometryEstimator):
         wheel_drift_std: float = 0.005,
     ) -> None:
         super().__init__()
-        if not 0.0 < gate_probability < 1.0:
-            raise ValueError(f"ekf.gate_probability must be in (0, 1), got {gate_probability}")
         if not 0.0 <= min_range < max_range:
             raise ValueError(f"ekf needs 0 <= min_range < max_range, got {min_range}, {max_range}")
         if sigma_px <= 0 or min(range_std_floor, range_std_fraction, bearing_std_floor) < 0:
@@ -113,7 +111,7 @@ class EKFEstimator(OdometryEstimator):
             raise ValueError(f"ekf.wheel_drift_std must be non-negative, got {wheel_drift_std}")
         self.sigma_px = float(sigma_px)
         self.gate_probability = float(gate_probability)
-        self.gate = -2.0 * math.log1p(-self.gate_probability)  # chi-square quantile, 2 dof
+        self.gate = chi_square_gate(self.gate_probability, dof=2)
         self.min_range, self.max_range = float(min_range), float(max_range)
         self.range_std_floor, self.range_std_fraction = (
             float(range_std_floor),

@@ -31,9 +31,8 @@ no longer describes its error.
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import gammaincinv
 
-from stsf_gym.estimators.base import SensorModel
+from stsf_gym.estimators.base import SensorModel, chi_square_gate
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.landmark_observation import (
     LandmarkObservation,
@@ -43,7 +42,14 @@ from stsf_gym.estimators.landmark_observation import (
 from stsf_gym.estimators.odometry import propagate
 from stsf_gym.estimators.pair_range import pair_range
 from stsf_gym.fusion import STSFTrack, merge_gaussians
-from stsf_gym.geometry import compose, compose_jacobians, inverse, inverse_jacobian, to_se3
+from stsf_gym.geometry import (
+    compose,
+    compose_gaussian,
+    compose_jacobians,
+    inverse,
+    inverse_jacobian,
+    to_se3,
+)
 from stsf_gym.vision.detector import LandmarkDetector
 
 CI_WEIGHTS = np.linspace(0.05, 0.95, 19)
@@ -59,9 +65,7 @@ class _Seen:
 
     def move(self, u: np.ndarray, q: np.ndarray) -> None:
         """Compose one step's odometry increment ``u`` (covariance ``q``) onto the motion."""
-        j_a, j_b = compose_jacobians(self.motion, u)
-        self.motion = compose(self.motion, u)
-        self.motion_cov = j_a @ self.motion_cov @ j_a.T + j_b @ q @ j_b.T
+        self.motion, self.motion_cov = compose_gaussian(self.motion, self.motion_cov, u, q)
 
 
 class LandmarkFusionEstimator(OdometryEstimator):
@@ -80,13 +84,11 @@ class LandmarkFusionEstimator(OdometryEstimator):
         position_std_per_m: float = 0.005,
     ) -> None:
         super().__init__()
-        if not 0 < gate_probability < 1:
-            raise ValueError(f"gate_probability must be in (0, 1), got {gate_probability}")
         self.sigma_px, self.max_gap_frames, self.max_range = sigma_px, max_gap_frames, max_range
         self.min_baseline, self.max_relative_range_std = min_baseline, max_relative_range_std
         self.orientation_var_floor = orientation_std_floor**2
         self.position_std_floor, self.position_std_per_m = position_std_floor, position_std_per_m
-        self.gate = 2 * gammaincinv(1.5, gate_probability)  # chi-square quantile, 3 dof
+        self.gate = chi_square_gate(gate_probability, dof=3)
         self.detector: LandmarkDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:

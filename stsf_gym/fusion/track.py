@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from stsf_gym.fusion.covariance import TrackCovariance
 from stsf_gym.fusion.temporal import Method, STSFResult, stsf_fuse
-from stsf_gym.geometry import compose, compose_jacobians, inverse, rot2
+from stsf_gym.geometry import compose, compose_gaussian, compose_jacobians, inverse, rot2
 
 Array = NDArray[np.float64]
 
@@ -152,10 +152,9 @@ class STSFTrack:
 
     def move(self, u: ArrayLike, Q: ArrayLike) -> None:
         """Accumulate an odometry increment ``u`` (robot frame) with covariance ``Q``."""
-        u = np.asarray(u, dtype=float)
-        j_a, j_b = compose_jacobians(self._pending, u)
-        self._pending = compose(self._pending, u)
-        self._pending_cov = j_a @ self._pending_cov @ j_a.T + j_b @ np.asarray(Q) @ j_b.T
+        self._pending, self._pending_cov = compose_gaussian(
+            self._pending, self._pending_cov, np.asarray(u, dtype=float), Q
+        )
 
     def add(self, z: ArrayLike, C: ArrayLike) -> None:
         """Add the landmark's pose ``z`` in the current robot frame, covariance ``C``."""
