@@ -89,6 +89,17 @@ class RobotConfig:
 
 
 @dataclass(frozen=True)
+class FastCameraConfig:
+    """Statistics of the detector, fitted on rendered frames (``benchmarks/fast_sensor_fit.py``)."""
+
+    feature_noise_px: float  # std of each square centre's pixel error, per axis
+    detect_size_px: float  # square pitch (px) at which half of the boards are detected
+    detect_size_scale: float  # logistic width of the detection rate in square pitch (px)
+    false_detection_rate: float  # wrong-id detections per frame
+    max_detections: int  # detection slots in the observation
+
+
+@dataclass(frozen=True)
 class CameraConfig:
     enabled: bool
     width: int
@@ -102,6 +113,8 @@ class CameraConfig:
     tilt_deg: float
     control: Literal["none", "pan", "pan_tilt"]
     noise_std: float
+    mode: Literal["rendered", "fast"]
+    fast: FastCameraConfig
 
 
 @dataclass(frozen=True)
