@@ -34,32 +34,14 @@ import gymnasium as gym
 import numpy as np
 
 import stsf_gym  # noqa: F401 - registers the ids
+from stsf_gym.experiments.detector_views import (
+    ANGLES,
+    DISTANCES,
+    LANDMARK_ID,
+    landmark_views,
+    room_world,
+)
 from stsf_gym.vision.detector import LandmarkDetector
-
-LANDMARK_ID = 77
-CAMERA_FORWARD = 0.10  # robot.camera_forward (configs/default.yaml)
-DISTANCES = (1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0)
-ANGLES = (0.0, 15.0, 30.0, 45.0, 60.0)
-
-
-def room_world() -> dict:
-    """A 16 x 16 m room: landmark 77 on the east wall, 200 on the west wall."""
-    return {
-        "name": "detector_room",
-        "wall_height": 2.0,
-        "wall_thickness": 0.1,
-        "walls": [[-1, -8, 15, -8], [-1, 8, 15, 8], [-1, -8, -1, 8], [15, -8, 15, 8]],
-        "path": [[0, 0], [10, 0]],
-        "start": [0, 0, 0],
-        "goal_radius": 0.3,
-        "landmark_height": 0.9,
-        "landmark_pattern": {"square_size": 0.05, "pitch": 0.10, "grid": 5, "border": 0.05},
-        "landmarks": [
-            {"id": LANDMARK_ID, "at": [15, 0], "facing_deg": 180},
-            {"id": 200, "at": [-1, 0], "facing_deg": 0},
-        ],
-        "obstacles": [],
-    }
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -99,15 +81,6 @@ def make_env(args, world=None, env_id="stsf_gym/Straight10m-v0"):
     return gym.make(env_id, **kwargs)
 
 
-def view_pose(board_xy, normal_deg, distance, angle_deg, yaw_jitter):
-    """Robot pose whose camera is ``distance`` from the board, ``angle_deg`` off its normal."""
-    a = math.radians(normal_deg + angle_deg)
-    cam = np.asarray(board_xy) + distance * np.array([math.cos(a), math.sin(a)])
-    yaw = a + math.pi + yaw_jitter
-    axle = cam - CAMERA_FORWARD * np.array([math.cos(yaw), math.sin(yaw)])
-    return [float(axle[0]), float(axle[1]), yaw]
-
-
 def error_stats(err: np.ndarray) -> dict:
     if len(err) == 0:
         return {"n": 0, "median": None, "rms": None, "p95": None, "max": None}
@@ -133,32 +106,19 @@ def run(args) -> dict:
     try:
         u = env.unwrapped
         landmark = next(lm for lm in u.landmarks if lm.id == LANDMARK_ID)
-        board_xy = landmark.centre[:2]
-        normal_deg = math.degrees(math.atan2(landmark.normal[1], landmark.normal[0]))
-        for distance in DISTANCES:
-            for angle in ANGLES:
-                for r in range(args.repeats):
-                    sign = 1 if r % 2 == 0 else -1
-                    pose = view_pose(
-                        board_xy, normal_deg, distance, sign * angle, rng.uniform(-0.06, 0.06)
-                    )
-                    obs, info = env.reset(
-                        seed=int(rng.integers(2**31)), options={"start_pose": pose}
-                    )
-                    if LANDMARK_ID not in u.landmarks_in_view(info["camera_pose"]):
-                        continue
-                    image = obs["image"]
-                    frames.append(image)
-                    dets = detector.detect(image)
-                    good = [d for d in dets if d.landmark_id == LANDMARK_ID]
-                    wrong = len(dets) - len(good)
-                    if good:
-                        d = good[0]
-                        truth = u.camera.project(info["camera_pose"], landmark.square_centres)
-                        err = np.linalg.norm(d.image_points - truth[d.indices], axis=1)
-                        errors.append(err)
-                        per_distance_err[distance].append(err)
-                    views.append((distance, angle, bool(good), wrong))
+        for distance, angle, obs, info in landmark_views(env, rng, repeats=args.repeats):
+            image = obs["image"]
+            frames.append(image)
+            dets = detector.detect(image)
+            good = [d for d in dets if d.landmark_id == LANDMARK_ID]
+            wrong = len(dets) - len(good)
+            if good:
+                d = good[0]
+                truth = u.camera.project(info["camera_pose"], landmark.square_centres)
+                err = np.linalg.norm(d.image_points - truth[d.indices], axis=1)
+                errors.append(err)
+                per_distance_err[distance].append(err)
+            views.append((distance, angle, bool(good), wrong))
         # Frames with no landmark in view: random poses in the room.
         empty_frames = _empty_frames(
             env,

@@ -1,0 +1,72 @@
+"""Views of a landmark from chosen distances and angles: the frames detector statistics come from.
+
+A 16 x 16 m room with one landmark on each of two opposite walls is large enough for oblique
+views up to 60 degrees; the robot is placed so its camera looks at the board from a given
+distance and angle off the board's normal. Used by the detector benchmark, the fit of the fast
+sensor mode and the tests comparing the two.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+import numpy as np
+
+LANDMARK_ID = 77
+DISTANCES = (1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0)
+ANGLES = (0.0, 15.0, 30.0, 45.0, 60.0)
+
+
+def room_world() -> dict:
+    """A 16 x 16 m room: landmark 77 on the east wall, 200 on the west wall."""
+    return {
+        "name": "detector_room",
+        "wall_height": 2.0,
+        "wall_thickness": 0.1,
+        "walls": [[-1, -8, 15, -8], [-1, 8, 15, 8], [-1, -8, -1, 8], [15, -8, 15, 8]],
+        "path": [[0, 0], [10, 0]],
+        "start": [0, 0, 0],
+        "goal_radius": 0.3,
+        "landmark_height": 0.9,
+        "landmark_pattern": {"square_size": 0.05, "pitch": 0.10, "grid": 5, "border": 0.05},
+        "landmarks": [
+            {"id": LANDMARK_ID, "at": [15, 0], "facing_deg": 180},
+            {"id": 200, "at": [-1, 0], "facing_deg": 0},
+        ],
+        "obstacles": [],
+    }
+
+
+def view_pose(board_xy, normal_deg, distance, angle_deg, yaw_jitter, camera_forward=0.10):
+    """Robot pose whose camera is ``distance`` from the board, ``angle_deg`` off its normal."""
+    a = math.radians(normal_deg + angle_deg)
+    cam = np.asarray(board_xy) + distance * np.array([math.cos(a), math.sin(a)])
+    yaw = a + math.pi + yaw_jitter
+    axle = cam - camera_forward * np.array([math.cos(yaw), math.sin(yaw)])
+    return [float(axle[0]), float(axle[1]), yaw]
+
+
+def landmark_views(
+    env, rng: np.random.Generator, distances=DISTANCES, angles=ANGLES, repeats: int = 3
+) -> Iterator[tuple[float, float, dict, dict]]:
+    """``(distance, angle, obs, info)`` for each view with the board wholly in view.
+
+    ``env`` must be built on :func:`room_world`; angles alternate in sign over the repeats and
+    the heading is jittered by up to 0.06 rad, all drawn from ``rng``.
+    """
+    u = env.unwrapped
+    landmark = next(lm for lm in u.landmarks if lm.id == LANDMARK_ID)
+    normal_deg = math.degrees(math.atan2(landmark.normal[1], landmark.normal[0]))
+    forward = u.config.robot.camera_forward
+    for distance in distances:
+        for angle in angles:
+            for r in range(repeats):
+                sign = 1 if r % 2 == 0 else -1
+                jitter = rng.uniform(-0.06, 0.06)
+                pose = view_pose(
+                    landmark.centre[:2], normal_deg, distance, sign * angle, jitter, forward
+                )
+                obs, info = env.reset(seed=int(rng.integers(2**31)), options={"start_pose": pose})
+                if LANDMARK_ID in u.landmarks_in_view(info["camera_pose"]):
+                    yield distance, angle, obs, info
