@@ -1,4 +1,4 @@
-"""Pure-pursuit path follower driving on a pose (true or estimated)."""
+"""Pure-pursuit path follower driving on a pose (true or estimated), with sonar avoidance."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from envs.config import CONFIG_DIR, build, read_yaml
+from agents.sonar_avoidance import AvoidanceConfig, SonarAvoidance
+from envs.config import CONFIG_DIR, build, deep_merge, overrides_to_tree, read_yaml
 from envs.task import Polyline
 
 
@@ -18,12 +19,16 @@ class FollowerConfig:
     lookahead: float
     max_yaw_rate: float
     turn_in_place: float
+    avoidance: AvoidanceConfig
 
 
 def load_follower_config(path: str | Path | None = None, **overrides) -> FollowerConfig:
-    """``configs/agents/follower.yaml`` (or ``path``) with keyword overrides; unknown keys fail."""
+    """``configs/agents/follower.yaml`` (or ``path``) with keyword overrides; unknown keys fail.
+
+    Nested keys are overridden as ``avoidance__enabled=False``.
+    """
     data = read_yaml(path or CONFIG_DIR / "agents" / "follower.yaml")
-    return build(FollowerConfig, {**data, **overrides}, "follower")
+    return build(FollowerConfig, deep_merge(data, overrides_to_tree(overrides)), "follower")
 
 
 class PathFollower:
@@ -31,27 +36,46 @@ class PathFollower:
 
     The curvature to reach a point (x_r, y_r) in the robot frame is ``2 y_r / d^2``; the
     follower drives at ``speed`` with yaw rate ``speed * curvature`` (clipped), and turns on
-    the spot when the point is more than ``turn_in_place`` radians off its heading. Actions
-    are scaled to the env's ``[-1, 1]`` box by the robot's ``max_speed`` and ``max_yaw_rate``.
+    the spot when the point is more than ``turn_in_place`` radians off its heading. Given the
+    sonar ranges, :class:`~agents.sonar_avoidance.SonarAvoidance` (``avoidance`` in the config)
+    may bend or slow that command around obstacles. Actions are scaled to the env's ``[-1, 1]``
+    box by the robot's ``max_speed`` and ``max_yaw_rate``.
     """
 
-    def __init__(self, path, cfg: FollowerConfig, max_speed: float, max_yaw_rate: float) -> None:
-        self.path, self.cfg = Polyline(path), cfg
+    def __init__(
+        self,
+        path,
+        cfg: FollowerConfig,
+        max_speed: float,
+        max_yaw_rate: float,
+        avoidance: SonarAvoidance | None = None,
+    ) -> None:
+        self.path, self.cfg, self.avoidance = Polyline(path), cfg, avoidance
         self.scale = np.array([max_speed, max_yaw_rate])
 
     @classmethod
     def for_env(cls, env, config: str | Path | None = None, **overrides) -> PathFollower:
-        """A follower of ``env``'s world path, scaled to its action space."""
+        """A follower of ``env``'s world path, scaled to its action space, reading its sonar."""
         env_cfg = env.unwrapped.config
+        cfg = load_follower_config(config, **overrides)
+        avoidance = None
+        if cfg.avoidance.enabled:
+            avoidance = SonarAvoidance(
+                cfg.avoidance,
+                env_cfg.sonar.count,
+                env_cfg.robot.body_radius,
+                env_cfg.sonar.max_range,
+            )
         return cls(
-            env_cfg.world.path,
-            load_follower_config(config, **overrides),
-            env_cfg.robot.max_speed,
-            env_cfg.robot.max_yaw_rate,
+            env_cfg.world.path, cfg, env_cfg.robot.max_speed, env_cfg.robot.max_yaw_rate, avoidance
         )
 
-    def act(self, pose: np.ndarray) -> np.ndarray:
-        """Action [v, w] in [-1, 1] for the robot at ``pose`` = [x, y, yaw]."""
+    def act(self, pose: np.ndarray, sonar: np.ndarray | None = None) -> np.ndarray:
+        """Action [v, w] in [-1, 1] for the robot at ``pose`` = [x, y, yaw].
+
+        With ``sonar`` (the observation's 16 ranges) and avoidance enabled, obstacles the ring
+        sees bend the command; without it this is plain pure pursuit.
+        """
         x, y, yaw = pose
         target = self.path.point_at(self.path.project(pose) + self.cfg.lookahead)
         dx, dy = target - (x, y)
@@ -64,4 +88,6 @@ class PathFollower:
             curvature = 2 * y_r / max(x_r * x_r + y_r * y_r, 1e-9)
             v = self.cfg.speed
             w = float(np.clip(v * curvature, -self.cfg.max_yaw_rate, self.cfg.max_yaw_rate))
+        if sonar is not None and self.avoidance is not None:
+            v, w = self.avoidance.adjust(sonar, bearing, v, w, self.cfg.max_yaw_rate)
         return np.clip(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)

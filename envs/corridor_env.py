@@ -9,10 +9,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import ConfigError, EnvConfig, load_config
+from envs.config import EnvConfig, load_config
+from envs.faults import FaultInjector
 from envs.robot import DiffDriveRobot
 from envs.sensors.camera import PinholeCamera, look_at, view_matrix
 from envs.sensors.encoders import OdometryCalibration, WheelEncoders
+from envs.sensors.fast_camera import SimulatedDetector
+from envs.sensors.image_noise import ImageNoise
 from envs.sensors.sonar import SonarRing
 from envs.simulator import Simulator
 from envs.task import PathTask
@@ -36,7 +39,8 @@ class CorridorEnv(gym.Env):
     ``Box(-1, 1, (2,), float32)``: ``[v, w]`` scaled to forward speed ``robot.max_speed`` (m/s)
     and yaw rate ``robot.max_yaw_rate`` (rad/s). With ``camera.control`` set to ``pan`` or
     ``pan_tilt`` one or two more entries set the mount's target angles, scaled to its limits.
-    Out-of-range actions are clipped; NaN or infinite actions raise ``ValueError``.
+    Entries outside [-1, 1] are clipped to it; NaN or infinite entries, a wrong shape or a
+    non-numeric dtype (strings, objects, bools) raise ``ValueError``.
 
     ## Observation space
     ``Dict``:
@@ -44,7 +48,12 @@ class CorridorEnv(gym.Env):
     - ``image``: ``Box(0, 255, (H, W, 3), uint8)``, the latest camera frame (default 320x240);
       frames are taken at ``camera.rate_hz`` of simulated time, independent of the control
       period, so between frames the previous one is repeated.
-    - ``image_new``: ``Discrete(2)``, 1 when ``image`` was captured during this step (or reset).
+    - ``image_new``: ``Discrete(2)``, 1 when a camera frame was taken during this step (or reset).
+    - With ``camera.mode: fast`` (no rendering; :mod:`envs.sensors.fast_camera`) ``image`` is
+      replaced by the frame's simulated detections: ``landmark_ids`` ``Box((L,), int64)``
+      (-1 marks an empty slot) and ``landmark_points`` ``Box((L * 2 grid^2,), float32)``, the
+      pixels ``x0, y0, x1, y1, ...`` of each detected board's lit squares, slot after slot
+      (``reshape(L, -1, 2)``), ``L = camera.fast.max_detections``.
     - ``camera_pan_tilt``: ``Box((2,), float32)``, measured mount angles (rad) of that frame.
     - ``sonar``: ``Box(min_range, max_range, (16,), float32)``, ranges (m), transducer 0
       forward, counter-clockwise.
@@ -58,6 +67,11 @@ class CorridorEnv(gym.Env):
     ## Episode end
     Terminated on reaching the goal (within ``goal_radius``) or on touching a wall or obstacle;
     truncated after ``sim.max_episode_seconds`` of simulated time.
+
+    ## Faults
+    The ``faults:`` config section (none by default, :mod:`envs.faults`) injects timed faults:
+    camera blackout, blur and dropped frames, landmarks removed, occluded or faked, sonar
+    dropouts and false echoes, encoder spikes, a kidnapped robot.
 
     ## Info
     ``true_pose`` ([x, y, yaw], privileged: for evaluation only), ``camera_pose`` (4x4
@@ -86,19 +100,12 @@ class CorridorEnv(gym.Env):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.config: EnvConfig = load_config(config, world=world, **overrides)
         cfg = self.config
-        substeps = cfg.sim.control_dt * cfg.sim.physics_hz
-        if cfg.sim.control_dt <= 0 or abs(substeps - round(substeps)) > 1e-6 or substeps < 1:
-            raise ConfigError(
-                f"sim.control_dt ({cfg.sim.control_dt}) must be a positive whole number of "
-                f"physics steps (sim.physics_hz = {cfg.sim.physics_hz})"
-            )
-        if cfg.camera.rate_hz <= 0:
-            raise ConfigError(f"camera.rate_hz must be positive, got {cfg.camera.rate_hz}")
         self.render_mode = render_mode
         self.dt = cfg.sim.control_dt
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.dt}
-        self._substeps = round(substeps)
-        renders = cfg.camera.enabled or render_mode is not None
+        self._substeps = round(cfg.sim.control_dt * cfg.sim.physics_hz)  # whole (config)
+        self._rendered_camera = cfg.camera.enabled and cfg.camera.mode == "rendered"
+        renders = self._rendered_camera or render_mode is not None
         self.sim = Simulator(cfg.sim.physics_hz, cfg.camera.renderer if renders else "none")
         try:
             self.world = CorridorWorld(self.sim, cfg.world)
@@ -113,24 +120,30 @@ class CorridorEnv(gym.Env):
             cfg.camera.near,
             cfg.camera.far,
         )
+        self.fast_detector = SimulatedDetector(
+            cfg.camera.fast, self.camera, cfg.world.landmark_pattern, self.world.landmarks
+        )
         self.sonar = SonarRing(cfg.sonar, cfg.robot.body_radius)
         self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
         self.task = PathTask(cfg.world, cfg.reward)
         self._projection = self.camera.projection_matrix()
         self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
         self.observation_space = self._observation_space()
+        self.faults = FaultInjector(cfg.faults, self.world, self.robot, self.observation_space)
         self._mount_target = np.radians([cfg.camera.pan_deg, cfg.camera.tilt_deg])
         self.robot.reset(cfg.world.start, *self._mount_target)
         # Saved after the wheels settled on the floor: the state then holds the contacts too,
         # so each reset starts the solver alike whatever the previous episode did.
         self.sim.step(SETTLE_STEPS)
         self._initial_state = self.sim.client.saveState()
-        if self.sim.renderer == "egl" and cfg.camera.enabled:
+        if self.sim.renderer == "egl" and self._rendered_camera:
             # The first two EGL frames of a client are shaded differently from all later ones
             # (its shadow state settles); discard them so every episode renders alike.
             for _ in range(EGL_WARMUP_FRAMES):
                 self._render_camera()
-        self._image = np.zeros(self.observation_space["image"].shape, np.uint8)
+        self._image = np.zeros((cfg.camera.height, cfg.camera.width, 3), np.uint8)
+        self.image_noise = ImageNoise(cfg.camera.noise_std, self._image.shape)
+        self._detections = self.fast_detector.empty()
         self._frame_pan_tilt = np.zeros(2, np.float32)
         self._frame_pose = np.eye(4)
 
@@ -160,7 +173,8 @@ class CorridorEnv(gym.Env):
         return self.robot.robot_from_camera(pan, tilt)
 
     def landmarks_in_view(self, camera_pose: np.ndarray | None = None) -> list[int]:
-        """Ids of landmarks wholly inside the frame, facing the camera and not occluded.
+        """Ids of landmarks wholly inside the frame, facing the camera, present (a fault may
+        remove one) and not occluded.
 
         Uses the true camera pose (``info["camera_pose"]`` by default): for evaluation only.
         """
@@ -168,7 +182,8 @@ class CorridorEnv(gym.Env):
         eye = pose[:3, 3]
         candidates = []
         for landmark in self.world.landmarks:
-            if np.dot(landmark.normal, eye - landmark.centre) <= 0:
+            facing = np.dot(landmark.normal, eye - landmark.centre) > 0
+            if not (facing and self.world.board_visible(self.world.boards[landmark.id])):
                 continue
             uv = self.camera.project(pose, landmark.board_corners)
             inside = np.all(
@@ -195,9 +210,22 @@ class CorridorEnv(gym.Env):
             4 * wheel_rate * self.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
         )
         limits = np.radians([cfg.robot.pan_limit_deg, cfg.robot.tilt_limit_deg]).astype(np.float32)
+        if cfg.camera.mode == "fast":
+            slots, values = self.fast_detector.slots, self.fast_detector.values_per_slot
+            span = 2 * max(cfg.camera.width, cfg.camera.height)
+            camera = {
+                "landmark_ids": spaces.Box(
+                    -1, cfg.world.landmark_pattern.max_id, (slots,), np.int64
+                ),
+                "landmark_points": spaces.Box(-span, span, (slots * values,), np.float32),
+            }
+        else:
+            camera = {
+                "image": spaces.Box(0, 255, (cfg.camera.height, cfg.camera.width, 3), np.uint8)
+            }
         return spaces.Dict(
             {
-                "image": spaces.Box(0, 255, (cfg.camera.height, cfg.camera.width, 3), np.uint8),
+                **camera,
                 "image_new": spaces.Discrete(2),
                 "camera_pan_tilt": spaces.Box(-limits - 0.05, limits + 0.05, (2,), np.float32),
                 "sonar": spaces.Box(
@@ -219,16 +247,23 @@ class CorridorEnv(gym.Env):
         self.sim.client.restoreState(self._initial_state)
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
         self.robot.reset(tuple(start), *self._mount_target)
+        self.faults.reset()
         self.encoders.reset(self.robot.wheel_angles(), self.np_random)
+        if self._rendered_camera:
+            self.image_noise.reset(self.np_random)
         self._time = 0.0
         self._distance = 0.0
         self._pose = self.robot.floor_pose()
         self._progress = self.task.progress(self._pose)
         self._next_frame = 0.0
-        return self._observe(np.zeros(2, np.int64)), self._info(collision=False)
+        obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, self.np_random)
+        return obs, self._info(collision=False)
 
     def step(self, action):
-        a = np.asarray(action, dtype=np.float64).ravel()
+        raw = np.asarray(action)
+        if raw.dtype.kind not in "iuf":
+            raise ValueError(f"action must be numeric (int or float), got dtype {raw.dtype}")
+        a = raw.astype(np.float64).ravel()
         if a.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
         if not np.all(np.isfinite(a)):
@@ -239,6 +274,8 @@ class CorridorEnv(gym.Env):
         if len(a) > 2:
             self._mount_target[: len(a) - 2] = a[2:] * self.robot.pan_tilt_limits[: len(a) - 2]
             self.robot.point_camera(*self._mount_target)
+        if self.faults.before_physics(self._time + self.dt):
+            self._pose = self.robot.floor_pose()  # a kidnap is no distance driven
         self.sim.step(self._substeps)
         self._time += self.dt
         pose = self.robot.floor_pose()
@@ -252,7 +289,8 @@ class CorridorEnv(gym.Env):
         self._progress = progress
         terminated = reached or collision
         truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9
-        return self._observe(ticks), float(reward), terminated, truncated, self._info(collision)
+        obs = self.faults.observe(self._observe(ticks), self._time, self.np_random)
+        return obs, float(reward), terminated, truncated, self._info(collision)
 
     def _observe(self, ticks: np.ndarray) -> dict:
         new_frame = self._time >= self._next_frame - 1e-9
@@ -260,10 +298,19 @@ class CorridorEnv(gym.Env):
             self._next_frame += 1.0 / self.config.camera.rate_hz
             self._frame_pose = self.robot.camera_pose()
             self._frame_pan_tilt = self.robot.mount_angles().astype(np.float32)
-            if self.config.camera.enabled:
-                self._image = self._sensor_noise(self._render_camera())
+            if self._rendered_camera:
+                self._image = self.image_noise(self._render_camera(), self.np_random)
+            elif self.config.camera.enabled:
+                self._detections = self.fast_detector.detect(
+                    self._frame_pose, self.landmarks_in_view(), self.np_random
+                )
+        if self.config.camera.mode == "fast":
+            ids, points = self._detections
+            camera = {"landmark_ids": ids.copy(), "landmark_points": points.copy()}
+        else:
+            camera = {"image": self._image.copy()}
         return {
-            "image": self._image.copy(),
+            **camera,
             "image_new": int(new_frame and self.config.camera.enabled),
             "camera_pan_tilt": self._frame_pan_tilt.copy(),
             "sonar": self.sonar.read(self.sim, self._pose, self.np_random),
@@ -275,14 +322,6 @@ class CorridorEnv(gym.Env):
         return self.sim.render(
             self.camera.width, self.camera.height, view_matrix(pose), self._projection
         )
-
-    def _sensor_noise(self, image: np.ndarray) -> np.ndarray:
-        """Add the camera's Gaussian intensity noise (``camera.noise_std`` grey levels)."""
-        sigma = self.config.camera.noise_std
-        if sigma <= 0:
-            return image
-        noise = self.np_random.standard_normal(image.shape, dtype=np.float32) * sigma
-        return np.clip(image + noise, 0, 255).round().astype(np.uint8)
 
     def _info(self, collision: bool) -> dict:
         return {

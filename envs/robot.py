@@ -210,6 +210,21 @@ class DiffDriveRobot:
         self.drive(0.0, 0.0)
         self.point_camera(pan, tilt)
 
+    def teleport(self, dx: float, dy: float, dyaw: float) -> None:
+        """Move the base by (dx, dy) (world, m) and turn it by ``dyaw`` (rad) about its vertical
+        axis, keeping its velocity in its own frame and every joint's state: the wheel encoders
+        do not notice (a kidnapped robot)."""
+        c = self.sim.client
+        position, orientation = c.getBasePositionAndOrientation(self.body)
+        turn = c.getQuaternionFromEuler([0.0, 0.0, dyaw])
+        _, orientation = c.multiplyTransforms([0, 0, 0], turn, [0, 0, 0], orientation)
+        c.resetBasePositionAndOrientation(
+            self.body, [position[0] + dx, position[1] + dy, position[2]], orientation
+        )
+        rotation = rot_z(dyaw)
+        linear, angular = c.getBaseVelocity(self.body)
+        c.resetBaseVelocity(self.body, (rotation @ linear).tolist(), (rotation @ angular).tolist())
+
     def drive(self, v: float, w: float) -> None:
         """Command forward speed ``v`` (m/s) and yaw rate ``w`` (rad/s) to the wheel motors."""
         half_b, r = self.cfg.wheelbase / 2, self.cfg.wheel_radius

@@ -37,6 +37,7 @@ WALL_RGBA = (0.78, 0.76, 0.72, 1.0)
 FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
 OBSTACLE_RGBA = (0.55, 0.35, 0.2, 1.0)
 BOARD_OFFSET = 0.02  # landmark board in front of the wall face (m), clear of depth fighting
+HIDDEN_DEPTH = -50.0  # m: where a board taken out of the world waits, below the floor
 
 
 @dataclass(frozen=True)
@@ -93,7 +94,44 @@ class CorridorWorld:
         )
         self.walls = [self._wall(seg) for seg in cfg.walls]
         self.obstacles = [self._obstacle(o) for o in cfg.obstacles]
+        self.boards: dict[int, int] = {}  # landmark id -> its board's body
+        self._hidden: dict[int, tuple] = {}  # body -> its pose while moved out of the world
         self.landmarks = [self._landmark(spec) for spec in cfg.landmarks]
+
+    def add_board(self, spec: LandmarkSpec) -> int:
+        """The body of a new board showing landmark ``spec.id``'s pattern where ``spec`` says
+        (a map landmark's, or a decoy's that is not in :attr:`landmarks`)."""
+        centre, normal, right, up = _landmark_frame(self.cfg, spec)
+        c = self.sim.client
+        pattern = self.cfg.landmark_pattern
+        # One OBJ file per landmark: the EGL renderer shares a texture between all instances
+        # of a mesh file, so boards built from one file would all show the same id.
+        quad = cache_file(f"landmark{spec.id}.obj", f"# landmark {spec.id}\n{QUAD_OBJ}".encode())
+        size = pattern.size
+        visual = c.createVisualShape(c.GEOM_MESH, fileName=str(quad), meshScale=[size, size, 1.0])
+        body = c.createMultiBody(
+            baseMass=0,
+            baseVisualShapeIndex=visual,
+            basePosition=centre.tolist(),
+            baseOrientation=_quaternion(np.column_stack([right, up, normal])),
+        )
+        grey = landmark_image(spec.id, pattern)
+        _, png = cv2.imencode(".png", cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
+        texture = c.loadTexture(str(cache_file(f"landmark{spec.id}.png", png.tobytes())))
+        c.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
+        return body
+
+    def board_visible(self, body: int) -> bool:
+        return body not in self._hidden
+
+    def set_board_visible(self, body: int, visible: bool) -> None:
+        """Take a board out of the world (far below the floor) or put it back where it was."""
+        c = self.sim.client
+        if not visible and body not in self._hidden:
+            self._hidden[body] = c.getBasePositionAndOrientation(body)
+            c.resetBasePositionAndOrientation(body, [0.0, 0.0, HIDDEN_DEPTH], [0, 0, 0, 1])
+        elif visible and body in self._hidden:
+            c.resetBasePositionAndOrientation(body, *self._hidden.pop(body))
 
     def _box(self, xy, half_xy, half_z: float, z: float, yaw: float, rgba) -> int:
         c = self.sim.client
@@ -145,23 +183,7 @@ class CorridorWorld:
     def _landmark(self, spec: LandmarkSpec) -> Landmark:
         pattern = self.cfg.landmark_pattern
         centre, normal, right, up = _landmark_frame(self.cfg, spec)
-        c = self.sim.client
-        size = pattern.size
-        # One OBJ file per landmark: the EGL renderer shares a texture between all instances
-        # of a mesh file, so boards built from one file would all show the same id.
-        quad = cache_file(f"landmark{spec.id}.obj", f"# landmark {spec.id}\n{QUAD_OBJ}".encode())
-        visual = c.createVisualShape(c.GEOM_MESH, fileName=str(quad), meshScale=[size, size, 1.0])
-        rotation = np.column_stack([right, up, normal])
-        body = c.createMultiBody(
-            baseMass=0,
-            baseVisualShapeIndex=visual,
-            basePosition=centre.tolist(),
-            baseOrientation=_quaternion(rotation),
-        )
-        grey = landmark_image(spec.id, pattern)
-        _, png = cv2.imencode(".png", cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
-        texture = c.loadTexture(str(cache_file(f"landmark{spec.id}.png", png.tobytes())))
-        c.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
+        self.boards[spec.id] = self.add_board(spec)
         frame = (centre, right, up)
         return Landmark(
             spec.id,

@@ -4,6 +4,8 @@ Importing the package registers the environments with Gymnasium (idempotently):
 
 - ``stsf_gym/Corridor-v0``: the IRL corridor (about 24 m with a turn, 8 landmarks).
 - ``stsf_gym/Straight10m-v0``: a straight 10 m corridor (the paper's Fig. 10).
+
+Each also has an id per pose source, e.g. ``stsf_gym/Corridor-STSF-v0`` (see below).
 """
 
 from gymnasium.envs.registration import register, registry
@@ -24,6 +26,7 @@ ESTIMATOR_IDS: dict[str, str] = {
     "Conventional": "conventional",
     "STSF": "stsf",
     "EKF": "ekf",
+    "Truth": "truth",  # privileged: the true pose, for reference runs
 }
 
 

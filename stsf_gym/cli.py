@@ -12,10 +12,14 @@ from pathlib import Path
 from stsf_gym.config import ConfigError, parse_overrides
 
 
-def _common(parser: argparse.ArgumentParser, out: str) -> None:
+def _common(
+    parser: argparse.ArgumentParser,
+    out: str,
+    config_help: str = "YAML config (env: merged over configs/default.yaml)",
+) -> None:
     parser.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     parser.add_argument("--out", type=Path, default=Path(out), help=f"output folder ({out})")
-    parser.add_argument("--config", help="YAML config (env: merged over configs/default.yaml)")
+    parser.add_argument("--config", help=config_help)
     parser.add_argument(
         "--set",
         dest="overrides",
@@ -69,23 +73,51 @@ def _print_markdown(args: argparse.Namespace, path: Path) -> None:
         Console().print(f"Wrote {path.parent}/")
 
 
-def _env_overrides(args: argparse.Namespace) -> dict:
-    """Env settings from ``--config FILE`` and ``--set key=value`` (later wins)."""
-    from envs.config import deep_merge, overrides_to_tree, read_yaml
+def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
+    """Env settings from ``--config FILE`` and ``--set key=value`` (later wins), validated
+    here (on ``world``) so a bad value is named before any work starts."""
+    from envs.config import deep_merge, load_config, overrides_to_tree, read_yaml
 
-    base = read_yaml(args.config) if args.config else {}
-    return deep_merge(base, overrides_to_tree(parse_overrides(args.overrides)))
+    overrides = parse_overrides(args.overrides)
+    env = deep_merge(read_yaml(args.config) if args.config else {}, overrides_to_tree(overrides))
+    if "world" in env:
+        where = "use --world" if hasattr(args, "world") else "it uses its own world"
+        raise ConfigError(f"--config/--set cannot change the world of this command ({where})")
+    load_config(args.config, world=world, **overrides)
+    return env
 
 
 def _evaluate(args: argparse.Namespace) -> dict:
-    from stsf_gym.estimators import ESTIMATORS
     from stsf_gym.experiments.evaluate import evaluate
+    from stsf_gym.wrappers import POSE_SOURCES
 
     _check_counts(args)
     estimators = [e.strip() for e in args.estimators.split(",") if e.strip()]
     for name in estimators:
-        if name not in ESTIMATORS:
-            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(ESTIMATORS)}")
+        if name not in POSE_SOURCES:
+            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    agents = [a.strip() for a in args.agent.split(",") if a.strip()]
+    models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
+    if models:
+        from agents.sb3_agent import model_metadata
+
+        for model in sorted(models):
+            model_metadata(model)  # a missing or foreign model file fails here, clearly
+    if len(agents) > 1 or "{estimator}" in args.agent:
+        from stsf_gym.experiments.compare import compare
+
+        summary = compare(
+            args.out,
+            agents,
+            estimators,
+            args.seeds,
+            args.seed,
+            args.world,
+            args.workers,
+            _env_overrides(args, args.world),
+        )
+        _print_markdown(args, args.out / "comparison.md")
+        return summary
     summary, _ = evaluate(
         args.out,
         estimators,
@@ -94,7 +126,8 @@ def _evaluate(args: argparse.Namespace) -> dict:
         args.world,
         args.agent,
         args.workers,
-        parse_overrides(args.overrides),
+        _env_overrides(args, args.world),
+        args.faults,
     )
     _print_markdown(args, args.out / "results.md")
     return summary
@@ -119,6 +152,62 @@ def _reproduce(args: argparse.Namespace) -> dict:
     return summary
 
 
+def _train(args: argparse.Namespace) -> dict:
+    from agents.train import train
+
+    try:
+        summary = train(
+            args.algo,
+            args.estimator,
+            args.out,
+            args.timesteps,
+            args.seed,
+            args.world,
+            args.config,
+            parse_overrides(args.overrides),
+            args.n_envs,
+            progress_bar=not args.json,
+        )
+    except KeyboardInterrupt:
+        print(
+            f"interrupted: checkpoint saved in {args.out}/checkpoints; rerun to resume",
+            file=sys.stderr,
+        )
+        raise SystemExit(130) from None
+    if not args.json:
+        evaluation = summary["last_evaluation"] or {}
+        print(
+            f"{summary['timesteps']} timesteps in {summary['wall_time_s']:.0f} s; last evaluation: "
+            f"success rate {evaluation.get('success_rate', float('nan')):.2f}. "
+            f"Wrote {summary['model']}, {summary['learning_curve']}, {args.out}/train.json"
+        )
+    return summary
+
+
+def _sweep(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.sweep import run_sweep
+
+    _check_counts(args)
+    out = args.out / args.file.stem
+    summary = run_sweep(
+        args.file, out, args.backend, args.workers, args.address, args.seed, _env_overrides(args)
+    )
+    _print_markdown(args, out / "results.md")
+    for failed in summary["failed"]:
+        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
+    return summary
+
+
+def _bench(args: argparse.Namespace) -> dict:
+    from stsf_gym.bench import run_bench
+
+    if args.seconds <= 0 or args.vector_steps < 1:
+        raise ConfigError("--seconds must be positive and --vector-steps at least 1")
+    summary = run_bench(args.out, args.seconds, args.vector_steps, args.seed)
+    _print_markdown(args, args.out / "bench.md")
+    return summary
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -135,7 +224,12 @@ def build_parser() -> argparse.ArgumentParser:
     reproduce.set_defaults(run=_reproduce)
     evaluate = commands.add_parser("evaluate", help="an agent on each estimator, many seeds")
     _common(evaluate, "out/evaluate")
-    evaluate.add_argument("--agent", default="follower", help="agent (follower)")
+    evaluate.add_argument(
+        "--agent",
+        default="follower",
+        help="follower, or a model saved by train (DIR/model.zip); several, comma-separated, "
+        "give one comparison table; {estimator} in a path is replaced by each pose source",
+    )
     evaluate.add_argument(
         "--estimators",
         default="odometry,conventional,stsf,ekf",
@@ -144,7 +238,43 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--world", default="irl_corridor", help="world name or YAML path")
     evaluate.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")
     evaluate.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
+    evaluate.add_argument(
+        "--faults",
+        nargs="+",
+        type=Path,
+        metavar="FILE",
+        help="fault files (e.g. configs/faults/*.yaml): each fault set x each estimator",
+    )
     evaluate.set_defaults(run=_evaluate)
+    train = commands.add_parser("train", help="a PPO or SAC agent on one pose source")
+    _common(train, "out/train", "hyper-parameter YAML (default configs/agents/ALGO.yaml)")
+    train.add_argument("--algo", choices=["ppo", "sac"], default="ppo", help="algorithm (ppo)")
+    train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
+    train.add_argument("--timesteps", type=int, help="total env steps (hyper-parameter file)")
+    train.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
+    train.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    train.set_defaults(run=_train)
+    sweep = commands.add_parser("sweep", help="a grid of evaluation or training cells")
+    sweep.add_argument("file", type=Path, help="sweep YAML, e.g. configs/sweeps/noise.yaml")
+    _common(sweep, "out/sweeps")
+    sweep.add_argument(
+        "--backend",
+        choices=["local", "ray"],
+        default="local",
+        help="where cells run: local processes or Ray tasks (local)",
+    )
+    sweep.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
+    sweep.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
+    sweep.set_defaults(run=_sweep)
+    bench = commands.add_parser("bench", help="the speed figures beside their targets")
+    _common(bench, "out/bench")
+    bench.add_argument(
+        "--seconds", type=float, default=60.0, help="simulated seconds per camera case (60)"
+    )
+    bench.add_argument(
+        "--vector-steps", type=int, default=1000, help="AsyncVectorEnv steps per worker count"
+    )
+    bench.set_defaults(run=_bench)
     return parser
 
 
@@ -160,14 +290,38 @@ def _silence_c_stdout() -> None:
     sys.stdout = os.fdopen(real, "w", buffering=1)
 
 
+def _check_writable(out: Path) -> None:
+    """Fail before any work when the folder ``out`` cannot be made or written (makes nothing)."""
+    existing = out
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise ConfigError(f"--out {out}: {existing} is not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out {out}: {existing} is not writable")
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run a command. Bad input: a one-line error and exit code 2, before any output is
+    written; jobs that failed twice: exit code 1 (finished results kept, a rerun resumes)."""
+    from stsf_gym.experiments.cache import JobsFailed
+
     args = build_parser().parse_args(argv)
-    _silence_c_stdout()
+    error = f"stsf-gym {args.command}: error:"
     try:
+        if hasattr(args, "out"):
+            _check_writable(args.out.absolute())
+        _silence_c_stdout()
         result = args.run(args)
-    except (ConfigError, ValueError) as err:
-        print(f"stsf-gym {args.command}: error: {err}", file=sys.stderr)
+    except (ConfigError, ValueError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
+        print(f"{error} {err}", file=sys.stderr)
         return 2
+    except JobsFailed as err:
+        print(f"{error} {err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{error} interrupted; rerun with the same --out to resume", file=sys.stderr)
+        return 130
     if args.json:
         print(json.dumps(result, default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v)))
     return 0

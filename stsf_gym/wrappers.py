@@ -8,12 +8,38 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from stsf_gym.estimators import SensorModel, make_estimator
+from stsf_gym.estimators import ESTIMATORS, PoseEstimator, SensorModel, make_estimator
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
 COV_LIMIT = 1e4
+#: The privileged pose source: the true pose from ``info``, for reference runs only.
+TRUTH = "truth"
+#: Standard deviations (m, m, rad) reported with the true pose: tiny, fixed.
+TRUTH_STD = (0.001, 0.001, 0.001)
+#: Every pose source a wrapper accepts: the estimators and the privileged ``truth``.
+POSE_SOURCES = (*ESTIMATORS, TRUTH)
+
+
+class TruePose(PoseEstimator):
+    """The privileged reference "estimator": the true pose with a tiny fixed covariance.
+
+    Not an estimator: the wrapper hands it ``info["true_pose"]`` (:meth:`see`), the one place
+    where ``info`` feeds a pose. It gives agents trained or run on perfect localization, to
+    compare the real estimators against.
+    """
+
+    name = TRUTH
+
+    def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
+        super().reset(model, initial_pose, np.diag(np.square(TRUTH_STD)))
+
+    def see(self, true_pose: np.ndarray) -> None:
+        self.mean = np.asarray(true_pose, dtype=float).copy()
+
+    def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        return self.mean, self.cov
 
 
 class PoseEstimateWrapper(gym.Wrapper):
@@ -24,22 +50,27 @@ class PoseEstimateWrapper(gym.Wrapper):
       (``obs["pose_cov"].reshape(3, 3)``; entries clipped to +-1e4). Flat, so SB3's
       multi-input policies take it as it is.
 
-    The estimator starts each episode at the commanded start pose (the world's ``start`` or
-    ``options["start_pose"]``) with standard deviations ``start_std``; it never sees ``info``.
+    With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):
+    privileged, for reference runs only. The real estimators never see ``info``: each starts
+    an episode at the commanded start pose (the world's ``start`` or
+    ``options["start_pose"]``) with standard deviations ``start_std``.
     When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
     landmark from the pose estimate and the map (:class:`LandmarkPointer`) and the agent's
     action stays ``[v, w]``.
 
     Args:
         env: a stsf-gym env.
-        estimator: ``"odometry"``, ... (see :data:`stsf_gym.estimators.ESTIMATORS`).
+        estimator: ``"odometry"``, ... (see :data:`stsf_gym.estimators.ESTIMATORS`), or
+            ``"truth"`` (privileged).
         start_std: standard deviations of the start pose (m, m, rad).
         **options: estimator options, over ``configs/estimators/<name>.yaml``.
     """
 
     def __init__(self, env: gym.Env, estimator: str = "odometry", start_std=START_STD, **options):
         super().__init__(env)
-        self.estimator = make_estimator(estimator, **options)
+        if estimator == TRUTH and options:
+            raise ValueError(f"the truth pose source takes no options, got {sorted(options)}")
+        self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
         robot = env.unwrapped.config.robot
         self.pointer = None
         if env.unwrapped.config.camera.control == "pan":
@@ -65,6 +96,8 @@ class PoseEstimateWrapper(gym.Wrapper):
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
         model = SensorModel.from_env(self.env)
         self.estimator.reset(model, start, self.start_cov)
+        if isinstance(self.estimator, TruePose):
+            self.estimator.see(info["true_pose"])
         if self.pointer is not None:
             self.pointer.landmarks, self.pointer.walls = model.landmarks, model.walls
             self.pointer.reset()
@@ -75,6 +108,8 @@ class PoseEstimateWrapper(gym.Wrapper):
             pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
             action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
         obs, reward, terminated, truncated, info = self.env.step(action)
+        if isinstance(self.estimator, TruePose):
+            self.estimator.see(info["true_pose"])
         mean, cov = self.estimator.update(obs, self.env.unwrapped.dt)
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 

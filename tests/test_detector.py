@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import stsf_gym  # noqa: F401 - registers the ids
+from stsf_gym.vision.board import GROW, BoardFit, _window_centroids
 from stsf_gym.vision.detector import Detection, LandmarkDetector
 from stsf_gym.vision.landmarks import LandmarkPattern, landmark_image, lit_cells, square_centres
 
@@ -234,3 +235,62 @@ def test_bad_input(detector):
         detector.detect(np.zeros((240, 320, 2), np.uint8))
     assert detector.detect(np.zeros((240, 320), np.uint8)) == []
     assert detector.detect(np.zeros((5, 5), np.uint8)) == []
+
+
+def test_detect_is_stateless(detector):
+    canvas = noisy_wall((240, 320), seed=11)
+    paste(canvas, 42, [[110, 70], [190, 72], [188, 150], [108, 148]])
+    with_board = finish(canvas, seed=3)
+    without = finish(noisy_wall((240, 320), seed=12), seed=4)
+    first = detector.detect(with_board)
+    detector.detect(without)
+    again = detector.detect(with_board)
+    assert [d.landmark_id for d in first] == [42]
+    assert [d.landmark_id for d in again] == [42]
+    np.testing.assert_array_equal(again[0].image_points, first[0].image_points)
+
+
+@pytest.mark.parametrize("shape", [(239, 321), (481, 641)])
+def test_odd_image_sizes(detector, shape):
+    # Odd sides exercise the pyramid's dropped rows and columns; points stay in full pixels.
+    h, w = shape
+    cx, cy, half = w / 2, h / 2, 0.2 * h
+    quad = [[cx - half, cy - half], [cx + half, cy - half], [cx + half, cy + half]]
+    quad.append([cx - half, cy + half])
+    canvas = noisy_wall(shape, seed=5)
+    hom = paste(canvas, 99, quad)
+    (det,) = detector.detect(finish(canvas, seed=6))
+    assert det.landmark_id == 99
+    truth = project(hom, det.plane_points)
+    assert np.linalg.norm(det.image_points - truth, axis=1).max() < 0.5
+
+
+def test_window_centroids_match_a_loop_over_windows():
+    rng = np.random.default_rng(0)
+    weight = rng.uniform(0, 50, (40, 60)).astype(np.float32)
+    weight[rng.uniform(size=weight.shape) < 0.3] = 0
+    boxes = np.array([[0, 0, 5, 4], [20, 10, 6, 6], [55, 35, 5, 5], [30, 5, 1, 1]])
+    weight[4:7, 29:32] = 0  # the last window (grown by 1) has no weight: its fallback is kept
+    fallback = rng.uniform(0, 40, (len(boxes), 2))
+    got = _window_centroids(weight, boxes, 1, fallback)
+    ys, xs = np.mgrid[0:40, 0:60]
+    for (x, y, w, h), point, back in zip(boxes, got, fallback, strict=True):
+        win = np.s_[max(y - 1, 0) : y + h + 1, max(x - 1, 0) : x + w + 1]
+        total = weight[win].sum(dtype=np.float64)
+        if total == 0:
+            np.testing.assert_array_equal(point, back)
+            continue
+        expected = [(weight[win] * xs[win]).sum() / total, (weight[win] * ys[win]).sum() / total]
+        np.testing.assert_allclose(point, expected, atol=1e-6)
+
+
+def test_board_fitter_grows_when_the_region_cuts_the_board():
+    canvas = noisy_wall((240, 320), seed=8)
+    hom = paste(canvas, 7, [[100, 60], [200, 60], [200, 160], [100, 160]])
+    grey = finish(canvas, seed=9)
+    fitter = LandmarkDetector(PATTERN).fitter
+    assert fitter.fit(grey, 120, 80, 180, 140) is GROW  # the region lies inside the board
+    fit = fitter.fit(grey, 80, 40, 220, 180)
+    assert isinstance(fit, BoardFit) and fit.landmark_id == 7
+    truth = project(hom, fit.plane_points)
+    assert np.linalg.norm(fit.image_points - truth, axis=1).max() < 0.5

@@ -37,7 +37,15 @@ round-off, and the right covariance for *any* gain, not only the optimal one (th
 distance ``d^2 = nu^T S^-1 nu`` exceeds the chi-square quantile of ``gate_probability`` with 2
 degrees of freedom (``-2 ln(1 - p)``, 9.21 for 0.99): a misread id, a bad PnP fit. Boards
 outside ``[min_range, max_range]`` are not used. ``counters``: ``frames``, ``detections``,
-``landmark_updates``, ``gated_out``, ``out_of_range``, ``unusable`` (no valid observation).
+``landmark_updates``, ``gated_out``, ``out_of_range``, ``unusable`` (no valid observation),
+``relocalised``.
+
+**Re-localisation.** A gate cannot tell a wrong detection from a wrong estimate: after a kidnap
+it would reject every landmark for good. Each rejected board's PnP pose gives the robot's full
+pose through the map; when ``relocalise_after`` rejected ones in a row agree, the state restarts
+there with their covariance times ``relocalise_inflation``
+(:mod:`stsf_gym.estimators.relocalise`). The EKF sees a board in every frame, so it needs more
+of them in a row than the pair-based estimators do.
 
 **Why the covariance stays consistent.** The measurement covariance is the first-order
 propagation of the pixel noise through PnP and the range/bearing map, and the prediction that
@@ -70,9 +78,14 @@ import numpy as np
 
 from stsf_gym.estimators.base import MapLandmark, SensorModel, chi_square_gate
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
-from stsf_gym.estimators.landmark_observation import LandmarkObservation, observe
+from stsf_gym.estimators.frame_detector import FrameDetector
+from stsf_gym.estimators.landmark_observation import (
+    LandmarkObservation,
+    observe,
+    robot_pose_from_landmark,
+)
+from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.geometry import wrap_angle
-from stsf_gym.vision.detector import LandmarkDetector
 
 
 class EKFEstimator(OdometryEstimator):
@@ -87,6 +100,8 @@ class EKFEstimator(OdometryEstimator):
         bearing_std_floor: standard deviation (rad) added to every bearing measurement.
         wheel_drift_std: extra wheel-travel noise, m per square root of metre travelled, on
             top of the odometry noise model, for the systematic calibration drift.
+        relocalise_after: rejected boards in a row that must agree to re-localise (0: never).
+        relocalise_inflation: factor on their covariance for the restarted state.
     """
 
     name = "ekf"
@@ -101,6 +116,8 @@ class EKFEstimator(OdometryEstimator):
         range_std_fraction: float = 0.01,
         bearing_std_floor: float = 0.002,
         wheel_drift_std: float = 0.005,
+        relocalise_after: int = 15,
+        relocalise_inflation: float = 4.0,
     ) -> None:
         super().__init__()
         if not 0.0 <= min_range < max_range:
@@ -119,14 +136,17 @@ class EKFEstimator(OdometryEstimator):
         )
         self.bearing_std_floor = float(bearing_std_floor)
         self.wheel_drift_std = float(wheel_drift_std)
-        self.detector: LandmarkDetector | None = None
+        self.relocaliser = Relocaliser(
+            relocalise_after, relocalise_inflation, chi_square_gate(self.gate_probability, dof=3)
+        )
+        self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         noise = model.odometry_noise
         inflated = replace(noise, slip_var_per_m=noise.slip_var_per_m + self.wheel_drift_std**2)
         super().reset(replace(model, odometry_noise=inflated), initial_pose, initial_cov)
-        if self.detector is None or self.detector.pattern != model.pattern:
-            self.detector = LandmarkDetector(model.pattern, valid_ids=set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks))
+        self.relocaliser.clear()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
@@ -135,7 +155,7 @@ class EKFEstimator(OdometryEstimator):
         if int(obs["image_new"]):
             self.counters["frames"] += 1
             with self.timed("detect"):
-                detections = self.detector.detect(obs["image"])
+                detections = self.detector(obs)
             with self.timed("update"):
                 pan, tilt = (float(a) for a in obs["camera_pan_tilt"])
                 self.counters["frames_matched"] += bool(detections)  # the detector keeps map ids
@@ -185,7 +205,15 @@ class EKFEstimator(OdometryEstimator):
         S_inv_nu = np.linalg.solve(S, nu)
         if not float(nu @ S_inv_nu) <= self.gate:  # also rejects NaN
             self.counters["gated_out"] += 1
+            candidate = robot_pose_from_landmark(
+                observation.landmark, observation.z, observation.cov
+            )
+            found = self.relocaliser.rejected(*candidate, self.mean)
+            if found is not None:  # lost (kidnapped): restart from the landmarks
+                self.mean, self.cov = found
+                self.counters["relocalised"] += 1
             return False
+        self.relocaliser.clear()
         K = np.linalg.solve(S, H @ self.cov).T  # P H^T S^-1 (S, P symmetric)
         mean = self.mean + K @ nu
         mean[2] = wrap_angle(mean[2])

@@ -15,11 +15,13 @@ between frames (eq. 3, with its uncertainty and the correlation between reused f
 all are fused with the significance weights of eq. 4-5 (eq. 2). Either result becomes a
 measurement of the robot's pose through the landmark's map pose, which is merged with the
 odometry prediction by eq. 23-24 after a Mahalanobis gate (chi-square, 3 dof), so a wrong
-detection is rejected rather than fused. STSF's fused track reuses frames whose information
-is already in the prediction; merging it as if independent would count them again and again
-(over-confidence, measured as NEES far above 3), so STSF merges by covariance intersection
-(eq. 23-24 on scaled covariances), consistent whatever that correlation. A track is dropped
-after ``max_gap_frames`` frames without the landmark.
+detection is rejected rather than fused; when ``relocalise_after`` rejected measurements
+agree with each other instead, the robot was moved (kidnapped) and the estimate starts again
+from them (:mod:`stsf_gym.estimators.relocalise`). STSF's fused track reuses frames whose
+information is already in the prediction; merging it as if independent would count them
+again and again (over-confidence, measured as NEES far above 3), so STSF merges by covariance
+intersection (eq. 23-24 on scaled covariances), consistent whatever that correlation. A track
+is dropped after ``max_gap_frames`` frames without the landmark.
 
 The two frames of a pair are the current frame and the landmark's last key frame at least
 ``min_baseline`` metres of odometry earlier: at 5 Hz and 12 cm/s consecutive frames are
@@ -34,23 +36,20 @@ import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
+from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
     LandmarkObservation,
-    landmark_world_pose,
     observe,
+    robot_pose_from_landmark,
 )
 from stsf_gym.estimators.odometry import propagate
 from stsf_gym.estimators.pair_range import pair_range
+from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.fusion import STSFTrack, merge_gaussians
 from stsf_gym.geometry import (
-    compose,
     compose_gaussian,
-    compose_jacobians,
-    inverse,
-    inverse_jacobian,
     to_se3,
 )
-from stsf_gym.vision.detector import LandmarkDetector
 
 CI_WEIGHTS = np.linspace(0.05, 0.95, 19)
 
@@ -82,6 +81,8 @@ class LandmarkFusionEstimator(OdometryEstimator):
         orientation_std_floor: float = 0.03,
         position_std_floor: float = 0.01,
         position_std_per_m: float = 0.005,
+        relocalise_after: int = 3,
+        relocalise_inflation: float = 4.0,
     ) -> None:
         super().__init__()
         self.sigma_px, self.max_gap_frames, self.max_range = sigma_px, max_gap_frames, max_range
@@ -89,13 +90,15 @@ class LandmarkFusionEstimator(OdometryEstimator):
         self.orientation_var_floor = orientation_std_floor**2
         self.position_std_floor, self.position_std_per_m = position_std_floor, position_std_per_m
         self.gate = chi_square_gate(gate_probability, dof=3)
-        self.detector: LandmarkDetector | None = None
+        self.relocaliser = Relocaliser(relocalise_after, relocalise_inflation, self.gate)
+        self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = LandmarkDetector(model.pattern, valid_ids=set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks))
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
+        self.relocaliser.clear()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
@@ -119,7 +122,7 @@ class LandmarkFusionEstimator(OdometryEstimator):
     def _frame(self, obs: dict) -> None:
         self.counters["frames"] += 1
         with self.timed("detect"):
-            detections = self.detector.detect(obs["image"])
+            detections = self.detector(obs)
         pan, tilt = (float(a) for a in obs["camera_pan_tilt"])
         observed = set()
         for detection in detections:
@@ -207,19 +210,21 @@ class LandmarkFusionEstimator(OdometryEstimator):
         raise NotImplementedError
 
     def _merge(self, current: LandmarkObservation, z: np.ndarray, cov: np.ndarray) -> None:
-        """Robot pose from the landmark's map pose, gated, merged by eq. 23-24."""
-        landmark_pose = landmark_world_pose(current.landmark)
-        z_inv = inverse(z)
-        pose = compose(landmark_pose, z_inv)
-        _, j_b = compose_jacobians(landmark_pose, z_inv)
-        jac = j_b @ inverse_jacobian(z)
-        pose_cov = jac @ cov @ jac.T
+        """Robot pose from the landmark's map pose, gated, merged by eq. 23-24; a rejected one
+        goes to the re-localisation rule (:mod:`stsf_gym.estimators.relocalise`)."""
+        pose, pose_cov = robot_pose_from_landmark(current.landmark, z, cov)
         innovation = pose - self.mean
         innovation[2] = np.arctan2(np.sin(innovation[2]), np.cos(innovation[2]))
         if innovation @ np.linalg.solve(self.cov + pose_cov, innovation) > self.gate:
             self.counters["gated_out"] += 1
             self.tracks.pop(current.landmark.id, None)
+            found = self.relocaliser.rejected(pose, pose_cov, self.mean)
+            if found is not None:  # lost (kidnapped): start again from the landmarks
+                self.mean, self.cov = found
+                self.tracks.clear()
+                self.counters["relocalised"] += 1
             return
+        self.relocaliser.clear()
         prior_cov, pose_cov = self.merge_covariances(self.cov, pose_cov)
         self.mean, self.cov = merge_gaussians(self.mean, prior_cov, pose, pose_cov, angle_index=[2])
         self.counters["landmark_updates"] += 1

@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 
 from stsf_gym.estimators.base import MapLandmark, SensorModel
+from stsf_gym.geometry import compose, compose_jacobians, inverse, inverse_jacobian
 from stsf_gym.vision.landmarks import square_centres
 
 
@@ -93,3 +94,15 @@ def landmark_world_pose(landmark: MapLandmark) -> np.ndarray:
     return np.array(
         [landmark.centre[0], landmark.centre[1], math.atan2(landmark.normal[1], landmark.normal[0])]
     )
+
+
+def robot_pose_from_landmark(
+    landmark: MapLandmark, z: np.ndarray, cov: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The robot's world pose, and its covariance, from the landmark's pose ``z`` relative to
+    the robot (covariance ``cov``) and the landmark's map pose: ``map (+) (-) z``."""
+    landmark_pose = landmark_world_pose(landmark)
+    z_inv = inverse(z)
+    _, j_b = compose_jacobians(landmark_pose, z_inv)
+    jac = j_b @ inverse_jacobian(z)
+    return compose(landmark_pose, z_inv), jac @ cov @ jac.T

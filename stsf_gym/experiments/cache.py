@@ -1,21 +1,59 @@
 """Run many jobs (in processes), keeping each finished result in its own JSON file.
 
 A rerun skips every job whose file holds the same job description, so an interrupted run
-resumes where it stopped and a changed config recomputes; files are written atomically.
+resumes where it stopped and a changed config recomputes; files are written atomically, and a
+file that cannot be read back counts as not done. A job whose worker raises or dies is
+reported on stderr (name and error) and run once more; a job failing twice is reported in
+:class:`JobsFailed` once every other job has finished and been saved.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, is_dataclass
+import sys
+import threading
+from collections.abc import Callable, Iterable
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import asdict, dataclass, is_dataclass
 from multiprocessing import get_context
 from pathlib import Path
 
 from tqdm import tqdm
 
 from stsf_gym.io import write_json
+
+ATTEMPTS = 2  # runs of a job before it is given up
+
+
+@dataclass(frozen=True)
+class Crash:
+    """What a runner yields for a job whose worker raised or died: the error, in words."""
+
+    error: str
+
+    @classmethod
+    def of(cls, err: BaseException) -> Crash:
+        if isinstance(err, BrokenProcessPool):
+            return cls("the worker process died (killed, os._exit or a crash in native code)")
+        first_line = (str(err).strip().splitlines() or [""])[0]
+        return cls(f"{type(err).__name__}: {first_line}")
+
+
+class JobsFailed(RuntimeError):
+    """Jobs that failed on every attempt; the finished ones are saved."""
+
+    def __init__(self, failures: dict[str, str], folder: Path) -> None:
+        listed = "; ".join(f"{name}: {error}" for name, error in failures.items())
+        super().__init__(
+            f"{len(failures)} job(s) failed {ATTEMPTS} times ({listed}); finished results are "
+            f"kept in {folder} and a rerun with the same output folder retries the rest"
+        )
+        self.failures = failures
+
+
+#: Runs ``fn`` on each job, yielding ``(job, result or Crash)`` in the order they finish.
+Runner = Callable[[Callable[[dict], object], list[dict]], Iterable[tuple[dict, object]]]
 
 
 def run_cached(
@@ -25,31 +63,94 @@ def run_cached(
     name: Callable[[dict], str],
     workers: int = 1,
     desc: str = "jobs",
+    runner: Runner | None = None,
 ) -> list[dict]:
-    """``fn(job)`` for every job (a JSON-friendly dict), its result as a dict, in job order."""
+    """``fn(job)`` for every job (a JSON-friendly dict), its result as a dict, in job order.
+
+    ``runner`` executes the jobs still to do (default: :func:`process_runner` of ``workers``);
+    each result is saved as soon as the runner yields it.
+    """
     folder = Path(folder)
     jobs = [json.loads(json.dumps(job)) for job in jobs]
 
     def load(job: dict) -> dict | None:
         path = folder / f"{name(job)}.json"
-        if not path.is_file():
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError):  # not there yet, or not readable: run the job again
             return None
-        data = json.loads(path.read_text())
-        return data["result"] if data.get("job") == job else None
+        return data["result"] if isinstance(data, dict) and data.get("job") == job else None
 
     def save(job: dict, result: object) -> None:
         result = asdict(result) if is_dataclass(result) else result
         write_json(folder / f"{name(job)}.json", {"job": job, "result": result})
 
     todo = [job for job in jobs if load(job) is None]
+    run = runner or process_runner(workers)
+    errors: dict[str, str] = {}
     with tqdm(total=len(jobs), initial=len(jobs) - len(todo), desc=desc) as progress:
-        if workers > 1 and len(todo) > 1:
-            with ProcessPoolExecutor(workers, mp_context=get_context("forkserver")) as pool:
-                for job, result in zip(todo, pool.map(fn, todo), strict=True):
-                    save(job, result)
+        for attempt in range(1, ATTEMPTS + 1):
+            failed = []
+            for job, outcome in run(fn, todo):
+                if isinstance(outcome, Crash):
+                    failed.append(job)
+                    errors[name(job)] = outcome.error
+                    then = "running it again" if attempt < ATTEMPTS else "giving up"
+                    tqdm.write(f"{desc}: {name(job)} failed: {outcome.error}; {then}", sys.stderr)
+                else:
+                    save(job, outcome)
                     progress.update()
-        else:
-            for job in todo:
-                save(job, fn(job))
-                progress.update()
+            todo = failed
+            if not todo:
+                break
+    if todo:
+        raise JobsFailed({name(job): errors[name(job)] for job in todo}, folder)
     return [load(job) for job in jobs]
+
+
+def process_runner(workers: int) -> Runner:
+    """Jobs in ``workers`` forkserver processes (in this process when ``workers`` is 1).
+
+    Each of the ``workers`` slots owns a one-process pool, so a worker that dies takes down
+    only the job it was running: that job is yielded as a :class:`Crash`, and the slot starts
+    a fresh process for its next job. An exception raised by ``fn`` is a :class:`Crash` too;
+    in this process (``workers`` 1) only exceptions are caught, a dying job ends the run.
+    """
+
+    def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterable[tuple[dict, object]]:
+        if not jobs:
+            return
+        if workers <= 1:
+            for job in jobs:
+                try:
+                    yield job, fn(job)
+                except Exception as err:
+                    yield job, Crash.of(err)
+            return
+        slot, pools, lock = threading.local(), [], threading.Lock()
+
+        def in_own_process(job: dict) -> object:
+            if getattr(slot, "pool", None) is None:
+                slot.pool = ProcessPoolExecutor(1, mp_context=get_context("forkserver"))
+                with lock:
+                    pools.append(slot.pool)
+            try:
+                return slot.pool.submit(fn, job).result()
+            except BrokenProcessPool:
+                slot.pool = None  # this slot's next job gets a fresh process
+                raise
+
+        with ThreadPoolExecutor(min(workers, len(jobs))) as threads:
+            futures = {threads.submit(in_own_process, job): job for job in jobs}
+            try:
+                for future in as_completed(futures):
+                    err = future.exception()
+                    yield futures[future], Crash.of(err) if err else future.result()
+            finally:
+                for future in futures:
+                    future.cancel()
+                with lock:
+                    for pool in pools:
+                        pool.shutdown(cancel_futures=True)
+
+    return run

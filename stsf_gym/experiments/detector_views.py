@@ -70,3 +70,65 @@ def landmark_views(
                 obs, info = env.reset(seed=int(rng.integers(2**31)), options={"start_pose": pose})
                 if LANDMARK_ID in u.landmarks_in_view(info["camera_pose"]):
                     yield distance, angle, obs, info
+
+
+def detection_records(
+    env, rng: np.random.Generator, distances=DISTANCES, angles=ANGLES, repeats: int = 3
+) -> list[dict]:
+    """What the env's camera pipeline detects of the board in each of :func:`landmark_views`.
+
+    Works in both camera modes (the rendered image through the detector, or the fast mode's
+    simulated detections), so the two can be compared. Each record: ``distance``, ``angle``,
+    ``size_px`` (the board's apparent size, see :func:`envs.sensors.fast_camera.apparent_size_px`),
+    ``detected``, ``wrong_ids`` (detections of other ids) and ``residuals`` ((N, 2) pixels,
+    detected minus true square centres; empty when not detected).
+    """
+    from envs.sensors.fast_camera import apparent_size_px
+    from stsf_gym.estimators.frame_detector import FrameDetector
+
+    u = env.unwrapped
+    landmark = next(lm for lm in u.landmarks if lm.id == LANDMARK_ID)
+    detector = FrameDetector(u.config.world.landmark_pattern, {lm.id for lm in u.landmarks})
+    records = []
+    for distance, angle, obs, info in landmark_views(env, rng, distances, angles, repeats):
+        pose = info["camera_pose"]
+        detections = detector(obs)
+        good = [d for d in detections if d.landmark_id == LANDMARK_ID]
+        residuals = np.zeros((0, 2))
+        if good:
+            truth = u.camera.project(pose, landmark.square_centres)
+            residuals = good[0].image_points - truth[good[0].indices]
+        records.append(
+            {
+                "distance": distance,
+                "angle": angle,
+                "size_px": apparent_size_px(u.camera, pose, landmark.board_corners),
+                "detected": bool(good),
+                "wrong_ids": len(detections) - len(good),
+                "residuals": residuals,
+            }
+        )
+    return records
+
+
+def summarise_records(records: list[dict]) -> dict:
+    """Detection rate, feature error (RMS per axis and median of the norm), wrong ids."""
+    residuals = np.concatenate([r["residuals"] for r in records]) if records else np.zeros((0, 2))
+    return {
+        "views": len(records),
+        "detection_rate": float(np.mean([r["detected"] for r in records])),
+        "feature_rms_px": float(np.sqrt(np.mean(residuals**2))) if len(residuals) else None,
+        "feature_median_px": float(np.median(np.linalg.norm(residuals, axis=1)))
+        if len(residuals)
+        else None,
+        "wrong_ids_per_view": float(np.mean([r["wrong_ids"] for r in records])),
+        "rate_vs_distance": _rates(records, "distance"),
+        "rate_vs_angle": _rates(records, "angle"),
+    }
+
+
+def _rates(records: list[dict], key: str) -> dict[str, float]:
+    values = sorted({r[key] for r in records})
+    return {
+        f"{v:g}": float(np.mean([r["detected"] for r in records if r[key] == v])) for v in values
+    }

@@ -19,7 +19,7 @@ from stsf_gym.experiments.cache import run_cached
 from stsf_gym.wrappers import PoseEstimateWrapper
 
 TRACE_EVERY = 10  # steps between stored trajectory samples
-RESULT_VERSION = 2  # bumped when EpisodeResult changes, so older episode files are rerun
+RESULT_VERSION = 4  # bumped when EpisodeResult changes, so older episode files are rerun
 
 
 @dataclass(frozen=True)
@@ -32,10 +32,11 @@ class EpisodeSpec:
     agent: str = "follower"
     env: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)  # estimator options (part of the cache key)
+    agent_options: dict = field(default_factory=dict)  # e.g. the follower's config overrides
 
     @property
     def key(self) -> str:
-        return f"{self.world}-{self.estimator}-{self.agent}-{self.seed}"
+        return f"{self.world}-{self.estimator}-{agent_label(self.agent)}-{self.seed}"
 
 
 @dataclass
@@ -48,42 +49,67 @@ class EpisodeResult:
     errors: list[float]  # position error per stored sample (m)
     heading_errors: list[float]  # rad, per stored sample
     travelled: list[float]  # distance driven at each sample (m)
+    times: list[float]  # simulated time of each sample (s)
     true_xy: list[list[float]]
     estimate_xy: list[list[float]]
     covariances: list[list[float]]  # 2x2 position covariance per sample, flattened
     nees: float  # time average of the 3-dof NEES
+    nees_trace: list[float]  # NEES at each stored sample
     frames: int
     camera_frames: int
     frames_in_view: int  # camera frames with a landmark wholly in view (true camera pose)
     frames_matched: int
     landmark_updates: int
     gated_out: int
+    relocalised: int
+    finite: bool  # pose and covariance finite at every step
+    min_cov_eigenvalue: float  # smallest eigenvalue of the covariance over the steps
     stage_ms_per_step: dict[str, float]
 
 
-def make_agent(name: str, env):
-    if name != "follower":
-        raise ValueError(f"unknown agent {name!r}; known: follower")
-    from agents.follower import PathFollower
+def agent_label(agent: str) -> str:
+    """``follower``, or a saved model's file stem and content digest (a file-name part)."""
+    if agent == "follower":
+        return agent
+    from agents.sb3_agent import model_digest
 
-    follower = PathFollower.for_env(env)
-    return lambda obs: follower.act(obs["pose"])
+    return f"{Path(agent).stem}-{model_digest(agent)}"
+
+
+def make_agent(name: str, env, options: dict | None = None):
+    """``obs -> action`` for the wrapped ``env``: the follower (``options`` override
+    ``configs/agents/follower.yaml``), or a saved SB3 model's path."""
+    if name == "follower":
+        from agents.follower import PathFollower
+
+        follower = PathFollower.for_env(env, **(options or {}))
+        return lambda obs: follower.act(obs["pose"], obs["sonar"])
+    if name.endswith(".zip"):
+        from agents.sb3_agent import load_agent
+
+        return load_agent(name, env)
+    raise ValueError(f"unknown agent {name!r}; known: follower or a saved model (.zip)")
+
+
+def make_episode_env(world: str, estimator: str, env: dict, options: dict) -> gym.Env:
+    """The env every agent is run in: the world with the pan camera (pointed by the wrapper)
+    and ``env`` overrides, wrapped in :class:`PoseEstimateWrapper` for ``estimator``."""
+    return PoseEstimateWrapper(
+        gym.make("stsf_gym/Corridor-v0", world=world, **{"camera__control": "pan", **env}),
+        estimator,
+        **options,
+    )
 
 
 def run_episode(spec: EpisodeSpec) -> EpisodeResult:
     """Drive one episode to its end; score the estimate against the true pose."""
-    env = PoseEstimateWrapper(
-        gym.make(
-            "stsf_gym/Corridor-v0", world=spec.world, **{"camera__control": "pan", **spec.env}
-        ),
-        spec.estimator,
-        **spec.options,
-    )
+    env = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
     try:
-        act = make_agent(spec.agent, env)
+        act = make_agent(spec.agent, env, spec.agent_options)
         obs, info = env.reset(seed=spec.seed)
-        samples: dict[str, list] = {k: [] for k in ("e", "h", "d", "t", "x", "c")}
+        samples: dict[str, list] = {k: [] for k in ("e", "h", "d", "s", "t", "x", "c", "n")}
         nees, steps, frames, in_view, terminated, truncated = [], 0, 0, 0, False, False
+        finite, min_eig = True, math.inf
         while not (terminated or truncated):
             obs, _, terminated, truncated, info = env.step(act(obs))
             steps += 1
@@ -93,11 +119,16 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             error = obs["pose"].astype(float) - info["true_pose"]
             error[2] = math.remainder(error[2], math.tau)
             cov = obs["pose_cov"].reshape(3, 3).astype(float)
+            finite = finite and bool(np.isfinite(error).all() and np.isfinite(cov).all())
+            if finite:
+                min_eig = min(min_eig, float(np.linalg.eigvalsh(cov)[0]))
             nees.append(float(error @ np.linalg.solve(cov, error)))
             if steps % TRACE_EVERY == 0 or terminated or truncated:
                 samples["e"].append(float(np.hypot(*error[:2])))
+                samples["n"].append(nees[-1])
                 samples["h"].append(float(error[2]))
                 samples["d"].append(float(info["distance_travelled"]))
+                samples["s"].append(float(info["sim_time"]))
                 samples["t"].append(info["true_pose"][:2].tolist())
                 samples["x"].append(obs["pose"][:2].astype(float).tolist())
                 samples["c"].append(cov[:2, :2].ravel().tolist())
@@ -112,16 +143,21 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             errors=samples["e"],
             heading_errors=samples["h"],
             travelled=samples["d"],
+            times=samples["s"],
             true_xy=samples["t"],
             estimate_xy=samples["x"],
             covariances=samples["c"],
             nees=float(np.mean(nees)),
+            nees_trace=samples["n"],
             frames=counters.get("frames", 0),
             camera_frames=frames,
             frames_in_view=in_view,
             frames_matched=counters.get("frames_matched", 0),
             landmark_updates=counters.get("landmark_updates", 0),
             gated_out=counters.get("gated_out", 0),
+            relocalised=counters.get("relocalised", 0),
+            finite=finite,
+            min_cov_eigenvalue=min_eig,
             stage_ms_per_step={k: 1000 * v / steps for k, v in env.estimator.timings.items()},
         )
     finally:

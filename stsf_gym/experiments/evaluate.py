@@ -3,7 +3,8 @@
 Writes ``results.json``, ``results.md`` (one row per estimator), ``trajectories.png`` (true
 vs estimated paths over the map, with 2-sigma ellipses) and ``errors.png`` (position and
 heading error against distance driven). Finished episodes are kept in ``episodes/`` and
-reused by a rerun with the same ``--out``.
+reused by a rerun with the same ``--out``. With fault files, every fault set runs on every
+estimator instead (:mod:`stsf_gym.experiments.fault_runs`).
 """
 
 from __future__ import annotations
@@ -28,14 +29,25 @@ def evaluate(
     agent: str = "follower",
     workers: int = 2,
     env: dict | None = None,
+    faults: list[str | Path] | None = None,
+    agent_options: dict | None = None,
 ) -> tuple[dict, dict[str, list[EpisodeResult]]]:
     """Run ``seeds`` episodes per estimator; write the table and figures to ``out``.
 
-    Returns the summary (as written to results.json) and the episodes per estimator.
+    Returns the summary (as written to results.json) and the episodes per estimator. With
+    ``faults`` (fault files), the episodes run per fault set and estimator instead.
     """
+    if faults:
+        from stsf_gym.experiments.fault_runs import evaluate_faults
+
+        return evaluate_faults(
+            out, estimators, seeds, seed, world, agent, workers, env or {}, faults
+        )
     out = Path(out)
     specs = [
-        EpisodeSpec(world, estimator, s, agent, env or {}, estimator_options(estimator))
+        EpisodeSpec(
+            world, estimator, s, agent, env or {}, estimator_options(estimator), agent_options or {}
+        )
         for estimator in estimators
         for s in range(seed, seed + seeds)
     ]
@@ -43,8 +55,14 @@ def evaluate(
     by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
     rows = [summarise(name, episodes) for name, episodes in by_estimator.items()]
     summary = {"world": world, "agent": agent, "seeds": [seed, seed + seeds - 1], "rows": rows}
+    title = agent
+    if agent != "follower":  # a saved model: record what it was trained on
+        from agents.sb3_agent import training_record
+
+        summary["trained"] = training_record(agent)
+        title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
     write_json(out / "results.json", summary)
-    write_atomic(out / "results.md", f"# Evaluation: {agent} on {world}\n\n" + markdown_table(rows))
+    write_atomic(out / "results.md", f"# Evaluation: {title} on {world}\n\n" + markdown_table(rows))
     summary["figures"] = [
         str(plot_trajectories(world, by_estimator, out / "trajectories.png")),
         str(plot_errors(by_estimator, out / "errors.png")),
@@ -64,8 +82,7 @@ def summarise(estimator: str, episodes: list[EpisodeResult]) -> dict:
     rms = [math.sqrt(np.mean(np.square(e.errors))) for e in episodes]
     worst = [max(e.errors) for e in episodes]
     heading = [math.sqrt(np.mean(np.square(e.heading_errors))) for e in episodes]
-    steps = int(np.mean([e.steps for e in episodes]))
-    lo, hi = chi2.ppf([0.025, 0.975], 3 * steps) / steps  # bounds of a time-average NEES
+    nees_in_bounds, (lo, hi) = nees_consistency(episodes)
     failed = [e.distance for e in episodes if e.outcome != "goal"]
     frames = sum(e.frames for e in episodes)
     stages = sorted({k for e in episodes for k in e.stage_ms_per_step})
@@ -81,6 +98,7 @@ def summarise(estimator: str, episodes: list[EpisodeResult]) -> dict:
         "RMS heading error (deg)": _mean_std(np.degrees(heading)),
         "NEES": float(np.mean([e.nees for e in episodes])),
         "NEES 95% bounds": f"{lo:.2f}-{hi:.2f}",
+        "NEES in bounds": nees_in_bounds,
         "landmark in view": sum(e.frames_in_view for e in episodes)
         / max(1, sum(e.camera_frames for e in episodes)),
         "landmark match rate": sum(e.frames_matched for e in episodes) / frames if frames else "-",
@@ -89,6 +107,23 @@ def summarise(estimator: str, episodes: list[EpisodeResult]) -> dict:
             for k in stages
         ),
     }
+
+
+def nees_consistency(episodes: list[EpisodeResult]) -> tuple[float, tuple[float, float]]:
+    """Monte-Carlo NEES test (Bar-Shalom, Li and Kirubarajan 2001, sect. 5.4).
+
+    At each stored sample k, the NEES averaged over the M runs times M is chi-square with 3M
+    degrees of freedom for a consistent estimator; returns the fraction of samples (up to the
+    shortest run) whose average lies inside the two-sided 95 % bounds, and the bounds. The
+    bounds also serve for the time average in the table (time-averaging only narrows the
+    spread, so they are conservative for it); samples within a run are correlated, so using
+    every step as a degree of freedom would give far too narrow bounds.
+    """
+    m = len(episodes)
+    lo, hi = chi2.ppf([0.025, 0.975], 3 * m) / m
+    length = min(len(e.nees_trace) for e in episodes)
+    average = np.mean([e.nees_trace[:length] for e in episodes], axis=0)
+    return float(np.mean((average >= lo) & (average <= hi))), (float(lo), float(hi))
 
 
 def _mean_std(values) -> str:

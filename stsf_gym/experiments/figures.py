@@ -29,6 +29,9 @@ FIG11_PAPER = {
     "stsf": "reaches the goal; smallest error in the latter part; match rate about 22 % higher",
 }
 LATTER_PART_M = 12.0
+#: The paper's navigation experiments measure localisation: the follower drives on the pose
+#: alone, without the sonar avoidance that would steer a lost robot off the walls.
+PATH_ONLY = {"avoidance": {"enabled": False}}
 
 
 def _axis_errors(episode: EpisodeResult) -> np.ndarray:
@@ -37,7 +40,14 @@ def _axis_errors(episode: EpisodeResult) -> np.ndarray:
 
 def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
     summary, by_estimator = evaluate(
-        out, ["odometry", "stsf", "ekf"], seeds, seed, "straight_10m", workers=workers, env=env
+        out,
+        ["odometry", "stsf", "ekf"],
+        seeds,
+        seed,
+        "straight_10m",
+        workers=workers,
+        env=env,
+        agent_options=PATH_ONLY,
     )
     rows = []
     for name in ("odometry", "stsf", "ekf"):
@@ -67,7 +77,7 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
 def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
     names = ["odometry", "conventional", "stsf", "ekf"]
     summary, by_estimator = evaluate(
-        out, names, seeds, seed, "irl_corridor", workers=workers, env=env
+        out, names, seeds, seed, "irl_corridor", workers=workers, env=env, agent_options=PATH_ONLY
     )
     rows = []
     for name, row in zip(names, summary["rows"], strict=True):

@@ -33,6 +33,7 @@ __all__ = ["Candidate", "TemplateMatcher"]
 TEMPLATE_MARGIN = 0.15  # wall around the board in the template, in board sides
 TEMPLATE_WALL = 0.6  # its grey level (fraction of white): walls are lighter than the board
 BLUR_PER_PX = 0.1  # Gaussian sigma of template and image, per pixel of the smallest template
+BLUR_RADIUS = 2.5  # the image's Gaussian kernel reaches this many sigmas either side
 
 
 @dataclass(frozen=True)
@@ -130,56 +131,92 @@ class TemplateMatcher:
         Returns candidates with NCC at least ``ncc_threshold``, with overlapping ones
         (centres closer than half a board) suppressed.
         """
-        h, w = grey.shape
         shrink, octaves = self._plan(grey.shape)
-        if shrink > 1.0:
-            size = (max(1, round(w / shrink)), max(1, round(h / shrink)))
-            level = cv2.resize(grey, size, interpolation=cv2.INTER_AREA)
-        else:
-            level = grey
+        level, (sx, sy) = _shrunk(grey, shrink)
         sigma = BLUR_PER_PX * self.template_px
-        found: list[Candidate] = []
+        ksize = 2 * max(1, round(BLUR_RADIUS * sigma)) + 1
+        found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        maps: list[tuple[float, float, float, float]] = []  # side, board size, sx, sy
         for k, sizes in enumerate(octaves):
             if k:
-                level = cv2.resize(
-                    level,
-                    (max(1, level.shape[1] // 2), max(1, level.shape[0] // 2)),
-                    interpolation=cv2.INTER_AREA,
-                )
-            blurred = cv2.GaussianBlur(level, (0, 0), sigma)
-            sx, sy = w / level.shape[1], h / level.shape[0]
+                level, sx, sy = _halved(level), 2 * sx, 2 * sy
+            blurred = cv2.GaussianBlur(level, (ksize, ksize), sigma)
             for s in sizes:
                 tpl, side = self._templates[s]
                 if side >= min(level.shape):
                     continue
-                ncc = cv2.matchTemplate(blurred, tpl, cv2.TM_CCOEFF_NORMED)
-                found.extend(self._peaks(ncc, s, side, sx, sy))
-        found.sort(key=lambda c: -c.score)
-        kept: list[Candidate] = []
-        for c in found:
-            if all(
-                (c.cx - k.cx) ** 2 + (c.cy - k.cy) ** 2 > (0.5 * min(c.size, k.size)) ** 2
-                for k in kept
-            ):
-                kept.append(c)
-        return kept
-
-    def _peaks(self, ncc: np.ndarray, s: int, side: int, sx: float, sy: float) -> list[Candidate]:
-        """Local maxima of an NCC map as candidates (board side ``s``, template ``side``)."""
-        if ncc.size == 0:
+                peaks = self._peaks(cv2.matchTemplate(blurred, tpl, cv2.TM_CCOEFF_NORMED), s)
+                if peaks is not None:
+                    found.append(peaks)
+                    maps.append((side, s, sx, sy))
+        if not found:
             return []
+        # One row per peak: its map's template side, board size and scale; then full pixels.
+        side, size, sx, sy = np.repeat(maps, [len(p[0]) for p in found], axis=0).T
+        ys, xs, score = (np.concatenate(c) for c in zip(*found, strict=True))
+        peaks = np.stack(
+            [(xs + side / 2) * sx - 0.5, (ys + side / 2) * sy - 0.5, size * 0.5 * (sx + sy), score],
+            axis=1,
+        )
+        cx, cy, size, score = _suppress_overlaps(peaks).T
+        return [
+            Candidate(*c)
+            for c in zip(cx.tolist(), cy.tolist(), size.tolist(), score.tolist(), strict=True)
+        ]
+
+    def _peaks(self, ncc: np.ndarray, s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Rows, columns and scores of the local maxima of an NCC map (board side ``s``) at
+        or above the threshold, at most ``max_peaks`` (the best); None if there are none."""
+        if ncc.size == 0 or cv2.minMaxLoc(ncc)[1] < self.ncc_threshold:
+            return None
         k = max(3, (s // 2) | 1)
         local_max = cv2.dilate(ncc, np.ones((k, k), np.uint8))
-        ys, xs = np.nonzero((ncc >= local_max) & (ncc >= self.ncc_threshold))
+        # Flat indices: numpy's 1-D nonzero is many times faster than its 2-D one.
+        at = ((ncc >= local_max) & (ncc >= self.ncc_threshold)).ravel().nonzero()[0]
+        ys, xs = np.divmod(at, ncc.shape[1])
+        score = ncc.ravel()[at].astype(np.float64)
         if len(xs) > self.max_peaks:
-            best = np.argsort(ncc[ys, xs])[::-1][: self.max_peaks]
-            ys, xs = ys[best], xs[best]
-        return [
-            Candidate(
-                (x + side / 2) * sx - 0.5,
-                (y + side / 2) * sy - 0.5,
-                s * 0.5 * (sx + sy),
-                float(ncc[y, x]),
-            )
-            for y, x in zip(ys.tolist(), xs.tolist(), strict=True)
-        ]
+            best = np.argsort(score)[::-1][: self.max_peaks]
+            ys, xs, score = ys[best], xs[best], score[best]
+        return ys, xs, score
+
+
+def _shrunk(grey: np.ndarray, shrink: float) -> tuple[np.ndarray, tuple[float, float]]:
+    """``grey`` made about ``shrink`` times smaller, and the factors (x, y) it was shrunk by.
+
+    It is box-averaged by the whole part of ``shrink`` (OpenCV's fast path for whole factors,
+    after dropping the last rows and columns that do not fill a box), then resampled linearly
+    by the rest.
+    """
+    if shrink <= 1.0:
+        return grey, (1.0, 1.0)
+    whole = int(shrink)
+    h, w = (n - n % whole for n in grey.shape)
+    if whole >= 2:
+        grey = cv2.resize(grey[:h, :w], (w // whole, h // whole), interpolation=cv2.INTER_AREA)
+    size = (max(1, round(w / shrink)), max(1, round(h / shrink)))
+    if grey.shape[::-1] != size:
+        grey = cv2.resize(grey, size, interpolation=cv2.INTER_LINEAR)
+    return grey, (w / size[0], h / size[1])
+
+
+def _halved(level: np.ndarray) -> np.ndarray:
+    """``level`` box-averaged by 2 (its last row or column dropped when odd)."""
+    h, w = level.shape[0] // 2, level.shape[1] // 2
+    return cv2.resize(level[: 2 * h, : 2 * w], (w, h), interpolation=cv2.INTER_AREA)
+
+
+def _suppress_overlaps(peaks: np.ndarray) -> np.ndarray:
+    """Rows ``cx, cy, size, score`` best first, without those whose centre is within half a
+    board of a better kept one (greedy non-maximum suppression)."""
+    peaks = peaks[np.argsort(-peaks[:, 3], kind="stable")]
+    x, y, s = peaks[:, 0], peaks[:, 1], peaks[:, 2]
+    d2 = (x[:, None] - x[None, :]) ** 2 + (y[:, None] - y[None, :]) ** 2
+    overlaps = d2 <= (0.5 * np.minimum(s[:, None], s[None, :])) ** 2
+    suppressed = np.zeros(len(peaks), dtype=bool)
+    keep = []
+    for i in range(len(peaks)):
+        if not suppressed[i]:
+            keep.append(i)
+            suppressed |= overlaps[i]
+    return peaks[keep]

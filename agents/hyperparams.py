@@ -1,0 +1,151 @@
+"""Hyper-parameters of the SB3 agents: rl-zoo style YAML, one file per algorithm.
+
+``configs/agents/<algo>.yaml`` holds a ``default`` section and optional sections named by
+registered env id (``stsf_gym/Corridor-Truth-v0``, ...), merged over it. A section mixes
+training keys (:class:`TrainingConfig`) with the algorithm's own keyword arguments
+(``learning_rate``, ``n_steps``, ``gamma``, ...), checked against its signature. Unknown
+sections, unknown keys and values of the wrong type raise :class:`ConfigError` naming the
+file and the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import importlib
+import inspect
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+import stsf_gym  # noqa: F401 - registers the env ids that name sections
+from envs.config import CONFIG_DIR, ConfigError, build, deep_merge, overrides_to_tree, read_yaml
+
+#: Supported algorithms: name -> "module:class".
+ALGORITHMS: dict[str, str] = {"ppo": "stable_baselines3:PPO", "sac": "stable_baselines3:SAC"}
+#: Constructor arguments the trainer sets itself (or that name classes, not values).
+RESERVED = {
+    "self", "policy", "env", "policy_kwargs", "tensorboard_log", "verbose", "seed", "device",
+    "_init_setup_model", "action_noise", "rollout_buffer_class", "replay_buffer_class",
+}  # fmt: skip
+ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leaky_relu": "LeakyReLU"}
+
+
+@dataclass(frozen=True)
+class TrainingConfig:
+    """The training keys of a section (everything else goes to the algorithm)."""
+
+    n_envs: int
+    n_timesteps: int
+    policy: str
+    eval_freq: int  # env steps (summed over the envs) between evaluations
+    n_eval_episodes: int
+    checkpoint_freq: int  # env steps (summed over the envs) between checkpoints
+    policy_kwargs: dict = field(default_factory=dict)
+    env: dict = field(default_factory=dict)  # env overrides, as gym.make keyword sections
+    observation: dict = field(default_factory=dict)  # agents.observation.ObservationConfig
+
+    def __post_init__(self) -> None:
+        for name in ("n_envs", "n_timesteps", "eval_freq", "n_eval_episodes", "checkpoint_freq"):
+            if getattr(self, name) < 1:
+                raise ConfigError(f"{name} must be at least 1, got {getattr(self, name)}")
+        for name in ("policy_kwargs", "env", "observation"):
+            if not isinstance(getattr(self, name), dict):
+                raise ConfigError(f"{name} must be a mapping, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True)
+class Hyperparams:
+    algo: str
+    section: str  # the env id section merged over ``default`` ("default" if none)
+    training: TrainingConfig
+    algo_kwargs: dict  # keyword arguments of the algorithm's constructor
+
+
+def algorithm_class(algo: str) -> type:
+    if algo not in ALGORITHMS:
+        raise ConfigError(f"unknown algorithm {algo!r}; known: {', '.join(ALGORITHMS)}")
+    module, _, name = ALGORITHMS[algo].partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def load_hyperparams(
+    algo: str,
+    env_id: str | None,
+    path: str | Path | None = None,
+    overrides: dict[str, Any] | None = None,
+) -> Hyperparams:
+    """The ``default`` section of ``path`` (``configs/agents/<algo>.yaml``) with the
+    ``env_id`` section and then ``overrides`` (flat ``key.sub=value`` or nested) over it."""
+    cls = algorithm_class(algo)
+    path = Path(path or CONFIG_DIR / "agents" / f"{algo}.yaml")
+    data = read_yaml(path)
+    for section, body in data.items():
+        if section != "default" and section not in gym.registry:
+            close = difflib.get_close_matches(str(section), list(gym.registry), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ConfigError(
+                f"{path}: unknown section {section!r}{hint}; use 'default' or a registered "
+                "env id such as 'stsf_gym/Corridor-Truth-v0'"
+            )
+        if not isinstance(body, dict):
+            raise ConfigError(f"{path}: section {section!r} must be a mapping, got {body!r}")
+    chosen = env_id if env_id in data else "default"
+    merged = deep_merge(data.get("default", {}), data.get(env_id, {}) if env_id else {})
+    merged = deep_merge(merged, overrides_to_tree(overrides or {}))
+    training_keys = {f.name for f in dataclasses.fields(TrainingConfig)}
+    try:
+        training = build(
+            TrainingConfig, {k: v for k, v in merged.items() if k in training_keys}, ""
+        )
+        algo_kwargs = {k: v for k, v in merged.items() if k not in training_keys}
+        _check_algo_kwargs(cls, algo_kwargs)
+        _check_policy_kwargs(training.policy_kwargs)
+    except ConfigError as err:
+        raise ConfigError(f"{path} [{chosen}]: {err}") from None
+    return Hyperparams(algo, chosen, training, algo_kwargs)
+
+
+def _check_algo_kwargs(cls: type, kwargs: dict) -> None:
+    """Names from ``cls.__init__``; types from its defaults (a ``None`` default takes any)."""
+    parameters = inspect.signature(cls.__init__).parameters
+    allowed = [name for name in parameters if name not in RESERVED]
+    for key, value in kwargs.items():
+        if key not in allowed:
+            close = difflib.get_close_matches(key, [*allowed, "n_envs", "n_timesteps"], n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ConfigError(f"unknown hyper-parameter {key!r} for {cls.__name__}{hint}")
+        default = parameters[key].default
+        if default is None:
+            continue
+        if isinstance(default, bool):
+            ok = isinstance(value, bool)
+        elif isinstance(default, int | float):
+            ok = isinstance(value, int | float) and not isinstance(value, bool)
+            ok = ok and (not isinstance(default, int) or float(value).is_integer())
+        else:  # a string default such as ent_coef: "auto" also takes a number
+            ok = isinstance(value, str | int | float) and not isinstance(value, bool)
+        if not ok:
+            raise ConfigError(f"{key} must be like {default!r}, got {value!r}")
+        if isinstance(default, int) and not isinstance(default, bool):
+            kwargs[key] = int(value)
+
+
+def _check_policy_kwargs(policy_kwargs: dict) -> None:
+    activation = policy_kwargs.get("activation_fn")
+    if activation is not None and activation not in ACTIVATIONS:
+        raise ConfigError(
+            f"policy_kwargs.activation_fn must be one of {list(ACTIVATIONS)}, got {activation!r}"
+        )
+
+
+def policy_kwargs_for_sb3(policy_kwargs: dict) -> dict:
+    """``policy_kwargs`` with the activation's name replaced by the ``torch.nn`` class."""
+    import torch.nn
+
+    kwargs = dict(policy_kwargs)
+    if "activation_fn" in kwargs:
+        kwargs["activation_fn"] = getattr(torch.nn, ACTIVATIONS[kwargs["activation_fn"]])
+    return kwargs

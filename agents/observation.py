@@ -1,0 +1,101 @@
+"""The RL policy's input: pose-derived path features, pose uncertainty, sonar, wheel speeds.
+
+:class:`PolicyObservation` sits on top of a :class:`stsf_gym.wrappers.PoseEstimateWrapper`
+and turns its ``Dict`` observation into one flat ``Box``. Everything comes from the pose
+estimate, the sensors and the world's path (public map knowledge), never from ``info``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from envs.config import build
+from envs.task import Polyline
+
+STD_FLOOR, STD_CEIL = 1e-3, 10.0  # clip range of a standard deviation before its log
+TANGENT_STEP = 0.1  # m, arc length over which the path's direction is measured
+FEATURE_LIMIT = 100.0  # every entry is clipped to +-this (only far-off lookahead points reach it)
+
+
+@dataclass(frozen=True)
+class ObservationConfig:
+    """``lookahead``: arc lengths (m) ahead of the robot's nearest path point whose positions
+    in the robot frame the policy sees; ``scale``: metres that map to 1 in those features."""
+
+    lookahead: tuple[float, ...] = (0.0, 0.5, 1.0, 2.0, 4.0)
+    scale: float = 4.0
+
+
+def observation_config(data: dict | None) -> ObservationConfig:
+    """An :class:`ObservationConfig` from a mapping; unknown keys raise ``ConfigError``."""
+    return build(ObservationConfig, data or {}, "observation")
+
+
+class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
+    """A flat ``Box`` observation in the robot frame, for MLP policies. Entries, in order:
+
+    - ``2 K`` lookahead points: ``(x, y)`` of the path points ``lookahead`` metres ahead of the
+      path point nearest the estimated pose, in the estimated robot frame, over ``scale``;
+    - the path length left to the goal, over the whole path length;
+    - ``sin`` and ``cos`` of the heading error (path direction minus estimated yaw);
+    - ``log10`` of the standard deviations of the estimate along and across the robot's
+      heading and of its yaw (each clipped to 1 mm..10 m or rad), over 3;
+    - the sonar ranges, 0 at ``min_range`` to 1 at ``max_range``;
+    - the wheel speeds from the encoder ticks, 1 at the robot's top speed.
+
+    ``info["is_success"]`` is set at the end of an episode (the goal reached), which
+    stable-baselines3's evaluation callback counts.
+    """
+
+    def __init__(self, env: gym.Env, config: ObservationConfig | None = None) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, config=config)
+        gym.ObservationWrapper.__init__(self, env)
+        if "pose" not in env.observation_space.spaces:
+            raise ValueError("PolicyObservation needs obs['pose']: wrap in PoseEstimateWrapper")
+        self.config = config or ObservationConfig()
+        cfg = env.unwrapped.config
+        self.path = Polyline(cfg.world.path)
+        self.sonar_range = (cfg.sonar.min_range, cfg.sonar.max_range)
+        top_wheel_speed = cfg.robot.max_speed / cfg.robot.wheel_radius  # rad/s
+        self.ticks_at_top_speed = (
+            top_wheel_speed * env.unwrapped.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
+        )
+        size = 2 * len(self.config.lookahead) + 6 + cfg.sonar.count + 2
+        self.observation_space = spaces.Box(-FEATURE_LIMIT, FEATURE_LIMIT, (size,), np.float32)
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        if terminated or truncated:
+            info["is_success"] = bool(terminated and not info.get("collision", False))
+        return self.observation(obs), reward, terminated, truncated, info
+
+    def observation(self, obs: dict) -> np.ndarray:
+        x, y, yaw = (float(v) for v in obs["pose"])
+        c, s = math.cos(yaw), math.sin(yaw)
+        to_robot = np.array([[c, s], [-s, c]])
+        here = self.path.project((x, y))
+        ahead = np.array([self.path.point_at(here + d) for d in self.config.lookahead])
+        points = (ahead - (x, y)) @ to_robot.T / self.config.scale
+        end = min(here + TANGENT_STEP, self.path.length)
+        dx, dy = self.path.point_at(end) - self.path.point_at(end - TANGENT_STEP)
+        heading_error = math.atan2(dy, dx) - yaw
+        cov = np.asarray(obs["pose_cov"], dtype=float).reshape(3, 3)
+        position_var = np.diag(to_robot @ cov[:2, :2] @ to_robot.T)
+        stds = np.sqrt(np.maximum([*position_var, cov[2, 2]], 0.0))
+        low, high = self.sonar_range
+        features = np.concatenate(
+            [
+                points.ravel(),
+                [(self.path.length - here) / self.path.length],
+                [math.sin(heading_error), math.cos(heading_error)],
+                np.log10(np.clip(stds, STD_FLOOR, STD_CEIL)) / 3.0,
+                (np.asarray(obs["sonar"], dtype=float) - low) / (high - low),
+                np.asarray(obs["encoders"], dtype=float) / self.ticks_at_top_speed,
+            ]
+        )
+        return np.clip(features, -FEATURE_LIMIT, FEATURE_LIMIT).astype(np.float32)

@@ -1,0 +1,94 @@
+"""Saved stable-baselines3 agents: what they were trained on, and a policy for evaluation.
+
+``stsf-gym train`` stores a ``stsf_meta`` mapping in every saved model (algorithm,
+estimator, world, env overrides, policy-input settings, wall time so far); it travels inside
+the ``.zip`` with the model, so a model file alone is enough to evaluate it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import zipfile
+from collections.abc import Callable
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+from agents.hyperparams import algorithm_class
+from agents.observation import PolicyObservation, observation_config
+from envs.config import ConfigError
+
+META_KEY = "stsf_meta"
+
+
+def check_model_file(path: str | Path) -> Path:
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"agent model not found: {path} (train one with `stsf-gym train`)")
+    return path
+
+
+def model_digest(path: str | Path) -> str:
+    """The first 10 hex digits of the model file's SHA-256 (a retrained model differs)."""
+    return hashlib.sha256(check_model_file(path).read_bytes()).hexdigest()[:10]
+
+
+def _saved_data(path: str | Path) -> dict:
+    """The JSON ``data`` part of an SB3 model file (attributes, not the network)."""
+    path = check_model_file(path)
+    try:
+        with zipfile.ZipFile(path) as archive:
+            data = json.loads(archive.read("data"))
+    except (zipfile.BadZipFile, KeyError, json.JSONDecodeError) as err:
+        raise ConfigError(f"{path} is not a stable-baselines3 model: {err}") from None
+    if META_KEY not in data:
+        raise ConfigError(f"{path} was not saved by `stsf-gym train` (no {META_KEY})")
+    return data
+
+
+def model_metadata(path: str | Path) -> dict:
+    """The ``stsf_meta`` mapping saved in a model trained by ``stsf-gym train``."""
+    return _saved_data(path)[META_KEY]
+
+
+def training_record(path: str | Path) -> dict:
+    """What an evaluation records about a model: algorithm, pose source, world, timesteps."""
+    data = _saved_data(path)
+    meta = data[META_KEY]
+    return {
+        "algo": meta["algo"],
+        "estimator": meta["estimator"],
+        "world": meta["world"],
+        "timesteps": data["num_timesteps"],
+        "digest": model_digest(path),
+    }
+
+
+def load_model(path: str | Path, env=None):
+    """The saved model (its algorithm read from its metadata), on the CPU."""
+    meta = model_metadata(path)
+    return algorithm_class(meta["algo"]).load(str(path), env=env, device="cpu")
+
+
+def load_agent(path: str | Path, env: gym.Env) -> Callable[[dict], np.ndarray]:
+    """``obs -> action`` of a saved model for ``env`` (a :class:`PoseEstimateWrapper`): the
+    observation is turned into the policy's input as in training, the action deterministic."""
+    import torch
+
+    torch.set_num_threads(1)
+    meta = model_metadata(path)
+    model = load_model(path)
+    features = PolicyObservation(env, observation_config(meta.get("observation")))
+    if features.observation_space.shape != model.observation_space.shape:
+        raise ConfigError(
+            f"{path} expects observations of shape {model.observation_space.shape}, "
+            f"this env gives {features.observation_space.shape}"
+        )
+
+    def act(obs: dict) -> np.ndarray:
+        action, _ = model.predict(features.observation(obs), deterministic=True)
+        return action
+
+    return act

@@ -1,0 +1,102 @@
+"""Fast sensor mode: landmark detections simulated from the true camera pose, no rendering.
+
+The rendered pipeline draws the frame and the estimator's detector finds the boards in it. In
+the fast mode (``camera.mode: fast``) the env skips the drawing and reports what the detector
+would have found, with the detector's statistics fitted on rendered frames
+(``benchmarks/fast_sensor_fit.py`` writes the ``camera.fast`` numbers):
+
+- **which boards**: every board wholly in the frame, facing the camera and not occluded (the
+  same test as ``CorridorEnv.landmarks_in_view``) is detected with probability
+  ``1 / (1 + exp(-(s - detect_size_px) / detect_size_scale))``, where ``s`` is the board's
+  apparent size in pixels: the shorter of its mean projected width and height. That one number
+  carries both distance and viewing angle (foreshortening), as it does for the detector,
+  whose smallest searched board is ``min_board_px`` wide;
+- **where its squares are**: the true projection through K of every lit square's centre plus
+  independent Gaussian errors of ``feature_noise_px`` per axis;
+- **false detections**: a Poisson number per frame (mean ``false_detection_rate``) of phantom
+  boards with a random map id, fronto-parallel 2-6 m ahead at a random place in the frame.
+
+The observation holds ``max_detections`` slots: ``landmark_ids`` (-1 for an empty slot) and
+``landmark_points``, flat (slots x 2 grid^2): each slot's lit-square centres as ``x0, y0, x1,
+y1, ...`` in :func:`stsf_gym.vision.landmarks.square_centres` order, zero past the last square
+(``reshape(slots, -1, 2)`` gives the points; flat because SB3 policies take 1-D vectors).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from envs.config import FastCameraConfig
+from envs.sensors.camera import PinholeCamera
+from envs.world import Landmark
+from stsf_gym.vision.landmarks import LandmarkPattern, square_centres
+
+PHANTOM_DEPTH = (2.0, 6.0)  # m, range of a false detection's depth
+
+
+def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corners) -> float:
+    """The shorter of a board's mean projected width and height (pixels)."""
+    uv = camera.project(world_from_camera, corners)  # top-left, top-right, bottom-right, ...
+    sides = np.linalg.norm(uv - np.roll(uv, -1, axis=0), axis=1)
+    return float(min(sides[0] + sides[2], sides[1] + sides[3]) / 2)
+
+
+def detection_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.ndarray:
+    """Probability that the detector finds a board of apparent size ``size_px``."""
+    z = (np.asarray(size_px, dtype=float) - cfg.detect_size_px) / cfg.detect_size_scale
+    return 1.0 / (1.0 + np.exp(-np.clip(z, -50, 50)))
+
+
+class SimulatedDetector:
+    """The detector's output for a camera pose, drawn from its fitted statistics."""
+
+    def __init__(
+        self,
+        cfg: FastCameraConfig,
+        camera: PinholeCamera,
+        pattern: LandmarkPattern,
+        landmarks: list[Landmark],
+    ) -> None:
+        self.cfg, self.camera, self.pattern = cfg, camera, pattern
+        self.landmarks = {lm.id: lm for lm in landmarks}
+        self.slots = cfg.max_detections
+        self.values_per_slot = 2 * pattern.grid**2
+
+    def empty(self) -> tuple[np.ndarray, np.ndarray]:
+        """Slots with nothing detected."""
+        return (
+            np.full(self.slots, -1, np.int64),
+            np.zeros(self.slots * self.values_per_slot, np.float32),
+        )
+
+    def detect(
+        self, world_from_camera: np.ndarray, visible_ids: list[int], rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``(landmark_ids, landmark_points)`` of one frame; ``visible_ids`` from ray tests."""
+        ids, points = self.empty()
+        found = []
+        for landmark_id in visible_ids:
+            landmark = self.landmarks[landmark_id]
+            size = apparent_size_px(self.camera, world_from_camera, landmark.board_corners)
+            if rng.random() < detection_probability(size, self.cfg):
+                found.append(
+                    (landmark_id, self.camera.project(world_from_camera, landmark.square_centres))
+                )
+        for _ in range(rng.poisson(self.cfg.false_detection_rate)):
+            found.append(self._phantom(rng))
+        for slot, (landmark_id, uv) in enumerate(found[: self.slots]):
+            noisy = uv + rng.normal(0.0, self.cfg.feature_noise_px, uv.shape)
+            ids[slot] = landmark_id
+            start = slot * self.values_per_slot
+            points[start : start + noisy.size] = noisy.ravel()
+        return ids, points
+
+    def _phantom(self, rng: np.random.Generator) -> tuple[int, np.ndarray]:
+        """A board of a random map id, fronto-parallel at a random depth and place."""
+        landmark_id = int(rng.choice(sorted(self.landmarks)))
+        plane = square_centres(landmark_id, self.pattern)
+        depth = rng.uniform(*PHANTOM_DEPTH)
+        half = self.pattern.size / 2 * self.camera.focal_px / depth
+        centre = rng.uniform([half, half], [self.camera.width - half, self.camera.height - half])
+        uv = centre + plane * np.array([1.0, -1.0]) * self.camera.focal_px / depth
+        return landmark_id, uv

@@ -1,0 +1,203 @@
+"""Typed, range-checked configs: frozen dataclasses built from nested mappings (YAML).
+
+A field's type is its schema. ``Annotated[float, Range(gt=0)]`` adds an allowed range, and a
+dataclass may check relations between its fields in ``__post_init__`` with :func:`require`.
+:func:`build` constructs a dataclass from a mapping and raises :class:`ConfigError` naming the
+full key path, the allowed values and the value given, e.g.
+``robot.wheel_radius must be > 0, got -0.1``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import re
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal
+
+
+class ConfigError(ValueError):
+    """A configuration key or value is invalid; the message names the key (and its file).
+
+    ``key`` is the full key path (``camera.width``) when one key is to blame, and ``source``
+    the file that set it, when known.
+    """
+
+    def __init__(self, message: str, key: str | None = None, source: str | None = None) -> None:
+        super().__init__(f"{source}: {message}" if source else message)
+        self.message, self.key, self.source = message, key, source
+
+
+class FieldError(ValueError):
+    """Raised in a config dataclass's ``__post_init__``: ``field`` (relative key) is invalid."""
+
+    def __init__(self, field: str, problem: str) -> None:
+        super().__init__(f"{field} {problem}")
+        self.field, self.problem = field, problem
+
+
+def require(condition: bool, field: str, problem: str) -> None:
+    """Raise :class:`FieldError` for ``field`` unless ``condition`` holds."""
+    if not condition:
+        raise FieldError(field, problem)
+
+
+@dataclass(frozen=True)
+class Range:
+    """Allowed values of a number: any of the bounds ``gt``, ``ge``, ``lt``, ``le``."""
+
+    gt: float | None = None
+    ge: float | None = None
+    lt: float | None = None
+    le: float | None = None
+
+    def __contains__(self, value: float) -> bool:
+        return not (
+            (self.gt is not None and value <= self.gt)
+            or (self.ge is not None and value < self.ge)
+            or (self.lt is not None and value >= self.lt)
+            or (self.le is not None and value > self.le)
+        )
+
+    def __str__(self) -> str:
+        low, high = _first(self.gt, self.ge), _first(self.lt, self.le)
+        if low is not None and high is not None:
+            left, right = "(" if self.gt is not None else "[", ")" if self.lt is not None else "]"
+            return f"in {left}{low:g}, {high:g}{right}"
+        if low is not None:
+            return f"{'>' if self.gt is not None else '>='} {low:g}"
+        if high is not None:
+            return f"{'<' if self.lt is not None else '<='} {high:g}"
+        return "any number"
+
+
+def _first(*values: float | None) -> float | None:
+    return next((v for v in values if v is not None), None)
+
+
+Positive = Annotated[float, Range(gt=0)]
+NonNegative = Annotated[float, Range(ge=0)]
+Probability = Annotated[float, Range(ge=0, le=1)]
+Count = Annotated[int, Range(ge=1)]
+Pixels = Annotated[int, Range(ge=1, le=8192)]
+Degrees = Annotated[float, Range(ge=-360, le=360)]
+
+
+def build(cls: type, data: Any, path: str) -> Any:
+    """Construct dataclass ``cls`` from nested ``data``, naming any bad key by its path."""
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"{path or 'config'} must be a mapping, got {data!r}", path)
+    hints = typing.get_type_hints(cls, include_extras=True)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = [k for k in data if k not in fields]
+    if unknown:
+        key = _join(path, unknown[0])
+        hint = difflib.get_close_matches(str(unknown[0]), fields, n=1)
+        suggestion = f" (did you mean {_join(path, hint[0])!r}?)" if hint else ""
+        raise ConfigError(f"unknown config key {key!r}{suggestion}", key)
+    values = {}
+    for name, f in fields.items():
+        if name in data:
+            values[name] = _coerce(hints[name], data[name], _join(path, name))
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise ConfigError(f"missing config key {_join(path, name)!r}", _join(path, name))
+    try:
+        return cls(**values)
+    except FieldError as err:
+        key = _join(path, err.field)
+        raise ConfigError(f"{key} {err.problem}", key) from err
+    except (TypeError, ValueError) as err:
+        raise ConfigError(f"invalid {path or 'config'}: {err}", path) from err
+
+
+def _coerce(hint: Any, value: Any, path: str) -> Any:
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin is Annotated:
+        value = _coerce(args[0], value, path)
+        for allowed in (m for m in hint.__metadata__ if isinstance(m, Range)):
+            if value not in allowed:
+                raise ConfigError(f"{path} must be {allowed}, got {value!r}", path)
+        return value
+    if dataclasses.is_dataclass(hint):
+        return build(hint, value, path)
+    if origin is Literal:
+        if value not in args:
+            raise ConfigError(f"{path} must be one of {list(args)}, got {value!r}", path)
+        return value
+    if origin is tuple:
+        return _coerce_tuple(args, value, path)
+    if origin in (typing.Union, types.UnionType):
+        return value
+    if hint is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(f"{path} must be true or false, got {value!r}", path)
+        return value
+    if hint in (int, float):
+        return _coerce_number(hint, value, path)
+    if hint is str and not isinstance(value, str):
+        raise ConfigError(f"{path} must be a string, got {value!r}", path)
+    return value
+
+
+def _coerce_tuple(args: tuple, value: Any, path: str) -> tuple:
+    if not isinstance(value, list | tuple):
+        raise ConfigError(f"{path} must be a list, got {value!r}", path)
+    if len(args) == 2 and args[1] is Ellipsis:
+        return tuple(_coerce(args[0], v, f"{path}[{i}]") for i, v in enumerate(value))
+    if len(value) != len(args):
+        raise ConfigError(f"{path} must have {len(args)} entries, got {len(value)}", path)
+    return tuple(
+        _coerce(a, v, f"{path}[{i}]") for i, (a, v) in enumerate(zip(args, value, strict=True))
+    )
+
+
+def _coerce_number(hint: type, value: Any, path: str) -> float | int:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(f"{path} must be a number, got {value!r}", path)
+    if not math.isfinite(value):
+        raise ConfigError(f"{path} must be a finite number, got {value!r}", path)
+    if hint is int and value != int(value):
+        raise ConfigError(f"{path} must be an integer, got {value!r}", path)
+    return hint(value)
+
+
+def _join(path: str, key: Any) -> str:
+    return f"{path}.{key}" if path else str(key)
+
+
+class KeySources:
+    """Which file set each key of a config merged from layers, to name that file in errors."""
+
+    def __init__(self) -> None:
+        self._files: dict[str, str] = {}  # key path -> file ("" when set by a mapping)
+
+    def record(self, tree: Mapping, file: str | None, prefix: str = "") -> None:
+        """Note ``file`` (``None``: not from a file) as the source of every key in ``tree``."""
+        for key, value in tree.items():
+            path = _join(prefix, key)
+            self._files[path] = file or ""
+            if isinstance(value, Mapping):
+                self.record(value, file, path)
+
+    def forget(self, prefix: str) -> None:
+        """Drop ``prefix`` and the keys under it (a section replaced as a whole)."""
+        for key in [k for k in self._files if k == prefix or k.startswith(f"{prefix}.")]:
+            del self._files[key]
+
+    def file_of(self, key: str | None) -> str:
+        """The file that set ``key`` or its nearest enclosing key ("" if none)."""
+        while key:
+            if key in self._files:
+                return self._files[key]
+            parent = re.sub(r"(\.[^.\[]+|\[\d+\])$", "", key)
+            key = parent if parent != key else None
+        return ""
+
+    def attribute(self, err: ConfigError) -> ConfigError:
+        """``err`` with the file that set its key, when known."""
+        file = self.file_of(err.key)
+        return ConfigError(err.message, err.key, file) if file and not err.source else err

@@ -1,0 +1,135 @@
+"""Geometry checks of a world config: landmarks on walls, start and path clear of walls.
+
+They raise :class:`~envs.validation.FieldError` naming the key relative to the config being
+checked (``landmarks[2].at`` in a world, ``world.start`` in the whole env config), so
+:func:`~envs.validation.build` reports the full key path.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from envs.validation import require
+
+if TYPE_CHECKING:
+    from envs.config import ObstacleSpec, WorldConfig
+
+ON_WALL_TOLERANCE = 1e-3  # m: how far a landmark's ``at`` may be off a wall centre line
+SQUARE_TOLERANCE_DEG = 1.0  # how far a landmark's normal may be off square to its wall
+SIDES = (-math.pi / 2, math.pi / 2)  # the two normals of a wall, from its direction
+
+
+def segment_distance(point, segment) -> float:
+    """Distance from ``point`` (x, y) to the segment ``[x1, y1, x2, y2]``."""
+    p, a, b = np.asarray(point, float), np.asarray(segment[:2], float), np.asarray(segment[2:])
+    ab = b - a
+    t = np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0.0, 1.0)
+    return float(np.hypot(*(p - a - t * ab)))
+
+
+def obstacle_distance(point, obstacle: ObstacleSpec) -> float:
+    """Distance from ``point`` to an obstacle's footprint (0 inside it)."""
+    offset = np.asarray(point, float) - obstacle.position
+    if obstacle.shape == "cylinder":
+        return max(0.0, float(np.hypot(*offset)) - obstacle.size[0])
+    yaw = math.radians(obstacle.yaw_deg)
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = np.array([c * offset[0] + s * offset[1], -s * offset[0] + c * offset[1]])
+    outside = np.maximum(np.abs(local) - np.asarray(obstacle.size[:2]) / 2, 0.0)
+    return float(np.hypot(*outside))
+
+
+def check_world(world: WorldConfig) -> None:
+    """Walls have length, the path two points, landmarks sit on walls and fit on them."""
+    for i, wall in enumerate(world.walls):
+        require(wall[:2] != wall[2:], f"walls[{i}]", f"must join two different points, got {wall}")
+    pattern = world.landmark_pattern
+    ids = [lm.id for lm in world.landmarks]
+    for i, landmark in enumerate(world.landmarks):
+        require(
+            landmark.id <= pattern.max_id,
+            f"landmarks[{i}].id",
+            f"must be in [0, {pattern.max_id}] for a {pattern.grid}x{pattern.grid} grid, "
+            f"got {landmark.id}",
+        )
+        require(
+            landmark.id not in ids[:i],
+            f"landmarks[{i}].id",
+            f"must be unique, got {landmark.id} again (ids: {ids})",
+        )
+        _check_on_wall(world, i)
+    half = pattern.size / 2
+    require(
+        half <= world.landmark_height <= world.wall_height - half,
+        "landmark_height",
+        f"must be in [{half:g}, {world.wall_height - half:g}] so a {pattern.size:g} m board fits "
+        f"on a {world.wall_height:g} m wall, got {world.landmark_height}",
+    )
+    for i, obstacle in enumerate(world.obstacles):
+        entries = 3 if obstacle.shape == "box" else 2
+        require(
+            len(obstacle.size) == entries,
+            f"obstacles[{i}].size",
+            f"of a {obstacle.shape} must have {entries} entries, got {list(obstacle.size)}",
+        )
+
+
+def _check_on_wall(world: WorldConfig, index: int) -> None:
+    landmark = world.landmarks[index]
+    distances = [segment_distance(landmark.at, wall) for wall in world.walls]
+    nearest = int(np.argmin(distances))
+    require(
+        distances[nearest] <= ON_WALL_TOLERANCE,
+        f"landmarks[{index}].at",
+        f"must lie on a wall centre line (the nearest, walls[{nearest}], is "
+        f"{distances[nearest]:.3f} m away), got {list(landmark.at)}",
+    )
+    squares = []
+    for wall, distance in zip(world.walls, distances, strict=True):
+        if distance <= ON_WALL_TOLERANCE:
+            along = math.atan2(wall[3] - wall[1], wall[2] - wall[0])
+            squares += [math.degrees(math.remainder(along + s, math.tau)) for s in SIDES]
+    off = min(abs(math.remainder(landmark.facing_deg - s, 360.0)) for s in squares)
+    require(
+        off <= SQUARE_TOLERANCE_DEG,
+        f"landmarks[{index}].facing_deg",
+        f"must face straight out of its wall ({' or '.join(f'{s:g}' for s in squares)}), "
+        f"got {landmark.facing_deg:g}",
+    )
+
+
+def check_clearance(world: WorldConfig, body_radius: float) -> None:
+    """Start pose and path points inside the walls' bounds, a robot radius clear of walls.
+
+    Keys are relative to the env config (``world.start``, ``world.path[1]``).
+    """
+    ends = np.array([p for wall in world.walls for p in (wall[:2], wall[2:])])
+    low, high = ends.min(axis=0), ends.max(axis=0)
+    points = {"world.start": world.start[:2]}
+    points.update({f"world.path[{i}]": p for i, p in enumerate(world.path)})
+    for key, point in points.items():
+        require(
+            bool(np.all((low <= point) & (point <= high))),
+            key,
+            f"must be inside the walls' bounds x in [{low[0]:g}, {high[0]:g}], "
+            f"y in [{low[1]:g}, {high[1]:g}], got {list(point)}",
+        )
+        gaps = [segment_distance(point, w) - world.wall_thickness / 2 for w in world.walls]
+        nearest = int(np.argmin(gaps))
+        require(
+            gaps[nearest] >= body_radius,
+            key,
+            f"must be at least robot.body_radius ({body_radius:g} m) from every wall; "
+            f"walls[{nearest}] is {gaps[nearest]:.3f} m away from {list(point)}",
+        )
+    for i, obstacle in enumerate(world.obstacles):
+        gap = obstacle_distance(world.start[:2], obstacle)
+        require(
+            gap >= body_radius,
+            "world.start",
+            f"must be at least robot.body_radius ({body_radius:g} m) from every obstacle; "
+            f"obstacles[{i}] is {gap:.3f} m away from {list(world.start[:2])}",
+        )

@@ -1,0 +1,76 @@
+"""Re-localisation: how a gated landmark estimator finds itself again after a kidnap.
+
+The Mahalanobis gate rejects a landmark measurement that disagrees with the estimate: right
+for a wrong detection, wrong when the estimate itself is off (the robot was carried away, or an
+encoder spike turned its heading). Then every landmark is rejected and the estimator would stay
+lost for good. Yet each rejected measurement of a map landmark gives the robot's full pose on
+its own (the landmark's pose relative to the robot through its map pose,
+:func:`~stsf_gym.estimators.landmark_observation.robot_pose_from_landmark`): a *candidate*.
+
+- A candidate is kept with the estimate it disagreed with. While nothing is accepted the
+  estimate moves by odometry only, so an earlier candidate is carried to now by the odometry
+  since: ``candidate (+) ((-) mean_then (+) mean_now)``, its covariance by the Jacobian of that
+  composition (the odometry's own noise over the short span is left out).
+- A candidate's covariance is first order and leaves out the systematic errors (the mount's
+  kinematics, the intrinsics), which PnP makes small but not nil: :data:`CANDIDATE_FLOOR_STD`
+  is added to it.
+- The last ``2 after - 1`` candidates are kept. When ``after`` of them, the newest included,
+  agree with the newest (the chi-square ``gate`` on the sum of their covariances), the estimate
+  is re-initialised at the newest with its covariance times ``inflation``, so an odd outlier
+  among them does not stop it. An accepted measurement clears the candidates.
+
+A single wrong detection is one candidate that the following ones contradict, so it never moves
+the estimate. A decoy board seen in ``after`` measurements in a row, with no real landmark
+accepted meanwhile, cannot be told from a kidnap by these sensors and is followed, until the
+real landmarks are rejected ``after`` times and bring the estimate back. Dead reckoning has no
+landmark to re-localise from: it never recovers from a kidnap or an encoder spike.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stsf_gym.geometry import compose, compose_jacobians, inverse, wrap_angle
+
+CANDIDATE_FLOOR_STD = (0.02, 0.02, 0.02)  # m, m, rad: added to every candidate's covariance
+
+
+class Relocaliser:
+    """Collects the candidates of rejected measurements; ``after = 0`` never re-localises."""
+
+    def __init__(self, after: int, inflation: float, gate: float) -> None:
+        if after != int(after) or after < 0 or after == 1:
+            raise ValueError(f"relocalise_after must be 0 (off) or an integer >= 2, got {after}")
+        if inflation < 1:
+            raise ValueError(f"relocalise_inflation must be >= 1, got {inflation}")
+        self.after, self.inflation, self.gate = int(after), float(inflation), gate
+        self.candidates: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def clear(self) -> None:
+        """Forget the candidates (a measurement was accepted, or a new episode)."""
+        self.candidates = []
+
+    def rejected(
+        self, pose: np.ndarray, cov: np.ndarray, mean: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Note the candidate ``pose`` (covariance ``cov``) of a measurement the gate rejected
+        against the estimate ``mean``; the pose to re-initialise at, when enough agree."""
+        if self.after == 0:
+            return None
+        cov = cov + np.diag(np.square(CANDIDATE_FLOOR_STD))
+        agreeing = sum(self._agrees(*c, pose, cov, mean) for c in self.candidates)
+        self.candidates = [*self.candidates, (pose.copy(), cov.copy(), mean.copy())]
+        self.candidates = self.candidates[-(2 * self.after - 1) :]
+        if agreeing + 1 < self.after:
+            return None
+        self.clear()
+        return pose.copy(), cov * self.inflation
+
+    def _agrees(self, old, old_cov, old_mean, pose, cov, mean) -> bool:
+        odometry = compose(inverse(old_mean), mean)
+        carried = compose(old, odometry)
+        jac, _ = compose_jacobians(old, odometry)
+        error = carried - pose
+        error[2] = wrap_angle(error[2])
+        total = jac @ old_cov @ jac.T + cov
+        return float(error @ np.linalg.solve(total, error)) <= self.gate

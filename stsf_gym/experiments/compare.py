@@ -1,0 +1,112 @@
+"""Agents x pose sources: the comparison table and figure of ``stsf-gym evaluate``.
+
+``stsf-gym evaluate --agent follower,out/train/ppo-{estimator}/best/best_model.zip`` runs each
+agent on each pose source; ``{estimator}`` in a model path is replaced by the pose source, so
+each source is driven by the agent trained on it. Every pair runs the same seeded episodes as
+:func:`stsf_gym.experiments.evaluate.evaluate` (same env, wrapper and scoring), in parallel,
+with resume. Writes ``comparison.json``, ``comparison.md`` (one row per pair: success rate,
+collisions, errors, NEES, ...) and ``comparison.png`` (success rate and RMS position error per
+pair).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
+from stsf_gym.experiments.evaluate import _pyplot, estimator_options, summarise
+from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+
+SUMMARY_COLUMNS = (
+    "agent",
+    "estimator",
+    "episodes",
+    "success rate",
+    "collisions",
+    "distance before failure (m)",
+    "final error (m)",
+    "RMS error (m)",
+    "RMS heading error (deg)",
+    "NEES",
+)
+
+
+def agent_for(template: str, estimator: str) -> str:
+    """The agent that drives on ``estimator``: ``{estimator}`` in a path is filled in."""
+    return template.replace("{estimator}", estimator)
+
+
+def agent_name(template: str, estimator: str) -> str:
+    """A short name for the table: ``follower``, or the algorithm of the saved model."""
+    if template == "follower":
+        return template
+    from agents.sb3_agent import training_record
+
+    return training_record(agent_for(template, estimator))["algo"].upper()
+
+
+def compare(
+    out: str | Path,
+    agents: list[str],
+    estimators: list[str],
+    seeds: int,
+    seed: int = 0,
+    world: str = "irl_corridor",
+    workers: int = 2,
+    env: dict | None = None,
+) -> dict:
+    """Run every agent on every pose source; write the table and the figure to ``out``."""
+    out = Path(out)
+    pairs = [(a, e) for a in agents for e in estimators]
+    specs = [
+        EpisodeSpec(world, e, s, agent_for(a, e), env or {}, estimator_options(e))
+        for a, e in pairs
+        for s in range(seed, seed + seeds)
+    ]
+    results = run_episodes(specs, out / "episodes", workers, desc=f"compare {world}")
+    rows = []
+    for template, estimator in pairs:
+        agent = agent_for(template, estimator)
+        episodes = [
+            r for r in results if r.spec["agent"] == agent and r.spec["estimator"] == estimator
+        ]
+        rows.append({"agent": agent_name(template, estimator), **summarise(estimator, episodes)})
+    summary = {
+        "world": world,
+        "agents": agents,
+        "seeds": [seed, seed + seeds - 1],
+        "rows": rows,
+    }
+    write_json(out / "comparison.json", summary)
+    table = markdown_table([{k: row[k] for k in SUMMARY_COLUMNS} for row in rows])
+    write_atomic(out / "comparison.md", f"# Agents x pose sources on {world}\n\n{table}")
+    summary["figures"] = [str(plot_comparison(rows, results, out / "comparison.png"))]
+    return summary
+
+
+def plot_comparison(rows: list[dict], results: list[EpisodeResult], path: Path) -> Path:
+    """Grouped bars per pose source: success rate and RMS position error, one bar per agent."""
+    plt = _pyplot()
+    agents = list(dict.fromkeys(r["agent"] for r in rows))
+    estimators = list(dict.fromkeys(r["estimator"] for r in rows))
+    width = 0.8 / len(agents)
+    x = np.arange(len(estimators))
+    fig, (ax_s, ax_e) = plt.subplots(1, 2, figsize=(12, 4))
+    for i, agent in enumerate(agents):
+        mine = {r["estimator"]: r for r in rows if r["agent"] == agent}
+        success = [mine[e]["success rate"] for e in estimators]
+        rms = [float(mine[e]["RMS error (m)"].split(" ")[0]) for e in estimators]
+        ax_s.bar(x + i * width, success, width, label=agent)
+        ax_e.bar(x + i * width, rms, width, label=agent)
+    for ax, label in ((ax_s, "success rate"), (ax_e, "RMS position error (m)")):
+        ax.set_xticks(x + width * (len(agents) - 1) / 2, estimators)
+        ax.set_ylabel(label)
+        ax.grid(axis="y", alpha=0.3)
+    ax_s.set_ylim(0, 1.05)
+    ax_e.set_yscale("log")
+    ax_s.legend()
+    fig.suptitle(f"Agents x pose sources ({len(results)} episodes)")
+    fig.tight_layout()
+    return save_figure(fig, path)

@@ -1,0 +1,71 @@
+"""Where sweep cells run: local processes (the default) or Ray tasks, one env per cell.
+
+Both are runners for :func:`stsf_gym.experiments.cache.run_cached`: they yield each cell's
+result as it finishes, and ``run_cached`` writes its JSON file and moves the progress bar, so
+the cell files, resume and summary are the same whichever backend ran them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+from envs.config import ConfigError
+from stsf_gym.experiments.cache import Runner, process_runner
+from stsf_gym.experiments.sweep_cells import failure
+
+BACKENDS = ("local", "ray")
+
+
+def make_runner(backend: str, workers: int = 2, address: str | None = None) -> Runner:
+    """The runner of ``backend``: ``local`` processes or ``ray`` (``address`` or a local Ray)."""
+    if workers < 1:
+        raise ConfigError(f"workers must be at least 1, got {workers}")
+    if backend == "local":
+        if address is not None:
+            raise ConfigError("--address is only for --backend ray")
+        return process_runner(workers)
+    if backend == "ray":
+        return ray_runner(address, workers)
+    raise ConfigError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
+
+
+def ray_runner(address: str | None = None, workers: int = 2) -> Runner:
+    """Cells as Ray tasks (one CPU each), gathered with ``ray.wait`` as they finish.
+
+    Uses the Ray instance already initialised in this process, else connects to ``address``
+    (a running cluster, e.g. ``ray://head:10001`` or ``auto``) or, without one, starts a local
+    instance of ``workers`` CPUs; an instance it started is shut down when the cells are done.
+    Nodes of a cluster need stsf-gym installed.
+    """
+    try:
+        import ray
+    except ImportError as err:
+        raise ConfigError(
+            "the ray backend needs Ray: pip install 'stsf-gym[ray]' (or pip install ray)"
+        ) from err
+
+    def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterator[tuple[dict, object]]:
+        if not jobs:
+            return
+        started = not ray.is_initialized()
+        if started:
+            local = {} if address else {"num_cpus": workers}
+            ray.init(address=address, include_dashboard=False, log_to_driver=False, **local)
+        task = ray.remote(num_cpus=1, max_retries=0)(fn)
+        pending = {task.remote(job): job for job in jobs}
+        try:
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1)
+                job = pending.pop(done[0])
+                try:
+                    result = ray.get(done[0])
+                except ray.exceptions.RayError as err:  # the worker died or the task was lost
+                    result = failure(err)
+                yield job, result
+        finally:
+            for ref in pending:
+                ray.cancel(ref, force=True)
+            if started:
+                ray.shutdown()
+
+    return run

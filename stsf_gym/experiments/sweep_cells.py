@@ -1,0 +1,134 @@
+"""What one sweep cell runs: a small registry of cell kinds, and failures kept as results.
+
+A cell is a JSON-friendly dict (``kind``, ``world``, ``estimator``, ``agent``, ``seed``,
+``env`` overrides, the estimator's ``options``, the swept ``values``; training cells also
+``train`` and their run folder ``out``). A kind's ``run`` takes the cell and returns a dict
+whose ``metrics`` (numbers or booleans) the sweep summarises over seeds; its optional
+``check`` raises ConfigError on a bad cell before anything runs. :func:`run_cell` never
+raises: an error becomes a result with the error's text, so one failed cell does not stop
+the rest.
+"""
+
+from __future__ import annotations
+
+import math
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from envs.config import ConfigError, deep_merge
+
+#: ``train`` keys that are arguments of ``agents.train.train`` (with their defaults in a
+#: sweep: one env per cell); every other ``train`` key is a hyper-parameter override.
+TRAIN_ARGUMENTS = {"algo": "ppo", "timesteps": None, "n_envs": 1, "config": None}
+
+
+@dataclass(frozen=True)
+class CellKind:
+    run: Callable[[dict], dict]
+    check: Callable[[dict], None] | None = None
+
+
+def cell_kind(kind: str) -> CellKind:
+    if kind not in CELL_KINDS:
+        raise ConfigError(f"unknown cell kind {kind!r}; known: {', '.join(CELL_KINDS)}")
+    return CELL_KINDS[kind]
+
+
+def run_cell(cell: dict) -> dict:
+    """Run ``cell`` with its kind's function; an exception becomes ``{"error": ...}``."""
+    try:
+        return cell_kind(cell["kind"]).run(cell)
+    except Exception as err:
+        return failure(err, traceback.format_exc())
+
+
+def failure(err: BaseException, details: str = "") -> dict:
+    """The result recorded for a cell that raised ``err``: the first line of its message, and
+    the traceback (or the whole message, for a Ray error, which holds the remote traceback)."""
+    message = (str(err).strip().splitlines() or [""])[0]
+    return {"error": f"{type(err).__name__}: {message}", "traceback": details or str(err)}
+
+
+def evaluate_cell(cell: dict) -> dict:
+    """One episode of the agent on the estimator's pose; its position errors and outcome."""
+    from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
+
+    spec = EpisodeSpec(
+        cell["world"], cell["estimator"], cell["seed"], cell["agent"], cell["env"], cell["options"]
+    )
+    episode = run_episode(spec)
+    return {
+        "outcome": episode.outcome,
+        "distance": episode.distance,
+        "metrics": {
+            "final error (m)": episode.errors[-1],
+            "RMS error (m)": math.sqrt(float(np.mean(np.square(episode.errors)))),
+            "max error (m)": max(episode.errors),
+            "NEES": episode.nees,
+            "success": episode.outcome == "goal",
+        },
+    }
+
+
+def train_cell(cell: dict) -> dict:
+    """Train an SB3 agent on the cell's pose source (in ``cell["out"]``, resumable), then
+    evaluate the model for one episode on an evaluation seed, as an evaluate cell does."""
+    from agents.train import EVAL_SEED_OFFSET, train
+
+    arguments, hyperparams = _train_arguments(cell)
+    summary = train(
+        arguments["algo"],
+        cell["estimator"],
+        Path(cell["out"]),
+        arguments["timesteps"],
+        cell["seed"],
+        cell["world"],
+        arguments["config"],
+        hyperparams,
+        arguments["n_envs"],
+        progress_bar=False,
+    )
+    evaluation = evaluate_cell(
+        {
+            **cell,
+            "agent": summary["model"],
+            "env": summary["env"],  # the env it was trained in (hyper-parameter file + cell)
+            "seed": cell["seed"] + EVAL_SEED_OFFSET,
+        }
+    )
+    last = summary["last_evaluation"] or {}
+    evaluation["metrics"]["timesteps"] = summary["timesteps"]
+    if "success_rate" in last:
+        evaluation["metrics"]["training eval success rate"] = last["success_rate"]
+    return {**evaluation, "model": summary["model"], "train wall time (s)": summary["wall_time_s"]}
+
+
+def check_train_cell(cell: dict) -> None:
+    """The trainer must be installed and the cell's hyper-parameters valid."""
+    try:
+        from agents.hyperparams import load_hyperparams
+        from agents.train import env_id_for
+    except ImportError as err:
+        raise ConfigError(f"cell kind 'train' is not available: {err}") from err
+    arguments, hyperparams = _train_arguments(cell)
+    env_id = env_id_for(cell["world"], cell["estimator"])
+    load_hyperparams(arguments["algo"], env_id, arguments["config"], hyperparams)
+
+
+def _train_arguments(cell: dict) -> tuple[dict, dict]:
+    """``train(...)`` arguments, and hyper-parameter overrides (the cell's env included)."""
+    options = cell["train"]
+    arguments = {key: options.get(key, default) for key, default in TRAIN_ARGUMENTS.items()}
+    hyperparams = {k: v for k, v in options.items() if k not in TRAIN_ARGUMENTS}
+    return arguments, deep_merge(hyperparams, {"env": cell["env"]})
+
+
+#: Cell kinds by name.
+CELL_KINDS: dict[str, CellKind] = {
+    "evaluate": CellKind(evaluate_cell),
+    "train": CellKind(train_cell, check_train_cell),
+}

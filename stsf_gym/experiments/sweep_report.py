@@ -1,0 +1,163 @@
+"""A sweep's summary: ``results.json``, ``results.md`` and ``errors.png``.
+
+Cells that differ only in their seed form a group; each metric of a group is its mean and
+standard deviation over the finished cells (booleans such as ``success`` become a rate).
+``errors.png`` has one panel per swept numeric ``env.*`` key: final (solid, with one std)
+and RMS (dashed) position error against the swept value, one line per estimator, both axes
+logarithmic (the value axis when its values are positive), means over seeds and any other
+swept values.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+
+if TYPE_CHECKING:
+    from stsf_gym.experiments.sweep import Sweep
+
+FINAL, RMS = "final error (m)", "RMS error (m)"
+FIGURE = "errors.png"
+
+
+def write_report(sweep: Sweep, results: list[dict], out: Path) -> dict:
+    """Summarise the cells' ``results``; write the files to ``out``; return the summary."""
+    groups = [_group(label, members) for label, members in _by_group(sweep.cells, results)]
+    failed = [
+        {"cell": cell["values"], "error": result["error"]}
+        for cell, result in zip(sweep.cells, results, strict=True)
+        if "error" in result
+    ]
+    figure = plot_errors(sweep.cells, results, out / FIGURE)
+    summary = {
+        "sweep": sweep.name,
+        "file": str(sweep.path),
+        "kind": sweep.kind,
+        "cells": len(results),
+        "finished": len(results) - len(failed),
+        "failed": failed,
+        "groups": groups,
+        "figures": [FIGURE] if figure else [],
+    }
+    write_json(out / "results.json", summary)
+    write_atomic(out / "results.md", markdown(sweep.name, groups, failed))
+    return summary
+
+
+def markdown(name: str, groups: list[dict], failed: list[dict]) -> str:
+    """One row per group: its swept values ("base" where a key keeps the base value)."""
+    keys = list(dict.fromkeys(key for group in groups for key in group["values"]))
+    rows = []
+    for group in groups:
+        row = {_column(k): _value(group["values"].get(k, "base")) for k in keys}
+        row.update(seeds=group["cells"] - group["failed"], failed=group["failed"])
+        for metric, stats in group["metrics"].items():
+            if "rate" in stats:
+                row[f"{metric} rate"] = stats["rate"]
+            else:
+                row[metric] = f"{stats['mean']:.3f} ± {stats['std']:.3f}"
+        rows.append(row)
+    columns = list(dict.fromkeys(column for row in rows for column in row))
+    text = f"# Sweep: {name}\n\n" + markdown_table(rows, columns)
+    if failed:
+        text += "\n## Failed cells\n\n" + markdown_table(
+            [
+                {"cell": json.dumps(f["cell"]), "error": f["error"].replace("|", "\\|")}
+                for f in failed
+            ]
+        )
+    return text
+
+
+def plot_errors(cells: list[dict], results: list[dict], path: Path) -> Path | None:
+    """Position error against each swept numeric ``env.*`` key; None when there is none."""
+    from matplotlib.figure import Figure
+
+    swept = _noise_levels(cells)
+    if not swept:
+        return None
+    fig = Figure(figsize=(5.5 * len(swept), 4.2))
+    for ax, key in zip(fig.subplots(1, len(swept), squeeze=False)[0], swept, strict=True):
+        for estimator, levels in _levels(cells, results, key).items():
+            xs = sorted(levels)
+            final = [[m[FINAL] for m in levels[x]] for x in xs]
+            rms = [np.mean([m[RMS] for m in levels[x]]) for x in xs]
+            line = ax.errorbar(
+                xs, np.mean(final, axis=1), np.std(final, axis=1), marker="o", capsize=3
+            )
+            line[0].set_label(estimator)
+            ax.plot(xs, rms, ls="--", color=line[0].get_color())
+        if min(swept[key]) > 0:
+            ax.set_xscale("log")
+        levels = sorted(set(swept[key]))
+        ax.set_xticks(levels, [f"{level:g}" for level in levels], minor=False)
+        ax.set_xticks([], minor=True)
+        ax.set_yscale("log")  # errors span orders of magnitude across estimators
+        ax.set(xlabel=_column(key), ylabel="position error (m)", title=_column(key))
+        ax.legend(title="final (solid), RMS (dashed)", fontsize=8)
+    return save_figure(fig, path)
+
+
+def _by_group(cells: list[dict], results: list[dict]) -> list[tuple[dict, list[dict]]]:
+    groups: dict[str, tuple[dict, list[dict]]] = {}
+    for cell, result in zip(cells, results, strict=True):
+        label = {k: v for k, v in cell["values"].items() if k != "seed"}
+        groups.setdefault(json.dumps(label, sort_keys=True), (label, []))[1].append(result)
+    return list(groups.values())
+
+
+def _group(label: dict, results: list[dict]) -> dict:
+    finished = [r["metrics"] for r in results if "error" not in r]
+    names = list(dict.fromkeys(name for metrics in finished for name in metrics))
+    stats = {}
+    for name in names:
+        values = [metrics[name] for metrics in finished if name in metrics]
+        if all(isinstance(v, bool) for v in values):
+            stats[name] = {"rate": float(np.mean(values)), "n": len(values)}
+        else:
+            stats[name] = {"mean": float(np.mean(values)), "std": float(np.std(values))}
+            stats[name]["n"] = len(values)
+    return {
+        "values": label,
+        "cells": len(results),
+        "failed": len(results) - len(finished),
+        "metrics": stats,
+    }
+
+
+def _noise_levels(cells: list[dict]) -> dict[str, list[float]]:
+    """The swept ``env.*`` keys whose values are all numbers, with those values."""
+    swept: dict[str, list] = {}
+    for cell in cells:
+        for key, value in cell["values"].items():
+            if key.startswith("env."):
+                swept.setdefault(key, []).append(value)
+    return {
+        key: values
+        for key, values in swept.items()
+        if all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
+    }
+
+
+def _levels(cells: list[dict], results: list[dict], key: str) -> dict[str, dict]:
+    """Metrics of the finished cells that set ``key``, by estimator then value."""
+    levels: dict[str, dict] = {}
+    for cell, result in zip(cells, results, strict=True):
+        metrics = result.get("metrics", {})
+        if key in cell["values"] and FINAL in metrics and RMS in metrics:
+            by_value = levels.setdefault(cell["estimator"], {})
+            by_value.setdefault(cell["values"][key], []).append(metrics)
+    return levels
+
+
+def _column(key: str) -> str:
+    return key.removeprefix("env.")
+
+
+def _value(value) -> str:
+    return value if isinstance(value, str) else json.dumps(value)

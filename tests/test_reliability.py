@@ -1,0 +1,231 @@
+"""Bad input gets a clear error; crashed jobs are rerun; long runs leak nothing; parallel runs
+match serial ones. (Config ranges and geometry: tests/test_config.py.)"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import stsf_gym.cli as cli
+from stsf_gym.experiments.cache import JobsFailed, run_cached
+
+ROOT = Path(__file__).resolve().parent.parent
+LIFETIME_CYCLES = 200  # 1000 in `benchmarks/soak.py --cycles 1000`; this many keep it < 1 min
+SOAK_STEPS = 5000  # 200,000 in `benchmarks/soak.py --steps 200000`
+
+
+def _soak_module():
+    spec = importlib.util.spec_from_file_location("soak", ROOT / "benchmarks" / "soak.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+# --- actions ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("action", "message"),
+    [
+        ([np.nan, 0.0], "NaN or infinite"),
+        ([0.5, np.inf], "NaN or infinite"),
+        ([0.5, 0.0, 0.1], r"shape \(2,\)"),
+        ([[0.5, 0.0]], None),  # (1, 2) flattens to (2,): accepted
+        (["0.5", "0.0"], "must be numeric"),
+        (np.array([0.5, None], dtype=object), "must be numeric"),
+        ([True, False], "must be numeric"),
+        ("forward", "must be numeric"),
+    ],
+)
+def test_bad_actions_raise_clear_errors(make_env, action, message):
+    env = make_env(camera__enabled=False)
+    env.reset(seed=0)
+    if message is None:
+        env.step(action)
+        return
+    with pytest.raises(ValueError, match=message):
+        env.step(action)
+
+
+def test_out_of_range_actions_are_clipped(make_env):
+    env = make_env(camera__enabled=False)
+    poses = []
+    for action in ([1.0, -1.0], [7.5, -30.0]):
+        env.reset(seed=4)
+        for _ in range(10):
+            *_, info = env.step(np.float32(action))
+        poses.append(info["true_pose"])
+    np.testing.assert_array_equal(poses[0], poses[1])
+    env.reset(seed=4)
+    for _ in range(10):
+        *_, info = env.step(np.float32([0.5, 0.0]))
+    assert not np.array_equal(info["true_pose"], poses[0])  # the action does matter
+
+
+# --- command line -------------------------------------------------------------------------
+
+
+@pytest.fixture
+def run_cli(monkeypatch, capsys):
+    """``stsf_gym.cli.main(argv)`` -> (exit code, stderr), C stdout left alone."""
+    monkeypatch.setattr(cli, "_silence_c_stdout", lambda: None)
+
+    def run(*argv: str) -> tuple[int, str]:
+        code = cli.main(list(argv))
+        return code, capsys.readouterr().err
+
+    return run
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["evaluate", "--estimators", "odometry,magic"], "unknown estimator 'magic'"),
+        (["evaluate", "--agent", "path/that/does/not/exist.zip"], "path/that/does/not/exist.zip"),
+        (["evaluate", "--set", "robot.wheel_radius=-1"], "robot.wheel_radius must be > 0"),
+        (["evaluate", "--set", "world.start=[0,0,0]"], "use --world"),
+        (["demo", "--set", "camera.width=0"], "camera.width must be in [1, 8192], got 0"),
+        (["reproduce", "fig10", "--seeds", "0"], "--seeds must be at least 1"),
+    ],
+)
+def test_cli_bad_input_exits_2_with_one_line_and_writes_nothing(run_cli, tmp_path, argv, message):
+    out = tmp_path / "out"
+    code, err = run_cli(*argv, "--out", str(out))
+    command = argv[0]
+    assert code == 2
+    assert err.startswith(f"stsf-gym {command}: error: ") and message in err
+    assert len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_cli_names_the_config_file_of_a_bad_value(run_cli, tmp_path):
+    config = tmp_path / "bad.yaml"
+    config.write_text("sonar:\n  dropout_prob: 2\n")
+    code, err = run_cli("demo", "--config", str(config), "--out", str(tmp_path / "out"))
+    assert code == 2 and f"{config}: sonar.dropout_prob must be in [0, 1], got 2" in err
+    config.write_text("sonar: [unclosed\n")
+    code, err = run_cli("demo", "--config", str(config), "--out", str(tmp_path / "out"))
+    assert code == 2 and f"{config}: malformed YAML at line 2" in err
+
+
+def test_cli_unwritable_out_fails_before_any_work(run_cli, tmp_path):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    code, err = run_cli("evaluate", "--out", str(blocker / "results"))
+    assert code == 2 and f"{blocker} is not a folder" in err
+    assert blocker.read_text() == "not a folder"
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write into read-only folders")
+def test_cli_read_only_out_fails_before_any_work(run_cli, tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o555)
+    code, err = run_cli("evaluate", "--out", str(locked / "results"))
+    assert code == 2 and "is not writable" in err
+    assert list(locked.iterdir()) == []
+
+
+# --- crashed jobs -------------------------------------------------------------------------
+
+
+def flaky_job(job: dict) -> dict:
+    """Fails the first time it runs a job marked ``crash`` (raising, or killing its process),
+    using a marker file to know; ``crash: "always"`` kills its process every time."""
+    marker = Path(job["marker"])
+    first_time = not marker.exists()
+    marker.touch()
+    if job["crash"] == "always" or (first_time and job["crash"] == "exit"):
+        os._exit(3)
+    if first_time and job["crash"] == "raise":
+        raise RuntimeError(f"job {job['n']} fails once")
+    runs = Path(f"{job['marker']}.runs")
+    runs.write_text(runs.read_text() + "x" if runs.exists() else "x")
+    return {"double": 2 * job["n"]}
+
+
+def _jobs(tmp_path: Path, crashes: dict[int, str]) -> list[dict]:
+    return [
+        {"n": n, "crash": crashes.get(n, ""), "marker": str(tmp_path / f"marker{n}")}
+        for n in range(5)
+    ]
+
+
+def _name(job: dict) -> str:
+    return f"job{job['n']}"
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_crashed_jobs_are_reported_and_rerun(tmp_path, capsys, workers):
+    crashes = {1: "raise"} if workers == 1 else {1: "raise", 3: "exit"}
+    results = run_cached(flaky_job, _jobs(tmp_path, crashes), tmp_path / "out", _name, workers)
+    assert results == [{"double": 2 * n} for n in range(5)]
+    err = capsys.readouterr().err
+    assert "job1 failed: RuntimeError: job 1 fails once; running it again" in err
+    if workers > 1:
+        assert "job3 failed: the worker process died" in err
+    assert "job0 failed" not in err and "job2 failed" not in err  # bystanders are not blamed
+    assert all((tmp_path / f"marker{n}.runs").read_text() == "x" for n in range(5))
+
+
+def test_job_failing_twice_keeps_the_others_and_a_rerun_resumes(tmp_path, capsys):
+    out = tmp_path / "out"
+    with pytest.raises(JobsFailed, match="job2: the worker process died") as failed:
+        run_cached(flaky_job, _jobs(tmp_path, {2: "always"}), out, _name, workers=2)
+    assert list(failed.value.failures) == ["job2"]
+    assert "job2 failed: the worker process died" in capsys.readouterr().err
+    assert sorted(p.name for p in out.glob("*.json")) == [f"job{n}.json" for n in (0, 1, 3, 4)]
+    (out / "job4.json").write_text('{"job": {"n": 4')  # a file cut short: redone, not trusted
+    results = run_cached(flaky_job, _jobs(tmp_path, {}), out, _name, workers=2)
+    assert results == [{"double": 2 * n} for n in range(5)]
+    runs = [(tmp_path / f"marker{n}.runs").read_text() for n in range(5)]
+    assert runs == ["x", "x", "x", "x", "xx"]  # only the failed and the corrupt job ran again
+
+
+# --- long runs and many envs --------------------------------------------------------------
+
+
+def test_env_lifetimes_leak_no_clients_bodies_or_memory():
+    soak = _soak_module()
+    report = soak.cycle_envs(LIFETIME_CYCLES)
+    assert report["clients_left_connected"] == 0
+    assert len(report["bodies_per_client"]) == 1  # every new client holds the same bodies
+    assert len(report["client_ids"]) == 1  # a closed client's slot is reused
+    assert report["rss_growth_mb"] < soak.MAX_RSS_GROWTH_MB
+    assert soak.failures({"cycles": report}) == []
+
+
+def test_parallel_soak_matches_serial_bit_for_bit():
+    soak = _soak_module()
+    report = soak.soak(SOAK_STEPS, workers=2, seed=3)
+    assert report["steps"] >= SOAK_STEPS
+    assert report["parallel"]["episodes"] > 0  # episodes ended and auto-reset in the soak
+    assert report["parallel"]["sha256"] == report["serial"]["sha256"]
+    assert report["parallel"]["episodes"] == report["serial"]["episodes"]
+    assert soak.failures(report) == []
+
+
+def _egl_loads() -> bool:
+    from envs.simulator import Simulator
+
+    sim = Simulator(60.0, "auto")
+    sim.close()
+    return sim.renderer == "egl"
+
+
+def test_images_are_bit_identical_per_renderer_serial_and_parallel():
+    """Each renderer repeats itself exactly (here and in forkserver workers); EGL and
+    TinyRenderer rasterise differently, so their images differ."""
+    soak = _soak_module()
+    renderers = ["tiny", "egl"] if _egl_loads() else ["tiny"]
+    camera = {"camera__width": 64, "camera__height": 48, "camera__noise_std": 0.0}
+    hashes = {}
+    for renderer in renderers:
+        report = soak.soak(60, 2, seed=1, env_kwargs={**camera, "camera__renderer": renderer})
+        assert report["parallel"]["renderers"] == report["serial"]["renderers"] == [renderer]
+        assert report["parallel"]["sha256"] == report["serial"]["sha256"], renderer
+        hashes[renderer] = report["serial"]["sha256"]
+    assert len(set(hashes.values())) == len(renderers)
