@@ -97,8 +97,8 @@ class FaultSpec:
 
 
 def fault_span(faults: tuple[FaultSpec, ...]) -> tuple[float, float | None]:
-    """First start and last end of a fault set (end ``None`` when one lasts to the end)."""
+    """First start, and last end of the faults that end (``None`` when none does), of a set."""
     if not faults:
         raise ValueError("an empty fault set has no span")
-    ends = [f.end for f in faults]
-    return min(f.start for f in faults), None if None in ends else max(ends)
+    ends = [f.end for f in faults if f.end is not None]
+    return min(f.start for f in faults), max(ends) if ends else None

@@ -7,12 +7,13 @@ table (``results.md``, ``results.json``) has one row per fault set and estimator
 - success rate and collisions, final and max position error;
 - ``valid``: episodes whose estimate was finite and whose covariance was positive definite at
   every step;
-- recovery, measured from the end of the set's last fault: the estimate has *recovered* when
-  its position error is back under ``max(RECOVERY_FLOOR, 2 x its pre-fault level)`` (the mean
-  error over the :data:`PRE_FAULT_SECONDS` before the first fault starts) for good, up to the
-  episode's end; the *recovery distance* is the distance driven from the fault's end until then
-  (0 when the error never left that bound), and *error after recovery* the mean error from then
-  on. A fault set lasting to the episode's end (``landmark_removed``) has no recovery.
+- recovery, measured from the end of the set's last fault that ends (a removed landmark stays
+  removed): the estimate has *recovered* when its position error is back under
+  ``max(RECOVERY_FLOOR, 2 x its pre-fault level)`` (the mean error over the
+  :data:`PRE_FAULT_SECONDS` before the first fault starts) for good, up to the episode's end;
+  the *recovery distance* is the distance driven from the fault's end until then (0 when the
+  error never left that bound), and *error after recovery* the mean error from then on. A set
+  whose faults all last to the episode's end has no recovery.
 
 Errors are sampled once a second of simulated time (``TRACE_EVERY`` steps), so a recovery
 distance is known to about one second of driving (12 cm at the nominal speed).
