@@ -121,6 +121,18 @@ class AtomicCheckpoint(BaseCallback):
         return True
 
 
+class SaveBest(BaseCallback):
+    """Run by ``EvalCallback`` on a new best mean reward: ``best/best_model.zip``, atomically."""
+
+    def __init__(self, out: Path) -> None:
+        super().__init__()
+        self.path = out / "best" / "best_model.zip"
+
+    def _on_step(self) -> bool:
+        save_atomic(self.model.save, self.path)
+        return True
+
+
 def _resume(cls: type, out: Path, meta: dict, env: VecEnv):
     """The newest checkpoint's model on ``env``, if any; it must be the same kind of run."""
     found = latest_checkpoint(out)
@@ -203,7 +215,7 @@ def train(
                     n_eval_episodes=cfg.n_eval_episodes,
                     eval_freq=max(cfg.eval_freq // n_envs, 1),
                     log_path=str(out / "eval"),
-                    best_model_save_path=str(out / "best"),
+                    callback_on_new_best=SaveBest(out),
                     deterministic=True,
                     callback_after_eval=EvalLog(out),
                     verbose=0,
