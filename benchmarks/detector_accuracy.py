@@ -9,8 +9,9 @@ oblique views up to 60 degrees fit), plus many frames with no landmark in view, 
   centre against ``camera.project`` of its true world position;
 - false detections (any detection, or a wrong id) on frames with no landmark in view;
 - detection time per frame (RGB and grey input, and the template-matching stage alone) next
-  to OpenCV's ArUco ``detectMarkers`` on the same frames, best of ``--timing-rounds`` passes
-  that time every method in turn, and the ratio to ArUco (which cancels machine load).
+  to OpenCV's ArUco ``detectMarkers`` on the same frames: each frame goes to every method in
+  turn, the best of ``--timing-rounds`` rounds is reported, and the ratio to ArUco is the
+  median of the rounds' ratios (which cancels machine load).
 
 Usage::
 
@@ -68,7 +69,7 @@ def parse_args(argv=None) -> argparse.Namespace:
         "--timing-rounds",
         type=int,
         default=5,
-        help="passes over the frames timed, each timing every method in turn (best pass kept)",
+        help="rounds over the frames timed, each frame by every method in turn (best kept)",
     )
     return p.parse_args(argv)
 
@@ -159,13 +160,11 @@ def run(args) -> dict:
     )
     timing = _time_per_frame(
         {
-            "detect_rgb": detector.detect,
-            "detect_grey": detector.detect,
-            "template_matching_stage": detector.candidates,
-            "aruco_detectMarkers": aruco.detectMarkers,
+            "detect_rgb": (detector.detect, all_frames),
+            "detect_grey": (detector.detect, greys),
+            "template_matching_stage": (detector.candidates, greys),
+            "aruco_detectMarkers": (aruco.detectMarkers, greys),
         },
-        {"detect_rgb": all_frames},
-        greys,
         args.timing_rounds,
     )
 
@@ -207,9 +206,9 @@ def run(args) -> dict:
         "false_detections": int(false_detections),
         "empty_frames_with_detection": int(frames_with_false),
         "timing_ms": {
-            **timing,
-            "ratio_detect_grey_to_aruco": timing["detect_grey"] / timing["aruco_detectMarkers"],
-            "ratio_detect_rgb_to_aruco": timing["detect_rgb"] / timing["aruco_detectMarkers"],
+            **{name: float(ms.min()) for name, ms in timing.items()},
+            "ratio_detect_grey_to_aruco": _median_ratio(timing, "detect_grey"),
+            "ratio_detect_rgb_to_aruco": _median_ratio(timing, "detect_rgb"),
             "frames": len(all_frames),
             "rounds": args.timing_rounds,
         },
@@ -243,22 +242,27 @@ def _any_board_in_frame(u, info) -> bool:
     return False
 
 
-def _time_per_frame(methods: dict, inputs: dict, greys: list, rounds: int) -> dict:
-    """Best milliseconds per frame of each method over ``rounds`` passes (after a warm-up).
+def _time_per_frame(methods: dict, rounds: int) -> dict[str, np.ndarray]:
+    """Milliseconds per frame of each method (name: (function, frames)) in each round.
 
-    Each pass times every method in turn on its frames (``inputs[name]``, else ``greys``), so
-    a busy machine slows all methods alike and their ratios stay meaningful.
+    Every frame goes to every method in turn, so a busy machine slows all methods alike and
+    their ratio in a round stays meaningful; a first round warms up and is dropped.
     """
-    best = dict.fromkeys(methods, math.inf)
+    n = min(len(frames) for _, frames in methods.values())
+    totals = np.zeros((rounds + 1, len(methods)))
     for r in range(rounds + 1):
-        for name, method in methods.items():
-            frames = inputs.get(name, greys)
-            t0 = time.perf_counter()
-            for frame in frames:
-                method(frame)
-            if r:  # pass 0 warms up
-                best[name] = min(best[name], (time.perf_counter() - t0) / max(len(frames), 1) * 1e3)
-    return best
+        for i in range(n):
+            for j, (method, frames) in enumerate(methods.values()):
+                t0 = time.perf_counter()
+                method(frames[i])
+                totals[r, j] += time.perf_counter() - t0
+    per_frame = totals[1:] / max(n, 1) * 1e3
+    return dict(zip(methods, per_frame.T, strict=True))
+
+
+def _median_ratio(timing: dict[str, np.ndarray], name: str) -> float:
+    """Median over rounds of the method's time over ArUco's in the same round."""
+    return float(np.median(timing[name] / timing["aruco_detectMarkers"]))
 
 
 def _rate(views) -> dict:
@@ -337,8 +341,9 @@ def to_markdown(res: dict) -> str:
         f"{res['false_detections']} detections on {res['empty_frames']} frames with no landmark "
         f"in view ({res['empty_frames_with_detection']} frames with any).",
         "",
-        f"## Time per frame (ms, best of {t['rounds']} interleaved rounds over {t['frames']} "
-        f"frames, OpenCV {c['opencv']}, {c['opencv_threads']} threads)",
+        f"## Time per frame (ms, best of {t['rounds']} rounds over {t['frames']} frames, each "
+        f"frame timed with every method in turn; OpenCV {c['opencv']}, "
+        f"{c['opencv_threads']} threads)",
         "",
         "| stage | ms/frame |",
         "| --- | ---: |",
@@ -346,8 +351,10 @@ def to_markdown(res: dict) -> str:
         f"| detect (grey input) | {t['detect_grey']:.3f} |",
         f"| of which template matching (eq. 6-7) | {t['template_matching_stage']:.3f} |",
         f"| ArUco detectMarkers (grey, DICT_4X4_50) | {t['aruco_detectMarkers']:.3f} |",
-        f"| ratio detect/ArUco (grey input) | {t['ratio_detect_grey_to_aruco']:.2f} |",
-        f"| ratio detect/ArUco (RGB input) | {t['ratio_detect_rgb_to_aruco']:.2f} |",
+        f"| ratio detect/ArUco, grey input (median over rounds) | "
+        f"{t['ratio_detect_grey_to_aruco']:.2f} |",
+        f"| ratio detect/ArUco, RGB input (median over rounds) | "
+        f"{t['ratio_detect_rgb_to_aruco']:.2f} |",
         "",
     ]
     return "\n".join(lines)

@@ -14,6 +14,7 @@ import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.vision.board import GROW, BoardFit, _window_centroids
 from stsf_gym.vision.detector import Detection, LandmarkDetector
 from stsf_gym.vision.landmarks import LandmarkPattern, landmark_image, lit_cells, square_centres
+from stsf_gym.vision.ncc import MIN_WINDOW_STD, CorrelationTemplate, correlate
 
 PATTERN = LandmarkPattern()
 CAMERA_FORWARD = 0.10  # robot.camera_forward in configs/default.yaml: optical centre ahead of axle
@@ -290,7 +291,36 @@ def test_board_fitter_grows_when_the_region_cuts_the_board():
     grey = finish(canvas, seed=9)
     fitter = LandmarkDetector(PATTERN).fitter
     assert fitter.fit(grey, 120, 80, 180, 140) is GROW  # the region lies inside the board
+    assert fitter.fit(grey[:, 120:], 0, 0, 80, 240) is None  # ... cut by the frame's edge
     fit = fitter.fit(grey, 80, 40, 220, 180)
     assert isinstance(fit, BoardFit) and fit.landmark_id == 7
     truth = project(hom, fit.plane_points)
     assert np.linalg.norm(fit.image_points - truth, axis=1).max() < 0.5
+
+
+def test_board_cut_by_the_frame_is_not_detected(detector):
+    canvas = noisy_wall((240, 320), seed=10)
+    paste(canvas, 7, [[-40, 60], [60, 60], [60, 160], [-40, 160]])
+    assert detector.detect(finish(canvas, seed=11)) == []
+
+
+def test_correlate_is_the_correlation_coefficient_except_on_flat_windows():
+    rng = np.random.default_rng(2)
+    image = cv2.GaussianBlur(rng.integers(0, 256, (60, 90), dtype=np.uint8), (5, 5), 1.0)
+    image[:, :30] = 120 + (rng.uniform(size=(60, 30)) < 0.2)  # flat to the eye: std 0.4
+    template = CorrelationTemplate(landmark_image(5, PATTERN, 20.0))
+    got = correlate(image, template)
+    expected = cv2.matchTemplate(image, template.image, cv2.TM_CCOEFF_NORMED)
+    h, w = template.shape
+    windows = np.lib.stride_tricks.sliding_window_view(image.astype(np.float64), (h, w))
+    std = windows.std(axis=(2, 3))
+    assert got.shape == expected.shape == std.shape
+    textured = std >= MIN_WINDOW_STD
+    assert textured.any() and (~textured).any()
+    np.testing.assert_allclose(got[textured], expected[textured], atol=1e-3)
+    # Flat windows are scaled down by their contrast instead of scoring anywhere in [-1, 1].
+    assert np.all(np.abs(got[~textured]) <= std[~textured] / MIN_WINDOW_STD + 1e-3)
+    with pytest.raises(ValueError, match="flat"):
+        CorrelationTemplate(np.full((5, 5), 7, np.uint8))
+    with pytest.raises(ValueError, match="uint8"):
+        CorrelationTemplate(np.zeros((5, 5), np.float32))

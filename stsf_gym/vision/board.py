@@ -12,9 +12,8 @@ square's centre is then the intensity-weighted centroid (above the board's black
 a window around its blob, a homography is fitted to all squares by least squares, and the
 board is rejected when its reprojection error is too large.
 
-Cost: one threshold and one contour pass per region; the rest works on the board's
-bounding box only and handles all squares at once with array operations (window sums from
-one integral image), with no loop over squares or pixels.
+Cost: one threshold and one contour pass per region; the rest works on the board's box and
+handles all squares at once (window sums from one integral image), with no loop over them.
 """
 
 from __future__ import annotations
@@ -97,14 +96,10 @@ class BoardFitter:
         ring = (rows == 0) | (rows == g - 1) | (cols == 0) | (cols == g - 1)
         self._required = ring | ((rows == centre) & (cols == centre))
         self._min_squares = int(np.count_nonzero(self._required))
-        cells = np.arange(g * g).reshape(g, g)  # pairs of side-by-side cells, for the pitch
-        self._neighbours = np.concatenate(
-            [
-                [cells[:, :-1].ravel(), cells[:, 1:].ravel()],
-                [cells[:-1].ravel(), cells[1:].ravel()],
-            ],
-            axis=1,
-        )
+        cells = np.arange(g * g).reshape(g, g)
+        across = np.stack([cells[:, :-1].ravel(), cells[:, 1:].ravel()])
+        down = np.stack([cells[:-1].ravel(), cells[1:].ravel()])
+        self._neighbours = np.hstack([across, down])  # (2, M) side-by-side cells, for the pitch
         self._bit_value = np.zeros(g * g, dtype=np.int64)
         for bit, (r, c) in enumerate(pattern.id_cells):
             self._bit_value[r * g + c] = 1 << bit
@@ -114,8 +109,8 @@ class BoardFitter:
         self.board_xy = board_corners(pattern)
 
     def fit(self, grey: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> BoardFit | str | None:
-        """The board in the region ``grey[y0:y1, x0:x1]``, :data:`GROW` if it touches the
-        region's edge, or None when there is none."""
+        """The board in the region ``grey[y0:y1, x0:x1]``, :data:`GROW` if it touches an edge
+        of the region inside the frame, or None when there is none."""
         board = self._find_board(grey, x0, y0, x1, y1)
         if board is None or board is GROW:
             return board
@@ -164,10 +159,14 @@ class BoardFitter:
         if counts[k] < MIN_HOLES:
             return self._fail("no dark region with squares")
         x, y, w, h = cv2.boundingRect(contours[k])
-        if x == 0 or y == 0 or x + w >= rw or y + h >= rh:
+        touches = (x == 0, y == 0, x + w >= rw, y + h >= rh)  # left, top, right, bottom
+        if any(touches):
+            # The board is wholly inside the frame: growing past the frame's edge cannot help.
+            frame = (x0 == 0, y0 == 0, x1 == grey.shape[1], y1 == grey.shape[0])
+            if any(t and f for t, f in zip(touches, frame, strict=True)):
+                return self._fail("dark region reaches the frame's edge")
             return GROW
-        box = np.s_[y : y + h, x : x + w]
-        inside = np.zeros((h, w), np.uint8)
+        box, inside = np.s_[y : y + h, x : x + w], np.zeros((h, w), np.uint8)
         cv2.drawContours(inside, contours, k, 1, cv2.FILLED, offset=(-x, -y))
         outline = cv2.convexHull(contours[k]).reshape(-1, 2) - np.int32([x, y])
         origin = np.array([x0 + x, y0 + y], dtype=np.float64)
@@ -230,8 +229,7 @@ class BoardFitter:
         step = max(1, round(math.sqrt(board.dark.size / 1024)))
         dark = board.grey[::step, ::step][board.dark[::step, ::step].view(bool)]
         black = _median(dark) if len(dark) else 0.0
-        # Bright level: the grey level at the blob centres (interpolated, as 2 px wide blobs
-        # have their centre between pixels).
+        # Bright level: grey at the blob centres (interpolated: 2 px blobs centre between pixels)
         at_centres = squares.centres.astype(np.float32)[:, None, :]
         peak = _median(cv2.remap(board.grey, at_centres, None, cv2.INTER_LINEAR).ravel())
         floor = black + max(0.15 * (peak - black), 4.0)

@@ -9,7 +9,7 @@ The detector runs in two stages.
 2. **Geometry** on the full-resolution image around each candidate, best first: the board's
    dark region, its white squares, their grid cells (which give the id), sub-pixel square
    centres and a least-squares homography, see :mod:`stsf_gym.vision.board`. The region of
-   interest grows while the board touches its edge.
+   interest grows while the board touches its edge (unless that edge is the frame's).
 
 Assumptions: the board is seen from its front, with image roll under 45 degrees (the ring
 and centre are symmetric under 90 degree turns, so "up" is taken from the image), whole
@@ -194,8 +194,6 @@ class LandmarkDetector:
             fit = self.fitter.fit(grey, x0, y0, x1, y1)
             if fit is not GROW:
                 return None if fit is None else _detection(fit, cand.score, self.fitter.board_xy)
-            if x0 == 0 and y0 == 0 and x1 == w and y1 == h:
-                return None
             half *= ROI_GROWTH
         return None
 

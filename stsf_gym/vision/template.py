@@ -10,12 +10,15 @@ correlation coefficient (OpenCV ``TM_CCOEFF_NORMED``)::
                / sqrt(sum (f - mean f)^2 * sum (g - mean g)^2)      in [-1, 1]
 
 which is eq. 7 after removing the local mean and dividing by the local energy; its maximum
-is the minimum of eq. 6 under an affine change of grey levels. The template is the board of
-:mod:`stsf_gym.vision.landmarks` with the ring and centre squares white and the id cells half
-grey (their mean over all ids), in a light margin, blurred. It is matched at two sizes per
-octave of a box-filtered image pyramid, so the cost stays that of a few small correlations
-on a small image; local maxima above ``ncc_threshold`` are the candidate regions, which
-:class:`~stsf_gym.vision.detector.LandmarkDetector` then verifies.
+is the minimum of eq. 6 under an affine change of grey levels. It is computed by
+:func:`stsf_gym.vision.ncc.correlate`, which also scores flat windows low. The template is
+the board of :mod:`stsf_gym.vision.landmarks` with the ring and centre squares white and the
+id cells half grey (their mean over all ids), in a light margin, blurred. It is matched at
+two sizes per octave of a box-filtered image pyramid (whole-factor box averages, OpenCV's
+fast resize path), so the cost stays that of a few small correlations on a small image;
+local maxima above ``ncc_threshold`` are the candidate regions, which
+:class:`~stsf_gym.vision.detector.LandmarkDetector` then verifies. The correlations are most
+of this stage's time; peaks are gathered and suppressed with array operations.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import cv2
 import numpy as np
 
 from stsf_gym.vision.landmarks import LandmarkPattern, landmark_image
+from stsf_gym.vision.ncc import CorrelationTemplate, correlate
 
 __all__ = ["Candidate", "TemplateMatcher"]
 
@@ -77,8 +81,8 @@ class TemplateMatcher:
         self._templates = self._make_templates()
         self._plan_cache: dict[tuple[int, int], tuple[float, list[list[int]]]] = {}
 
-    def _make_templates(self) -> dict[int, tuple[np.ndarray, int]]:
-        """Templates by board side ``s`` (pixels): ``(uint8 template, template side)``.
+    def _make_templates(self) -> dict[int, CorrelationTemplate]:
+        """Templates by board side ``s`` (pixels).
 
         The board (ring and centre white, id cells half grey: their mean over all ids) sits
         in a margin of ``TEMPLATE_MARGIN`` board sides of light grey (the wall) and is blurred
@@ -98,7 +102,7 @@ class TemplateMatcher:
             side = round(s * (n + 2 * m) / n)
             tpl = cv2.resize(hires, (side, side), interpolation=cv2.INTER_AREA)
             tpl = cv2.GaussianBlur(tpl, (0, 0), BLUR_PER_PX * self.template_px)
-            out[s] = (np.rint(tpl).astype(np.uint8), side)
+            out[s] = CorrelationTemplate(np.rint(tpl).astype(np.uint8))
         return out
 
     def _plan(self, shape: tuple[int, int]) -> tuple[float, list[list[int]]]:
@@ -114,8 +118,8 @@ class TemplateMatcher:
             while self.template_px * scale <= max_board * 1.15:
                 sizes = [
                     s
-                    for s, (_, side) in self._templates.items()
-                    if s * scale <= max_board * 1.2 and side < short
+                    for s, tpl in self._templates.items()
+                    if s * scale <= max_board * 1.2 and tpl.shape[0] < short
                 ]
                 if not sizes:
                     break
@@ -132,6 +136,8 @@ class TemplateMatcher:
         (centres closer than half a board) suppressed.
         """
         shrink, octaves = self._plan(grey.shape)
+        if not octaves:
+            return []
         level, (sx, sy) = _shrunk(grey, shrink)
         sigma = BLUR_PER_PX * self.template_px
         ksize = 2 * max(1, round(BLUR_RADIUS * sigma)) + 1
@@ -142,10 +148,11 @@ class TemplateMatcher:
                 level, sx, sy = _halved(level), 2 * sx, 2 * sy
             blurred = cv2.GaussianBlur(level, (ksize, ksize), sigma)
             for s in sizes:
-                tpl, side = self._templates[s]
+                tpl = self._templates[s]
+                side = tpl.shape[0]
                 if side >= min(level.shape):
                     continue
-                peaks = self._peaks(cv2.matchTemplate(blurred, tpl, cv2.TM_CCOEFF_NORMED), s)
+                peaks = self._peaks(correlate(blurred, tpl), s)
                 if peaks is not None:
                     found.append(peaks)
                     maps.append((side, s, sx, sy))
