@@ -204,6 +204,7 @@ class RewardConfig:
     goal: float
     collision: float
     time: float
+    steering_change: Annotated[float, Range(le=0)] = 0.0  # per unit change of action[1]
 
 
 @dataclass(frozen=True)

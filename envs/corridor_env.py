@@ -62,7 +62,8 @@ class CorridorEnv(gym.Env):
 
     ## Reward
     ``reward.progress`` per metre gained along the path, ``reward.time`` per second,
-    ``reward.goal`` on reaching the goal, ``reward.collision`` on a collision.
+    ``reward.goal`` on reaching the goal, ``reward.collision`` on a collision, and
+    ``reward.steering_change`` (<= 0, default 0) per unit change of the yaw command ``action[1]``.
 
     ## Episode end
     Terminated on reaching the goal (within ``goal_radius``) or on touching a wall or obstacle;
@@ -252,6 +253,7 @@ class CorridorEnv(gym.Env):
         if self._rendered_camera:
             self.image_noise.reset(self.np_random)
         self._time = 0.0
+        self._yaw_command = 0.0
         self._distance = 0.0
         self._pose = self.robot.floor_pose()
         self._progress = self.task.progress(self._pose)
@@ -285,7 +287,11 @@ class CorridorEnv(gym.Env):
         collision = self.robot.in_collision(ignore={self.world.floor})
         progress = self.task.progress(pose)
         reached = self.task.reached_goal(pose)
-        reward = self.task.reward(progress - self._progress, self.dt, reached, collision)
+        steering_change = abs(a[1] - self._yaw_command)
+        self._yaw_command = float(a[1])
+        reward = self.task.reward(
+            progress - self._progress, self.dt, reached, collision, steering_change
+        )
         self._progress = progress
         terminated = reached or collision
         truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9

@@ -59,6 +59,14 @@ class PathTask:
     def reached_goal(self, xy: np.ndarray) -> bool:
         return bool(np.linalg.norm(np.asarray(xy)[:2] - self.goal) <= self.goal_radius)
 
-    def reward(self, gained: float, dt: float, reached: bool, collided: bool) -> float:
+    def reward(
+        self, gained: float, dt: float, reached: bool, collided: bool, steering_change: float = 0.0
+    ) -> float:
         cfg = self.reward_cfg
-        return cfg.progress * gained + cfg.time * dt + cfg.goal * reached + cfg.collision * collided
+        return (
+            cfg.progress * gained
+            + cfg.time * dt
+            + cfg.goal * reached
+            + cfg.collision * collided
+            + cfg.steering_change * steering_change
+        )

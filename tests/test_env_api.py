@@ -92,3 +92,14 @@ def test_landmark_geometry(make_env):
         np.testing.assert_allclose(sides, 0.05, atol=1e-9)  # 5 cm squares
         assert landmark.centre[2] == pytest.approx(0.9)  # at the configured height
         assert landmark.board_corners[:, 2].mean() == pytest.approx(0.9)
+
+
+def test_steering_change_penalty_charges_each_change_of_the_yaw_command(make_env):
+    actions = [[0.5, 0.0], [0.5, 1.0], [0.5, 1.0], [0.5, -1.0]]
+    rewards = {}
+    for penalty in (0.0, -0.1):
+        env = make_env(camera__enabled=False, reward__steering_change=penalty)
+        env.reset(seed=3)
+        rewards[penalty] = [env.step(np.array(a, np.float32))[1] for a in actions]
+    difference = np.subtract(rewards[-0.1], rewards[0.0])
+    np.testing.assert_allclose(difference, [0.0, -0.1, 0.0, -0.2], atol=1e-9)
