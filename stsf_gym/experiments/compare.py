@@ -66,13 +66,13 @@ def compare(
         for s in range(seed, seed + seeds)
     ]
     results = run_episodes(specs, out / "episodes", workers, desc=f"compare {world}")
-    rows = []
-    for template, estimator in pairs:
-        agent = agent_for(template, estimator)
-        episodes = [
-            r for r in results if r.spec["agent"] == agent and r.spec["estimator"] == estimator
+    by_pair = {
+        (agent_name(a, e), e): [
+            r for r in results if r.spec["agent"] == agent_for(a, e) and r.spec["estimator"] == e
         ]
-        rows.append({"agent": agent_name(template, estimator), **summarise(estimator, episodes)})
+        for a, e in pairs
+    }
+    rows = [{"agent": a, **summarise(e, episodes)} for (a, e), episodes in by_pair.items()]
     summary = {
         "world": world,
         "agents": agents,
@@ -82,24 +82,24 @@ def compare(
     write_json(out / "comparison.json", summary)
     table = markdown_table([{k: row[k] for k in SUMMARY_COLUMNS} for row in rows])
     write_atomic(out / "comparison.md", f"# Agents x pose sources on {world}\n\n{table}")
-    summary["figures"] = [str(plot_comparison(rows, results, out / "comparison.png"))]
+    summary["figures"] = [str(plot_comparison(by_pair, out / "comparison.png"))]
     return summary
 
 
-def plot_comparison(rows: list[dict], results: list[EpisodeResult], path: Path) -> Path:
+def plot_comparison(by_pair: dict[tuple[str, str], list[EpisodeResult]], path: Path) -> Path:
     """Grouped bars per pose source: success rate and RMS position error, one bar per agent."""
     plt = _pyplot()
-    agents = list(dict.fromkeys(r["agent"] for r in rows))
-    estimators = list(dict.fromkeys(r["estimator"] for r in rows))
+    agents = list(dict.fromkeys(a for a, _ in by_pair))
+    estimators = list(dict.fromkeys(e for _, e in by_pair))
     width = 0.8 / len(agents)
     x = np.arange(len(estimators))
     fig, (ax_s, ax_e) = plt.subplots(1, 2, figsize=(12, 4))
     for i, agent in enumerate(agents):
-        mine = {r["estimator"]: r for r in rows if r["agent"] == agent}
-        success = [mine[e]["success rate"] for e in estimators]
-        rms = [float(mine[e]["RMS error (m)"].split(" ")[0]) for e in estimators]
+        runs = [by_pair[agent, e] for e in estimators]
+        success = [np.mean([r.outcome == "goal" for r in episodes]) for episodes in runs]
+        rms = [np.mean([np.sqrt(np.mean(np.square(r.errors))) for r in eps]) for eps in runs]
         ax_s.bar(x + i * width, success, width, label=agent)
-        ax_e.bar(x + i * width, rms, width, label=agent)
+        ax_e.bar(x + i * width, np.maximum(rms, 1e-4), width, label=agent)  # truth: 0 on log
     for ax, label in ((ax_s, "success rate"), (ax_e, "RMS position error (m)")):
         ax.set_xticks(x + width * (len(agents) - 1) / 2, estimators)
         ax.set_ylabel(label)
@@ -107,6 +107,7 @@ def plot_comparison(rows: list[dict], results: list[EpisodeResult], path: Path) 
     ax_s.set_ylim(0, 1.05)
     ax_e.set_yscale("log")
     ax_s.legend()
-    fig.suptitle(f"Agents x pose sources ({len(results)} episodes)")
+    episodes = sum(len(runs) for runs in by_pair.values())
+    fig.suptitle(f"Agents x pose sources ({episodes} episodes)")
     fig.tight_layout()
     return save_figure(fig, path)
