@@ -13,7 +13,7 @@ def test_straight_and_turn_in_place():
 
 def test_propagated_covariance_matches_monte_carlo():
     """NEES of sampled dead-reckoning errors averages the state dimension (3)."""
-    noise = OdometryNoise(slip_var_per_m=2e-5, scale_std=2e-3)
+    noise = OdometryNoise(slip_var_per_m=2e-5, radius_var=1e-5, calibration_length=2.0)
     wheelbase, rng = 0.4, np.random.default_rng(0)
     travels = [(0.012, 0.012)] * 80 + [(0.008, 0.016)] * 40 + [(0.015, 0.010)] * 60
     mean, cov = np.zeros(3), np.zeros((3, 3))

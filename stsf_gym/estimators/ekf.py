@@ -5,8 +5,8 @@ covariance ``P``. The landmark map (:attr:`SensorModel.landmarks`) is known, not
 
 **Prediction** (every step). The odometry estimator's mid-point model,
 :meth:`OdometryEstimator.predict`: ``x <- f(x, d_l, d_r)``, ``P <- F P F^T + G N G^T``, with the
-wheel-travel noise ``N`` of :class:`~stsf_gym.estimators.odometry.OdometryNoise` widened by
-``wheel_drift_std^2`` per metre of wheel travel (see below).
+wheel-travel noise ``N`` of :class:`~stsf_gym.estimators.odometry.OdometryNoise` matched at
+``calibration_length`` metres (see below).
 
 **Measurement** (every new camera frame). The detector finds the boards; each board of the map
 becomes a :class:`LandmarkObservation` whose ``z[:2] = (u, v)`` is the board centre in the
@@ -59,11 +59,11 @@ that treats systematic errors as white averages them away and becomes overconfid
   one frame can carry; a conservative ``sigma_px`` does the same where pixel noise dominates;
 - the per-episode wheel-radius and wheelbase calibration errors make the odometry drift
   *linearly* with distance, which a random-walk noise model (all a per-step model can be)
-  matches at one distance only. ``wheel_drift_std`` widens the odometry noise by a random walk
-  per metre of wheel travel, so that the drift between landmark sightings stays inside the
-  gate (otherwise the gate would lock the landmarks out after a gap) and the filter's memory
-  is bounded: the repeated, correlated measurements cannot shrink ``P`` below the error they
-  leave.
+  matches at one distance only: ``calibration_length``, the distance the filter drives on
+  odometry alone between landmark corrections, so that the drift between sightings stays
+  inside the gate (otherwise the gate would lock the landmarks out after a gap) and the
+  filter's memory is bounded: the repeated, correlated measurements cannot shrink ``P`` below
+  the error they leave.
 
 The Joseph form and the gate keep single updates from breaking ``P``; the average NEES against
 the true pose (``tests/test_ekf.py``) checks the whole.
@@ -72,7 +72,6 @@ the true pose (``tests/test_ekf.py``) checks the whole.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -98,8 +97,8 @@ class EKFEstimator(OdometryEstimator):
         range_std_floor: standard deviation (m) added to every range measurement,
         range_std_fraction: and this fraction of the range (added in quadrature).
         bearing_std_floor: standard deviation (rad) added to every bearing measurement.
-        wheel_drift_std: extra wheel-travel noise, m per square root of metre travelled, on
-            top of the odometry noise model, for the systematic calibration drift.
+        calibration_length: metres at which the odometry noise matches the calibration drift
+            (:class:`~stsf_gym.estimators.odometry.OdometryNoise`).
         relocalise_after: rejected boards in a row that must agree to re-localise (0: never).
         relocalise_inflation: factor on their covariance for the restarted state.
     """
@@ -115,17 +114,15 @@ class EKFEstimator(OdometryEstimator):
         range_std_floor: float = 0.01,
         range_std_fraction: float = 0.01,
         bearing_std_floor: float = 0.002,
-        wheel_drift_std: float = 0.005,
+        calibration_length: float = 2.0,
         relocalise_after: int = 15,
         relocalise_inflation: float = 4.0,
     ) -> None:
-        super().__init__()
+        super().__init__(calibration_length)
         if not 0.0 <= min_range < max_range:
             raise ValueError(f"ekf needs 0 <= min_range < max_range, got {min_range}, {max_range}")
         if sigma_px <= 0 or min(range_std_floor, range_std_fraction, bearing_std_floor) < 0:
             raise ValueError("ekf.sigma_px must be positive and the std floors non-negative")
-        if wheel_drift_std < 0:
-            raise ValueError(f"ekf.wheel_drift_std must be non-negative, got {wheel_drift_std}")
         self.sigma_px = float(sigma_px)
         self.gate_probability = float(gate_probability)
         self.gate = chi_square_gate(self.gate_probability, dof=2)
@@ -135,16 +132,13 @@ class EKFEstimator(OdometryEstimator):
             float(range_std_fraction),
         )
         self.bearing_std_floor = float(bearing_std_floor)
-        self.wheel_drift_std = float(wheel_drift_std)
         self.relocaliser = Relocaliser(
             relocalise_after, relocalise_inflation, chi_square_gate(self.gate_probability, dof=3)
         )
         self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
-        noise = model.odometry_noise
-        inflated = replace(noise, slip_var_per_m=noise.slip_var_per_m + self.wheel_drift_std**2)
-        super().reset(replace(model, odometry_noise=inflated), initial_pose, initial_cov)
+        super().reset(model, initial_pose, initial_cov)
         self.detector = FrameDetector(model.pattern, set(model.landmarks))
         self.relocaliser.clear()
 

@@ -12,16 +12,16 @@ landmark seen in the previous frame too gives a measurement of its pose relative
 **Conventional** fusion uses that measurement of the current two frames. **STSF** keeps the
 landmark's track: each earlier measurement is carried into the current frame by the odometry
 between frames (eq. 3, with its uncertainty and the correlation between reused frames) and
-all are fused with the significance weights of eq. 4-5 (eq. 2). Either result becomes a
-measurement of the robot's pose through the landmark's map pose, which is merged with the
-odometry prediction by eq. 23-24 after a Mahalanobis gate (chi-square, 3 dof), so a wrong
-detection is rejected rather than fused; when ``relocalise_after`` rejected measurements
-agree with each other instead, the robot was moved (kidnapped) and the estimate starts again
-from them (:mod:`stsf_gym.estimators.relocalise`). STSF's fused track reuses frames whose
-information is already in the prediction; merging it as if independent would count them
-again and again (over-confidence, measured as NEES far above 3), so STSF merges by covariance
-intersection (eq. 23-24 on scaled covariances), consistent whatever that correlation. A track
-is dropped after ``max_gap_frames`` frames without the landmark.
+all are fused with the significance weights of eq. 4-5 (eq. 2); conventional fusion is the
+track of one frame. Through the landmark's map pose the result becomes a measurement of the
+robot's pose, merged with the odometry prediction by eq. 23-24 after a Mahalanobis gate
+(chi-square, 3 dof), so a wrong detection is rejected rather than fused; when
+``relocalise_after`` rejected measurements agree with each other instead, the robot was moved
+(kidnapped) and the estimate starts again from them (:mod:`stsf_gym.estimators.relocalise`).
+STSF's fused track reuses frames already merged into the estimate, and shares the odometry
+since each frame with it; the merge keeps that correlation
+(:class:`~stsf_gym.estimators.carried_poses.CarriedPoses`), so each frame's information counts
+once. A track is dropped after ``max_gap_frames`` frames without the landmark.
 
 The two frames of a pair are the current frame and the landmark's last key frame at least
 ``min_baseline`` metres of odometry earlier: at 5 Hz and 12 cm/s consecutive frames are
@@ -32,59 +32,82 @@ no longer describes its error.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
+from stsf_gym.estimators.carried_poses import CarriedPoses
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
     LandmarkObservation,
     observe,
     robot_pose_from_landmark,
+    robot_pose_jacobian,
 )
-from stsf_gym.estimators.odometry import propagate
+from stsf_gym.estimators.odometry import odometry_step
 from stsf_gym.estimators.pair_range import pair_range
 from stsf_gym.estimators.relocalise import Relocaliser
-from stsf_gym.fusion import STSFTrack, merge_gaussians
-from stsf_gym.geometry import (
-    compose_gaussian,
-    to_se3,
-)
-
-CI_WEIGHTS = np.linspace(0.05, 0.95, 19)
+from stsf_gym.fusion import STSFTrack
+from stsf_gym.geometry import compose, compose_jacobians, to_se3, wrap_angle
 
 
 class _Seen:
-    """The last frame a landmark was seen in, and the odometry since then."""
+    """The last frame a landmark was seen in, and the odometry since then.
+
+    The covariance of that motion, the baseline of the next pair, keeps slip and calibration
+    apart: slip is a random walk, but the wheel-radius error is one scale per wheel, so over a
+    short baseline of ``d`` metres its drift has the variance of the random walk matched at
+    ``d`` (:class:`~stsf_gym.estimators.odometry.OdometryNoise`), far below that matched at
+    the estimator's ``calibration_length``.
+    """
 
     def __init__(self, observation: LandmarkObservation) -> None:
         self.observation = observation
-        self.motion, self.motion_cov = np.zeros(3), np.zeros((3, 3))
+        self.motion, self.distance = np.zeros(3), 0.0
+        self.slip_cov, self.scale_cov = np.zeros((3, 3)), np.zeros((3, 3))
         self.missed = 0
 
-    def move(self, u: np.ndarray, q: np.ndarray) -> None:
-        """Compose one step's odometry increment ``u`` (covariance ``q``) onto the motion."""
-        self.motion, self.motion_cov = compose_gaussian(self.motion, self.motion_cov, u, q)
+    def move(self, u: np.ndarray, q_slip: np.ndarray, q_scale: np.ndarray) -> None:
+        """Compose one step's odometry increment ``u`` onto the motion: ``q_slip`` is its slip
+        covariance, ``q_scale`` its calibration covariance matched at 1 m."""
+        j_a, j_b = compose_jacobians(self.motion, u)
+        self.motion = compose(self.motion, u)
+        self.distance += float(np.hypot(*u[:2]))
+        self.slip_cov = j_a @ self.slip_cov @ j_a.T + j_b @ q_slip @ j_b.T
+        self.scale_cov = j_a @ self.scale_cov @ j_a.T + j_b @ q_scale @ j_b.T
+
+    @property
+    def motion_cov(self) -> np.ndarray:
+        return self.slip_cov + self.distance * self.scale_cov
 
 
 class LandmarkFusionEstimator(OdometryEstimator):
-    """Shared machinery of :class:`ConventionalEstimator` and :class:`STSFEstimator`."""
+    """Shared machinery of :class:`ConventionalEstimator` and :class:`STSFEstimator`: landmark
+    tracks of at most ``max_track_frames`` frames, fused with ``weights`` (eq. 2-5)."""
 
     def __init__(
         self,
+        max_track_frames: int,
+        weights: str = "significance",
         sigma_px: float = 0.15,
         gate_probability: float = 0.99,
         max_gap_frames: int = 5,
         max_range: float = 9.0,
         min_baseline: float = 0.1,
         max_relative_range_std: float = 0.25,
-        orientation_std_floor: float = 0.03,
+        orientation_std_floor: float = 0.006,
         position_std_floor: float = 0.01,
         position_std_per_m: float = 0.005,
         relocalise_after: int = 3,
         relocalise_inflation: float = 4.0,
+        calibration_length: float = 3.0,
     ) -> None:
-        super().__init__()
+        super().__init__(calibration_length)
+        if weights not in ("significance", "gls"):
+            raise ValueError(f"stsf weights must be 'significance' or 'gls', got {weights!r}")
+        self.max_track_frames, self.weights = max_track_frames, weights
         self.sigma_px, self.max_gap_frames, self.max_range = sigma_px, max_gap_frames, max_range
         self.min_baseline, self.max_relative_range_std = min_baseline, max_relative_range_std
         self.orientation_var_floor = orientation_std_floor**2
@@ -98,23 +121,29 @@ class LandmarkFusionEstimator(OdometryEstimator):
         self.detector = FrameDetector(model.pattern, set(model.landmarks))
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
+        self.carried = CarriedPoses()
+        self.noise = self.model.odometry_noise
+        self.baseline_noises = (  # slip alone; calibration alone, matched at 1 m (see _Seen)
+            replace(self.noise, radius_var=0.0),
+            replace(self.noise, slip_var_per_m=0.0, calibration_length=1.0),
+        )
+        self.frame_count = 0
         self.relocaliser.clear()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
-            self.predict(obs)
+            self.carried.predict(*self.predict(obs))
             calibration = self.model.calibration
-            step = propagate(
-                np.zeros(3),
-                np.zeros((3, 3)),
-                *calibration.wheel_travel(obs["encoders"]),
-                calibration.wheelbase,
-                self.model.odometry_noise,
+            travel = calibration.wheel_travel(obs["encoders"])
+            u, _, q = odometry_step(np.zeros(3), *travel, calibration.wheelbase, self.noise)
+            q_slip, q_scale = (
+                odometry_step(np.zeros(3), *travel, calibration.wheelbase, noise)[2]
+                for noise in self.baseline_noises
             )
             for seen in self.seen.values():
-                seen.move(*step)
+                seen.move(u, q_slip, q_scale)
             for track in self.tracks.values():
-                track.move(*step)
+                track.move(u, q)
         if obs["image_new"]:
             self._frame(obs)
         return self.mean, self.cov
@@ -144,14 +173,13 @@ class LandmarkFusionEstimator(OdometryEstimator):
             if measured is None:
                 continue
             with self.timed("fusion"):
-                z, cov = self.fuse_landmark(current.landmark.id, *measured)
-                self._merge(current, z, cov)
+                self._fuse(current, *measured)
         self.counters["frames_matched"] += bool(observed)
         for landmark_id in set(self.seen) - observed:
             self.seen[landmark_id].missed += 1
             if self.seen[landmark_id].missed > self.max_gap_frames:
                 del self.seen[landmark_id]
-                self.tracks.pop(landmark_id, None)
+                self._drop_track(landmark_id)
 
     def _pair_measurement(
         self, previous: _Seen, current: LandmarkObservation
@@ -205,33 +233,51 @@ class LandmarkFusionEstimator(OdometryEstimator):
         cov += np.diag([position_std**2, position_std**2, self.orientation_var_floor])
         return z, cov
 
-    def fuse_landmark(self, landmark_id: int, z: np.ndarray, cov: np.ndarray):
-        """The landmark's relative pose to merge: conventional or STSF."""
-        raise NotImplementedError
-
-    def _merge(self, current: LandmarkObservation, z: np.ndarray, cov: np.ndarray) -> None:
-        """Robot pose from the landmark's map pose, gated, merged by eq. 23-24; a rejected one
-        goes to the re-localisation rule (:mod:`stsf_gym.estimators.relocalise`)."""
-        pose, pose_cov = robot_pose_from_landmark(current.landmark, z, cov)
-        innovation = pose - self.mean
-        innovation[2] = np.arctan2(np.sin(innovation[2]), np.cos(innovation[2]))
-        if innovation @ np.linalg.solve(self.cov + pose_cov, innovation) > self.gate:
+    def _fuse(self, current: LandmarkObservation, z: np.ndarray, cov: np.ndarray) -> None:
+        """Add the frame's measurement ``z`` to the landmark's track, fuse the track (eq. 2-5)
+        and merge the robot pose it gives with the estimate (eq. 23-24, gated, with the carried
+        correlation). A rejected frame goes to the re-localisation rule
+        (:mod:`stsf_gym.estimators.relocalise`) with the robot pose of its board alone (PnP):
+        a motion-stereo range needs the odometry, which is what may have gone wrong."""
+        landmark = current.landmark
+        track = self.tracks.setdefault(landmark.id, STSFTrack(self.max_track_frames))
+        track.add(z, cov)
+        _, pose_cov = robot_pose_from_landmark(landmark, z, cov)
+        self.frame_count += 1
+        self.carried.add((landmark.id, self.frame_count), pose_cov)
+        keys = [key for key in self.carried.keys if key[0] == landmark.id]
+        self.carried.remove(keys[: len(keys) - len(track)])  # the frames the track let go
+        fused = track.fuse(self.weights)
+        # the weights on the landmark's pose, as weights on the robot poses it gives
+        jac = robot_pose_jacobian(landmark, fused.x)
+        weights = {
+            key: jac @ w @ np.linalg.inv(jac)
+            for key, w in zip(keys[-len(track) :], fused.weights, strict=True)
+        }
+        fused_pose, _ = robot_pose_from_landmark(landmark, fused.x, fused.cov)
+        innovation = fused_pose - self.mean
+        innovation[2] = wrap_angle(innovation[2])
+        merged = self.carried.merge(self.cov, weights, innovation, self.gate)
+        if merged is None:
             self.counters["gated_out"] += 1
-            self.tracks.pop(current.landmark.id, None)
-            found = self.relocaliser.rejected(pose, pose_cov, self.mean)
+            self._drop_track(landmark.id)
+            candidate = robot_pose_from_landmark(landmark, current.z, current.cov)
+            found = self.relocaliser.rejected(*candidate, self.mean)
             if found is not None:  # lost (kidnapped): start again from the landmarks
                 self.mean, self.cov = found
                 self.tracks.clear()
+                self.carried.clear()
                 self.counters["relocalised"] += 1
             return
         self.relocaliser.clear()
-        prior_cov, pose_cov = self.merge_covariances(self.cov, pose_cov)
-        self.mean, self.cov = merge_gaussians(self.mean, prior_cov, pose, pose_cov, angle_index=[2])
+        correction, self.cov = merged
+        self.mean = self.mean + correction
+        self.mean[2] = wrap_angle(self.mean[2])
         self.counters["landmark_updates"] += 1
 
-    def merge_covariances(self, prior: np.ndarray, measured: np.ndarray):
-        """Covariances to merge with (eq. 23-24): as they are, for independent errors."""
-        return prior, measured
+    def _drop_track(self, landmark_id: int) -> None:
+        self.tracks.pop(landmark_id, None)
+        self.carried.remove([key for key in self.carried.keys if key[0] == landmark_id])
 
 
 class ConventionalEstimator(LandmarkFusionEstimator):
@@ -239,8 +285,8 @@ class ConventionalEstimator(LandmarkFusionEstimator):
 
     name = "conventional"
 
-    def fuse_landmark(self, landmark_id: int, z: np.ndarray, cov: np.ndarray):
-        return z, cov
+    def __init__(self, **options) -> None:
+        super().__init__(max_track_frames=1, **options)
 
 
 class STSFEstimator(LandmarkFusionEstimator):
@@ -248,27 +294,5 @@ class STSFEstimator(LandmarkFusionEstimator):
 
     name = "stsf"
 
-    def __init__(self, weights: str = "significance", max_track_frames: int = 50, **options):
-        super().__init__(**options)
-        if weights not in ("significance", "gls"):
-            raise ValueError(f"stsf weights must be 'significance' or 'gls', got {weights!r}")
-        self.weights, self.max_track_frames = weights, max_track_frames
-
-    def fuse_landmark(self, landmark_id: int, z: np.ndarray, cov: np.ndarray):
-        track = self.tracks.setdefault(landmark_id, STSFTrack(self.max_track_frames))
-        track.add(z, cov)
-        fused = track.fuse(self.weights)
-        return fused.x, fused.cov
-
-    def merge_covariances(self, prior: np.ndarray, measured: np.ndarray):
-        """Covariance intersection: the fused track reuses frames already merged into the
-        prior, so the two are correlated by an unknown amount. Eq. 23-24 on ``prior / w`` and
-        ``measured / (1 - w)`` is consistent for any such correlation; ``w`` minimises the
-        merged covariance's trace."""
-        best = None
-        for w in CI_WEIGHTS:
-            a, b = prior / w, measured / (1 - w)
-            merged = a - a @ np.linalg.solve(a + b, a)
-            if best is None or np.trace(merged) < best[0]:
-                best = (np.trace(merged), a, b)
-        return best[1], best[2]
+    def __init__(self, max_track_frames: int = 10, **options) -> None:
+        super().__init__(max_track_frames=max_track_frames, **options)

@@ -96,13 +96,16 @@ def landmark_world_pose(landmark: MapLandmark) -> np.ndarray:
     )
 
 
+def robot_pose_jacobian(landmark: MapLandmark, z: np.ndarray) -> np.ndarray:
+    """The Jacobian of :func:`robot_pose_from_landmark`'s pose by ``z``."""
+    _, j_b = compose_jacobians(landmark_world_pose(landmark), inverse(z))
+    return j_b @ inverse_jacobian(z)
+
+
 def robot_pose_from_landmark(
     landmark: MapLandmark, z: np.ndarray, cov: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """The robot's world pose, and its covariance, from the landmark's pose ``z`` relative to
     the robot (covariance ``cov``) and the landmark's map pose: ``map (+) (-) z``."""
-    landmark_pose = landmark_world_pose(landmark)
-    z_inv = inverse(z)
-    _, j_b = compose_jacobians(landmark_pose, z_inv)
-    jac = j_b @ inverse_jacobian(z)
-    return compose(landmark_pose, z_inv), jac @ cov @ jac.T
+    jac = robot_pose_jacobian(landmark, z)
+    return compose(landmark_world_pose(landmark), inverse(z)), jac @ cov @ jac.T

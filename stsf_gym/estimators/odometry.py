@@ -10,33 +10,33 @@ import numpy as np
 
 @dataclass(frozen=True)
 class OdometryNoise:
-    """Wheel-travel noise an estimator assumes, per wheel and per step.
+    """Wheel-travel noise an estimator assumes, per wheel and per step: a random walk,
+    ``var(d) = (slip_var_per_m + radius_var * calibration_length) * |d|`` for a wheel that
+    rolled ``d`` metres.
 
-    ``var(d) = slip_var_per_m * |d| + (scale_std * d)^2`` for a wheel that rolled ``d``
-    metres: a random walk from slip, plus a share of the unknown calibration error.
+    Slip is a random walk. The wheel-radius calibration error (relative variance
+    ``radius_var``) is not: it is one unknown scale per wheel and episode, so its drift grows
+    linearly with distance, which a per-step model cannot follow. It is modelled as the random
+    walk with the same variance after ``calibration_length`` metres: a filter's covariance is
+    right at that distance, too wide before it and too narrow after. Dead reckoning should
+    match it at the length of a run; a filter corrected by landmarks at the length it drives
+    between corrections.
     """
 
     slip_var_per_m: float
-    scale_std: float
+    radius_var: float = 0.0
+    calibration_length: float = 5.0
 
     @classmethod
-    def from_encoders(
-        cls,
-        slip_std: float,
-        radius_error_std: float,
-        wheel_radius: float,
-        calibration_length: float = 5.0,
-    ):
+    def from_encoders(cls, slip_std: float, radius_error_std: float, wheel_radius: float):
         """Matching the env's encoder model: slip ``slip_std`` rad per sqrt(rad) of rotation,
         and a wheel-radius error of relative std ``radius_error_std`` that the robot cannot
-        know. That error is systematic; it is modelled as a random walk with the same variance
-        after ``calibration_length`` metres, which keeps the covariance from being
-        over-confident over tens of metres without making it useless over a few."""
-        return cls(slip_std**2 * wheel_radius + radius_error_std**2 * calibration_length, 0.0)
+        know."""
+        return cls(slip_std**2 * wheel_radius, radius_error_std**2)
 
     def wheel_variances(self, d_left: float, d_right: float) -> np.ndarray:
-        d = np.array([d_left, d_right])
-        return self.slip_var_per_m * np.abs(d) + (self.scale_std * d) ** 2
+        var_per_m = self.slip_var_per_m + self.radius_var * self.calibration_length
+        return var_per_m * np.abs(np.array([d_left, d_right]))
 
 
 def integrate_wheel_travel(
@@ -54,19 +54,16 @@ def integrate_wheel_travel(
     return np.array([x + distance * math.cos(mid), y + distance * math.sin(mid), yaw + turn])
 
 
-def propagate(
+def odometry_step(
     pose: np.ndarray,
-    cov: np.ndarray,
     d_left: float,
     d_right: float,
     wheelbase: float,
     noise: OdometryNoise,
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`integrate_wheel_travel` with first-order covariance ``F C F^T + G N G^T``.
-
-    ``F`` is the Jacobian with respect to the pose and ``G`` with respect to the two
-    wheel travels, whose noise ``N`` is :meth:`OdometryNoise.wheel_variances`.
-    """
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`integrate_wheel_travel`, its Jacobian ``F`` by the pose and its noise in pose
+    coordinates ``Q = G N G^T`` (``G``: Jacobian by the two wheel travels, ``N``:
+    :meth:`OdometryNoise.wheel_variances`)."""
     distance = (d_left + d_right) / 2
     mid = pose[2] + (d_right - d_left) / (2 * wheelbase)
     c, s = math.cos(mid), math.sin(mid)
@@ -79,6 +76,20 @@ def propagate(
             [-1 / wheelbase, 1 / wheelbase],
         ]
     )
-    N = np.diag(noise.wheel_variances(d_left, d_right))
-    new_cov = F @ cov @ F.T + G @ N @ G.T
-    return integrate_wheel_travel(pose, d_left, d_right, wheelbase), (new_cov + new_cov.T) / 2
+    Q = G @ np.diag(noise.wheel_variances(d_left, d_right)) @ G.T
+    return integrate_wheel_travel(pose, d_left, d_right, wheelbase), F, Q
+
+
+def propagate(
+    pose: np.ndarray,
+    cov: np.ndarray,
+    d_left: float,
+    d_right: float,
+    wheelbase: float,
+    noise: OdometryNoise,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`integrate_wheel_travel` with first-order covariance ``F C F^T + Q``
+    (:func:`odometry_step`)."""
+    new_pose, F, Q = odometry_step(pose, d_left, d_right, wheelbase, noise)
+    new_cov = F @ cov @ F.T + Q
+    return new_pose, (new_cov + new_cov.T) / 2
