@@ -1,0 +1,208 @@
+"""Noise identification for the landmark estimators, on seeds the figures do not use.
+
+Two reports, over ``--seeds`` episodes from ``--seed0`` (default 100-119; Fig. 10/11 use 0-9)
+of the path follower driving on each estimator:
+
+- ``pairs``: every motion-stereo pair measurement of the conventional estimator against the
+  landmark's true pose relative to the robot, split into radial (along the ray), tangential
+  and orientation errors by range, beside the model's standard deviations (without and with
+  the floors of ``configs/estimators/conventional.yaml``). What the floors were set from.
+- ``nees``: per estimator, the 3-dof NEES and its position (2-dof) and heading (1-dof) parts,
+  RMS errors beside the mean model standard deviations, updates, gated measurements, and the
+  seeds that needed a re-localisation or were ever more than 10 cm off. What
+  ``calibration_length`` was chosen with.
+
+    python benchmarks/estimator_noise.py pairs --world irl_corridor --mode fast
+    python benchmarks/estimator_noise.py nees --estimators conventional,stsf,ekf \\
+        --set calibration_length=3
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import yaml
+from tqdm import tqdm
+
+RANGE_BINS = [(0, 2), (2, 3), (3, 4), (4, 6), (6, 9)]
+
+
+def _env(world: str, estimator: str, mode: str, options: dict):
+    from agents.follower import PathFollower
+    from stsf_gym.experiments.episodes import make_episode_env
+    from stsf_gym.experiments.figures import PATH_ONLY
+
+    env = make_episode_env(world, estimator, {"camera__mode": mode}, options)
+    return env, PathFollower.for_env(env, **PATH_ONLY)
+
+
+def pair_errors(job: tuple) -> np.ndarray:
+    """Rows: range, radial, tangential and orientation error, and the model's variances
+    (radial, tangential, orientation) with their floors, for each pair measurement."""
+    from stsf_gym.estimators.landmark_fusion import LandmarkFusionEstimator
+    from stsf_gym.estimators.landmark_observation import landmark_world_pose
+    from stsf_gym.geometry import compose, inverse
+
+    world, seed, mode, options = job
+    env, follower = _env(world, "conventional", mode, options)
+    estimator, measured, rows = env.estimator, [], []
+    pair_measurement = LandmarkFusionEstimator._pair_measurement
+
+    def recorded(self, previous, current):
+        out = pair_measurement(self, previous, current)
+        if out is not None:
+            measured.append((current.landmark, *out))
+        return out
+
+    LandmarkFusionEstimator._pair_measurement = recorded
+    obs, info, done = *env.reset(seed=seed), False
+    while not done:
+        obs, _, terminated, truncated, info = env.step(follower.act(obs["pose"], obs["sonar"]))
+        done = terminated or truncated
+        for landmark, z, cov in measured:
+            truth = compose(inverse(info["true_pose"]), landmark_world_pose(landmark))
+            error = z - truth
+            error[2] = math.remainder(error[2], math.tau)
+            bearing = math.atan2(truth[1], truth[0])
+            c, s = math.cos(bearing), math.sin(bearing)
+            to_ray = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+            along, model = to_ray @ error, to_ray @ cov @ to_ray.T
+            floor = estimator.position_std_floor + estimator.position_std_per_m * math.hypot(*z[:2])
+            rows.append(
+                [
+                    math.hypot(*truth[:2]),
+                    *along,
+                    *np.diag(model),
+                    floor**2,
+                    estimator.orientation_var_floor,
+                ]
+            )
+        measured.clear()
+    env.close()
+    return np.array(rows).reshape(-1, 9)
+
+
+def nees_parts(job: tuple) -> dict:
+    """NEES parts, squared errors and model variances at every step of one episode."""
+    world, seed, mode, options, estimator_name = job
+    env, follower = _env(world, estimator_name, mode, options)
+    obs, info, done, rows = *env.reset(seed=seed), False, []
+    while not done:
+        obs, _, terminated, truncated, info = env.step(follower.act(obs["pose"], obs["sonar"]))
+        done = terminated or truncated
+        error = obs["pose"].astype(float) - info["true_pose"]
+        error[2] = math.remainder(error[2], math.tau)
+        cov = obs["pose_cov"].reshape(3, 3).astype(float)
+        nees = error @ np.linalg.solve(cov, error)
+        position = error[:2] @ np.linalg.solve(cov[:2, :2], error[:2])
+        rows.append([nees, position, error[2] ** 2 / cov[2, 2], *(error**2), *np.diag(cov)])
+    counters = dict(env.estimator.counters)
+    env.close()
+    rows = np.array(rows)
+    return {
+        "estimator": estimator_name,
+        "seed": seed,
+        "rows": rows,
+        "counters": counters,
+        "bad": bool(counters.get("relocalised") or np.sqrt(rows[:, 3] + rows[:, 4]).max() > 0.1),
+    }
+
+
+def _map(function, jobs: list, workers: int) -> list:
+    context = multiprocessing.get_context("forkserver")
+    with ProcessPoolExecutor(workers, mp_context=context) as pool:
+        return list(tqdm(pool.map(function, jobs), total=len(jobs), desc=function.__name__))
+
+
+def report_pairs(rows: np.ndarray) -> None:
+    rng, radial, tangential, orientation, var_r, var_t, var_o, floor_p, floor_o = rows.T
+    print(f"{len(rows)} pair measurements")
+    print(
+        "| range (m) | n | radial RMS / model / floor (cm) | tangential RMS / model (cm) | "
+        "orientation RMS / model / floor (deg) |"
+    )
+    print("|---|---|---|---|---|")
+    for low, high in RANGE_BINS:
+        m = (rng >= low) & (rng < high)
+        if m.sum() < 5:
+            continue
+
+        def rms(x, m=m):
+            return math.sqrt(np.mean(x[m] ** 2))
+
+        def model(var, floor, m=m):
+            return math.sqrt(np.mean(var[m] - floor[m]))
+
+        print(
+            f"| {low}-{high} | {m.sum()} | {100 * rms(radial):.2f} / "
+            f"{100 * model(var_r, floor_p):.2f} / {100 * math.sqrt(floor_p[m].mean()):.2f} | "
+            f"{100 * rms(tangential):.2f} / {100 * model(var_t, floor_p):.2f} | "
+            f"{math.degrees(rms(orientation)):.2f} / {math.degrees(model(var_o, floor_o)):.2f} / "
+            f"{math.degrees(math.sqrt(floor_o[m].mean())):.2f} |"
+        )
+
+
+def report_nees(results: list[dict], estimators: list[str]) -> None:
+    print(
+        "| estimator | NEES (3) | position (2) | heading (1) | RMS x / std (cm) | "
+        "RMS y / std (cm) | RMS heading / std (deg) | updates | gated | off or re-localised |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name in estimators:
+        runs = [r for r in results if r["estimator"] == name]
+        rows = np.concatenate([r["rows"] for r in runs])
+        mean = rows.mean(axis=0)
+        bad = [r["seed"] for r in runs if r["bad"]]
+
+        def counter(key, runs=runs):
+            return np.mean([r["counters"].get(key, 0) for r in runs])
+
+        print(
+            f"| {name} | {mean[0]:.2f} | {mean[1]:.2f} | {mean[2]:.2f} | "
+            f"{100 * math.sqrt(mean[3]):.2f} / {100 * math.sqrt(mean[6]):.2f} | "
+            f"{100 * math.sqrt(mean[4]):.2f} / {100 * math.sqrt(mean[7]):.2f} | "
+            f"{math.degrees(math.sqrt(mean[5])):.2f} / {math.degrees(math.sqrt(mean[8])):.2f} | "
+            f"{counter('landmark_updates'):.0f} | {counter('gated_out'):.1f} | "
+            f"{len(bad)} {bad} |"
+        )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("report", choices=["pairs", "nees"])
+    parser.add_argument("--world", default="irl_corridor")
+    parser.add_argument("--mode", default="fast", choices=["fast", "rendered"])
+    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--seed0", type=int, default=100)
+    parser.add_argument("--estimators", default="conventional,stsf,ekf")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="estimator option for every estimator, e.g. calibration_length=3",
+    )
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args()
+    options = {}
+    for item in args.set:
+        key, sep, value = item.partition("=")
+        if not sep:
+            parser.error(f"--set needs KEY=VALUE, got {item!r}")
+        options[key] = yaml.safe_load(value)
+    seeds = range(args.seed0, args.seed0 + args.seeds)
+    if args.report == "pairs":
+        jobs = [(args.world, seed, args.mode, options) for seed in seeds]
+        report_pairs(np.concatenate(_map(pair_errors, jobs, args.workers)))
+    else:
+        estimators = args.estimators.split(",")
+        jobs = [(args.world, s, args.mode, options, e) for e in estimators for s in seeds]
+        report_nees(_map(nees_parts, jobs, args.workers), estimators)
+
+
+if __name__ == "__main__":
+    main()
