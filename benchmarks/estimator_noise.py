@@ -5,16 +5,17 @@ of the path follower driving on each estimator:
 
 - ``pairs``: every motion-stereo pair measurement of the conventional estimator against the
   landmark's true pose relative to the robot, split into radial (along the ray), tangential
-  and orientation errors by range, beside the model's standard deviations (without and with
-  the floors of ``configs/estimators/conventional.yaml``). What the floors were set from.
+  and orientation errors by range, beside the model's standard deviations (pixels, slip,
+  wheel calibration and mount, without the floors) and the floors of
+  ``configs/estimators/conventional.yaml``. What the floors were set from.
 - ``nees``: per estimator, the 3-dof NEES and its position (2-dof) and heading (1-dof) parts,
   RMS errors beside the mean model standard deviations, updates, gated measurements, and the
-  seeds that needed a re-localisation or were ever more than 10 cm off. What
-  ``calibration_length`` was chosen with.
+  seeds that needed a re-localisation or were ever more than 10 cm off. What the floors and
+  ``mount_std`` were checked with.
 
     python benchmarks/estimator_noise.py pairs --world irl_corridor --mode fast
-    python benchmarks/estimator_noise.py nees --estimators conventional,stsf,ekf \\
-        --set calibration_length=3
+    python benchmarks/estimator_noise.py nees --estimators odometry,conventional,stsf,ekf
+    python benchmarks/estimator_noise.py nees --estimators stsf --set mount_std=0.005
 """
 
 from __future__ import annotations
@@ -63,7 +64,11 @@ def pair_errors(job: tuple) -> np.ndarray:
     while not done:
         obs, _, terminated, truncated, info = env.step(follower.act(obs["pose"], obs["sonar"]))
         done = terminated or truncated
-        for landmark, z, cov in measured:
+        for landmark, z, cov, by_calibration in measured:
+            # the considered errors too: the wheel calibration through the baseline, the mount
+            calibration_cov = estimator.model.odometry_noise.calibration_cov
+            cov = cov + by_calibration @ calibration_cov @ by_calibration.T
+            cov = cov + np.diag([estimator.mount_std**2] * 2 + [0.0])
             truth = compose(inverse(info["true_pose"]), landmark_world_pose(landmark))
             error = z - truth
             error[2] = math.remainder(error[2], math.tau)
@@ -184,7 +189,7 @@ def main() -> None:
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="estimator option for every estimator, e.g. calibration_length=3",
+        help="estimator option for every estimator, e.g. mount_std=0.005",
     )
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()

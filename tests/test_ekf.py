@@ -87,13 +87,13 @@ def test_ekf_beats_dead_reckoning(straight_run):
     assert abs(pose_error(straight_run["ekf_mean"], truth)[2]) < 0.01
 
 
-def test_ekf_is_consistent(straight_run):
+def test_ekf_is_not_wildly_overconfident(straight_run):
+    """One run is one sample of the Monte-Carlo NEES test (tests/test_landmark_estimators.py
+    runs that over ten seeds): its steps are correlated, so only gross failures show here."""
     nees = straight_run["nees"]
-    # the 99 % bound of the time average of len(nees) chi-square(3) values
-    upper = chi2.ppf(0.99, 3 * len(nees)) / len(nees)
-    print(f"average NEES {nees.mean():.3f} (band 0.3 .. {upper:.3f}), max {nees.max():.2f}")
-    assert 0.3 < nees.mean() < upper
-    assert nees.max() < chi2.ppf(0.9999, 3) * 2  # never wildly overconfident
+    print(f"average NEES {nees.mean():.3f}, max {nees.max():.2f}")
+    assert 0.3 < nees.mean() < 9.0
+    assert nees.max() < chi2.ppf(0.9999, 3) * 2
 
 
 def test_ekf_counts_updates_and_times_stages(straight_run):
@@ -184,7 +184,7 @@ def test_gate_threshold_is_the_chi_square_quantile(model):
         ekf = make_ekf(model, pose, gate_probability=probability, range_std_fraction=0)
         assert ekf.gate == pytest.approx(chi2.ppf(probability, 2))
         observation = synthetic_observation(model, 4, pose)
-        _, R = ekf.measurement(observation)
+        _, R, _ = ekf.measurement(observation)
         _, H = ekf.predict_measurement(observation.landmark)
         range_std = math.sqrt((H @ ekf.cov @ H.T + R)[0, 0])
         # straight ahead, range and bearing are uncorrelated: a range offset has
@@ -234,11 +234,11 @@ def test_measurement_covariance_maps_xy_and_adds_floors(model):
     observation = synthetic_observation(model, 2, pose)  # 1.2 m to the right
     bare = make_ekf(model, pose, range_std_floor=0, range_std_fraction=0, bearing_std_floor=0)
     floored = make_ekf(model, pose)
-    z, R0 = bare.measurement(observation)
+    z, R0, _ = bare.measurement(observation)
     np.testing.assert_allclose(z, observation.range_bearing)
     r = z[0]
     np.testing.assert_allclose(np.diag(R0), [1e-4, 1e-4 / r**2], rtol=1e-9)  # isotropic C
-    _, R = floored.measurement(observation)
+    _, R, _ = floored.measurement(observation)
     expected = np.diag(
         [
             floored.range_std_floor**2 + (floored.range_std_fraction * r) ** 2,
@@ -272,7 +272,7 @@ def test_without_camera_ekf_is_the_odometry_estimator():
     try:
         obs, _ = env.reset(seed=5, options={"start_pose": [1.0, 0.2, 3.0]})
         ekf = env.estimator
-        odometry = make_estimator("odometry", calibration_length=ekf.calibration_length)
+        odometry = make_estimator("odometry")
         odometry.reset(SensorModel.from_env(env), ekf.mean, ekf.cov)
         for action in [[0.6, 0.4]] * 40 + [[0.8, -0.3]] * 40:  # yaw crosses pi
             obs, *_ = env.step(np.float32(action))

@@ -21,7 +21,7 @@ def test_propagated_covariance_matches_monte_carlo():
         mean, cov = propagate(mean, cov, d_left, d_right, wheelbase, noise)
     samples = np.zeros((2000, 3))
     for d_left, d_right in travels:
-        std = np.sqrt(noise.wheel_variances(d_left, d_right))
+        std = np.sqrt(noise.random_walk_variances(d_left, d_right))
         d = np.array([d_left, d_right]) + rng.standard_normal((len(samples), 2)) * std
         samples = np.array(
             [integrate_wheel_travel(p, *w, wheelbase) for p, w in zip(samples, d, strict=True)]

@@ -1,4 +1,4 @@
-"""The odometry covariance of a motion-stereo baseline: slip plus a systematic wheel scale."""
+"""The odometry error of a motion-stereo baseline: slip plus the episode's fixed calibration."""
 
 import numpy as np
 
@@ -6,39 +6,31 @@ from stsf_gym.estimators.landmark_fusion import _Seen
 from stsf_gym.estimators.odometry import OdometryNoise, integrate_wheel_travel, odometry_step
 
 
-def test_baseline_covariance_matches_a_fixed_wheel_scale_error():
-    """Each run draws one radius error per wheel (as the env does per episode) and slip per
-    step. The baseline covariance describes the spread of the odometry's error over 0.19 m; the
-    random walk matched at 5 m (the estimator's prediction noise) overstates it many times."""
-    wheelbase, samples, radius_std = 0.3, 4000, 0.0033
-    slip_noise = OdometryNoise(2e-6)
-    scale_noise = OdometryNoise(0.0, radius_std**2, calibration_length=1.0)
-    walk_noise = OdometryNoise(2e-6, radius_std**2, calibration_length=5.0)
+def test_baseline_error_is_slip_plus_the_calibration_jacobian():
+    """Each run draws one radius error per wheel and one wheelbase error (as the env does per
+    episode) and slip per step; over a 0.19 m baseline the motion's error must follow
+    ``slip_cov + by_calibration Cov(c) by_calibration^T``."""
+    wheelbase, samples = 0.3, 4000
+    noise = OdometryNoise(2e-6, radius_var=0.0033**2, wheelbase_var=0.01**2)
     travels = [(0.012, 0.0125)] * 10 + [(0.0125, 0.011)] * 6  # 0.19 m with a slight S-bend
-    seen, walk_cov = _Seen(observation=None), np.zeros((3, 3))
+    seen = _Seen(observation=None)
     for d in travels:
-        _, F, Q = odometry_step(seen.motion, *d, wheelbase, walk_noise)
-        walk_cov = F @ walk_cov @ F.T + Q
-        u = odometry_step(np.zeros(3), *d, wheelbase, walk_noise)[0]
-        q_slip, q_scale = (
-            odometry_step(np.zeros(3), *d, wheelbase, n)[2] for n in (slip_noise, scale_noise)
-        )
-        seen.move(u, q_slip, q_scale)
+        u, _, G, G_c = odometry_step(np.zeros(3), *d, wheelbase)
+        seen.move(u, G @ np.diag(noise.slip_variances(*d)) @ G.T, G_c)
     rng = np.random.default_rng(1)
-    scales = 1 + rng.normal(0, radius_std, (samples, 2))
+    calibration = rng.normal(size=(samples, 3)) * np.sqrt(np.diag(noise.calibration_cov))
     true = np.zeros((samples, 3))
     for d in travels:
-        slip = rng.normal(0, 1, (samples, 2)) * np.sqrt(slip_noise.wheel_variances(*d))
-        rolled = np.array(d) * scales + slip
+        slip = rng.normal(size=(samples, 2)) * np.sqrt(noise.slip_variances(*d))
+        rolled = np.array(d) / (1 + calibration[:, :2]) + slip
+        bases = wheelbase / (1 + calibration[:, 2])
         true = np.array(
-            [integrate_wheel_travel(p, *w, wheelbase) for p, w in zip(true, rolled, strict=True)]
+            [integrate_wheel_travel(p, *w, b) for p, w, b in zip(true, rolled, bases, strict=True)]
         )
-    errors = true - seen.motion
-
-    def nees(cov):
-        return np.einsum("ni,ij,nj->n", errors, np.linalg.inv(cov), errors).mean()
-
-    # first order a fixed scale's sideways drift grows like d^2 / 2, the random walk matched at
-    # the baseline like d^1.5 / sqrt(3): its variance is up to 4/3 too wide, never too narrow
-    assert 3.0 / (4 / 3) - 0.1 < nees(seen.motion_cov) < 3.3
-    assert nees(walk_cov) < 0.5
+    errors = seen.motion - true
+    cov = seen.slip_cov + seen.by_calibration @ noise.calibration_cov @ seen.by_calibration.T
+    nees = np.einsum("ni,ij,nj->n", errors, np.linalg.inv(cov), errors).mean()
+    assert abs(nees - 3.0) < 0.25
+    # the calibration part: its sign too (each run's error minus its slip part)
+    slip_free = errors @ np.linalg.inv(cov).T
+    assert np.corrcoef(slip_free[:, 0], calibration @ seen.by_calibration.T[:, 0])[0, 1] > 0

@@ -51,7 +51,10 @@ class SensorModel:
         return cls(
             calibration=u.odometry_calibration,
             odometry_noise=OdometryNoise.from_encoders(
-                cfg.encoders.slip_std, cfg.encoders.radius_error_std, cfg.robot.wheel_radius
+                cfg.encoders.slip_std,
+                cfg.encoders.radius_error_std,
+                cfg.encoders.wheelbase_error_std,
+                cfg.robot.wheel_radius,
             ),
             camera_matrix=u.camera_matrix,
             image_size=(cfg.camera.width, cfg.camera.height),

@@ -2,44 +2,45 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
+from scipy.linalg import block_diag
 
 from stsf_gym.estimators.base import PoseEstimator, SensorModel
 from stsf_gym.estimators.odometry import odometry_step
+from stsf_gym.estimators.pose_errors import PoseErrors
 
 
 class OdometryEstimator(PoseEstimator):
-    """Integrates the wheel encoders (mid-point model); the covariance only grows."""
+    """Integrates the wheel encoders (mid-point model) with the covariance of slip, a random
+    walk, and of the unknown calibration, fixed errors (:mod:`~stsf_gym.estimators.pose_errors`).
+    """
 
     name = "odometry"
-
-    def __init__(self, calibration_length: float = 5.0) -> None:
-        """``calibration_length``: metres at which the odometry noise's random walk matches the
-        drift of the wheel-radius calibration error (:class:`OdometryNoise`)."""
-        super().__init__()
-        if not calibration_length > 0:
-            raise ValueError(f"calibration_length must be positive, got {calibration_length}")
-        self.calibration_length = float(calibration_length)
+    mount_std = 0.0  # m: estimators with a camera consider its mount's position error too
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
-        noise = replace(model.odometry_noise, calibration_length=self.calibration_length)
-        super().reset(replace(model, odometry_noise=noise), initial_pose, initial_cov)
+        super().reset(model, initial_pose, initial_cov)
+        considered = block_diag(model.odometry_noise.calibration_cov, self.mount_std**2 * np.eye(2))
+        self.errors = PoseErrors(self.cov, considered)
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
             self.predict(obs)
         return self.mean, self.cov
 
-    def predict(self, obs: dict) -> tuple[np.ndarray, np.ndarray]:
-        """The odometry prediction every estimator starts a step with; returns its Jacobian
-        ``F`` and noise ``Q`` (:func:`~stsf_gym.estimators.odometry.odometry_step`)."""
+    def predict(self, obs: dict) -> tuple[float, float]:
+        """The odometry prediction every estimator starts a step with; returns the wheel
+        travels (m)."""
         calibration = self.model.calibration
         d_left, d_right = calibration.wheel_travel(obs["encoders"])
-        self.mean, F, Q = odometry_step(
-            self.mean, d_left, d_right, calibration.wheelbase, self.model.odometry_noise
-        )
-        cov = F @ self.cov @ F.T + Q
-        self.cov = (cov + cov.T) / 2
-        return F, Q
+        self.mean, F, G, G_c = odometry_step(self.mean, d_left, d_right, calibration.wheelbase)
+        slip = np.diag(self.model.odometry_noise.slip_variances(d_left, d_right))
+        self.errors.predict(F, G @ slip @ G.T, G_c)
+        self.cov = self.errors.P
+        return d_left, d_right
+
+    def restart(self, mean: np.ndarray, cov: np.ndarray) -> None:
+        """Start again from ``mean`` with covariance ``cov`` (re-localisation)."""
+        self.mean = np.asarray(mean, dtype=float).copy()
+        self.errors.restart(cov)
+        self.cov = self.errors.P

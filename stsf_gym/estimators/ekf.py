@@ -4,9 +4,10 @@
 covariance ``P``. The landmark map (:attr:`SensorModel.landmarks`) is known, not estimated.
 
 **Prediction** (every step). The odometry estimator's mid-point model,
-:meth:`OdometryEstimator.predict`: ``x <- f(x, d_l, d_r)``, ``P <- F P F^T + G N G^T``, with the
-wheel-travel noise ``N`` of :class:`~stsf_gym.estimators.odometry.OdometryNoise` matched at
-``calibration_length`` metres (see below).
+:meth:`OdometryEstimator.predict`: ``x <- f(x, d_l, d_r)``, ``P <- F P F^T + G N G^T`` for the
+slip ``N``, plus the unknown calibration errors ``c`` carried as considered parameters
+(:mod:`stsf_gym.estimators.pose_errors`): ``P`` keeps its correlation with ``c``, so the
+drift they cause is predicted as the linear growth it is (see below).
 
 **Measurement** (every new camera frame). The detector finds the boards; each board of the map
 becomes a :class:`LandmarkObservation` whose ``z[:2] = (u, v)`` is the board centre in the
@@ -31,7 +32,9 @@ covariance in Joseph form::
 
 a sum of two positive semi-definite terms, so ``P`` stays symmetric positive definite under
 round-off, and the right covariance for *any* gain, not only the optimal one (the short form
-``(I - K H) P`` is exact only for the optimal gain and can lose definiteness).
+``(I - K H) P`` is exact only for the optimal gain and can lose definiteness). The
+cross-covariance with ``c`` becomes ``(I - K H) P_xc``: ``c`` is not estimated (a Schmidt
+update), so the EKF stays the textbook one and only its covariance knows the calibration.
 
 **Gating.** Before it touches the state, a measurement is rejected when its Mahalanobis
 distance ``d^2 = nu^T S^-1 nu`` exceeds the chi-square quantile of ``gate_probability`` with 2
@@ -59,11 +62,10 @@ that treats systematic errors as white averages them away and becomes overconfid
   one frame can carry; a conservative ``sigma_px`` does the same where pixel noise dominates;
 - the per-episode wheel-radius and wheelbase calibration errors make the odometry drift
   *linearly* with distance, which a random-walk noise model (all a per-step model can be)
-  matches at one distance only: ``calibration_length``, the distance the filter drives on
-  odometry alone between landmark corrections, so that the drift between sightings stays
-  inside the gate (otherwise the gate would lock the landmarks out after a gap) and the
-  filter's memory is bounded: the repeated, correlated measurements cannot shrink ``P`` below
-  the error they leave.
+  matches at one distance only: too wide over a short gap, too narrow over a long one, and
+  blind to the drift always going the same way. Carried as considered parameters, they keep
+  the predicted drift right over any gap, and the repeated measurements cannot shrink ``P``
+  below the error the calibration leaves.
 
 The Joseph form and the gate keep single updates from breaking ``P``; the average NEES against
 the true pose (``tests/test_ekf.py``) checks the whole.
@@ -97,8 +99,9 @@ class EKFEstimator(OdometryEstimator):
         range_std_floor: standard deviation (m) added to every range measurement,
         range_std_fraction: and this fraction of the range (added in quadrature).
         bearing_std_floor: standard deviation (rad) added to every bearing measurement.
-        calibration_length: metres at which the odometry noise matches the calibration drift
-            (:class:`~stsf_gym.estimators.odometry.OdometryNoise`).
+        mount_std: standard deviation (m) of the camera mount's unknown position error on the
+            robot, in x and y: one error for every frame, a considered parameter
+            (:mod:`~stsf_gym.estimators.pose_errors`).
         relocalise_after: rejected boards in a row that must agree to re-localise (0: never).
         relocalise_inflation: factor on their covariance for the restarted state.
     """
@@ -114,11 +117,11 @@ class EKFEstimator(OdometryEstimator):
         range_std_floor: float = 0.01,
         range_std_fraction: float = 0.01,
         bearing_std_floor: float = 0.002,
-        calibration_length: float = 2.0,
+        mount_std: float = 0.005,
         relocalise_after: int = 15,
         relocalise_inflation: float = 4.0,
     ) -> None:
-        super().__init__(calibration_length)
+        super().__init__()
         if not 0.0 <= min_range < max_range:
             raise ValueError(f"ekf needs 0 <= min_range < max_range, got {min_range}, {max_range}")
         if sigma_px <= 0 or min(range_std_floor, range_std_fraction, bearing_std_floor) < 0:
@@ -132,6 +135,9 @@ class EKFEstimator(OdometryEstimator):
             float(range_std_fraction),
         )
         self.bearing_std_floor = float(bearing_std_floor)
+        if mount_std < 0:
+            raise ValueError(f"ekf.mount_std must be non-negative, got {mount_std}")
+        self.mount_std = float(mount_std)
         self.relocaliser = Relocaliser(
             relocalise_after, relocalise_inflation, chi_square_gate(self.gate_probability, dof=3)
         )
@@ -162,8 +168,12 @@ class EKFEstimator(OdometryEstimator):
                         self.correct(observation)
         return self.mean, self.cov
 
-    def measurement(self, observation: LandmarkObservation) -> tuple[np.ndarray, np.ndarray]:
-        """``z = [range, bearing]`` of the board centre and its covariance ``R`` (with floors)."""
+    def measurement(
+        self, observation: LandmarkObservation
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``z = [range, bearing]`` of the board centre, its covariance ``R`` (with floors) and
+        its Jacobian by the considered parameters: a camera mounted ``m`` off puts the centre
+        ``-m`` off in the robot frame."""
         u, v = observation.z[:2]
         q = u * u + v * v
         r = math.sqrt(q)
@@ -175,7 +185,8 @@ class EKFEstimator(OdometryEstimator):
             ]
         )
         R = J @ observation.cov[:2, :2] @ J.T + floor
-        return observation.range_bearing, (R + R.T) / 2
+        by_considered = np.hstack([np.zeros((2, 3)), -J])  # odometry calibration, mount
+        return observation.range_bearing, (R + R.T) / 2, by_considered
 
     def predict_measurement(self, landmark: MapLandmark) -> tuple[np.ndarray, np.ndarray]:
         """``h(mean)`` = [range, bearing] of the map landmark's centre, and its Jacobian ``H``."""
@@ -188,31 +199,27 @@ class EKFEstimator(OdometryEstimator):
 
     def correct(self, observation: LandmarkObservation) -> bool:
         """One gated EKF update (Joseph form); ``True`` when the measurement was used."""
-        z, R = self.measurement(observation)
+        z, R, by_considered = self.measurement(observation)
         if not self.min_range <= z[0] <= self.max_range:
             self.counters["out_of_range"] += 1
             return False
         h, H = self.predict_measurement(observation.landmark)
         nu = z - h
         nu[1] = wrap_angle(nu[1])
-        S = H @ self.cov @ H.T + R
-        S_inv_nu = np.linalg.solve(S, nu)
-        if not float(nu @ S_inv_nu) <= self.gate:  # also rejects NaN
+        correction = self.errors.correct(H, R, nu, self.gate, by_considered)
+        if correction is None:
             self.counters["gated_out"] += 1
             candidate = robot_pose_from_landmark(
                 observation.landmark, observation.z, observation.cov
             )
             found = self.relocaliser.rejected(*candidate, self.mean)
             if found is not None:  # lost (kidnapped): restart from the landmarks
-                self.mean, self.cov = found
+                self.restart(*found)
                 self.counters["relocalised"] += 1
             return False
         self.relocaliser.clear()
-        K = np.linalg.solve(S, H @ self.cov).T  # P H^T S^-1 (S, P symmetric)
-        mean = self.mean + K @ nu
-        mean[2] = wrap_angle(mean[2])
-        A = np.eye(3) - K @ H
-        cov = A @ self.cov @ A.T + K @ R @ K.T
-        self.mean, self.cov = mean, (cov + cov.T) / 2
+        self.mean = self.mean + correction
+        self.mean[2] = wrap_angle(self.mean[2])
+        self.cov = self.errors.P
         self.counters["landmark_updates"] += 1
         return True

@@ -18,9 +18,10 @@ robot's pose, merged with the odometry prediction by eq. 23-24 after a Mahalanob
 (chi-square, 3 dof), so a wrong detection is rejected rather than fused; when
 ``relocalise_after`` rejected measurements agree with each other instead, the robot was moved
 (kidnapped) and the estimate starts again from them (:mod:`stsf_gym.estimators.relocalise`).
-STSF's fused track reuses frames already merged into the estimate, and shares the odometry
-since each frame with it; the merge keeps that correlation
-(:class:`~stsf_gym.estimators.carried_poses.CarriedPoses`), so each frame's information counts
+STSF's fused track reuses frames already merged into the estimate, shares the odometry since
+each frame with it, and every motion-stereo baseline depends on the same unknown wheel
+calibration as the prediction; the merge keeps those correlations
+(:class:`~stsf_gym.estimators.pose_errors.PoseErrors`), so each frame's information counts
 once. A track is dropped after ``max_gap_frames`` frames without the landmark.
 
 The two frames of a pair are the current frame and the landmark's last key frame at least
@@ -32,12 +33,9 @@ no longer describes its error.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
-from stsf_gym.estimators.carried_poses import CarriedPoses
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
@@ -54,33 +52,27 @@ from stsf_gym.geometry import compose, compose_jacobians, to_se3, wrap_angle
 
 
 class _Seen:
-    """The last frame a landmark was seen in, and the odometry since then.
-
-    The covariance of that motion, the baseline of the next pair, keeps slip and calibration
-    apart: slip is a random walk, but the wheel-radius error is one scale per wheel, so over a
-    short baseline of ``d`` metres its drift has the variance of the random walk matched at
-    ``d`` (:class:`~stsf_gym.estimators.odometry.OdometryNoise`), far below that matched at
-    the estimator's ``calibration_length``.
-    """
+    """The last frame a landmark was seen in, and the odometry since then: the motion (the
+    baseline of the next pair), its slip covariance and its Jacobian by the calibration errors
+    ``c`` (:mod:`~stsf_gym.estimators.pose_errors`), which every baseline of the episode shares
+    with the prediction."""
 
     def __init__(self, observation: LandmarkObservation) -> None:
         self.observation = observation
-        self.motion, self.distance = np.zeros(3), 0.0
-        self.slip_cov, self.scale_cov = np.zeros((3, 3)), np.zeros((3, 3))
+        self.motion, self.slip_cov, self.by_calibration = (
+            np.zeros(3),
+            np.zeros((3, 3)),
+            np.zeros((3, 3)),
+        )
         self.missed = 0
 
-    def move(self, u: np.ndarray, q_slip: np.ndarray, q_scale: np.ndarray) -> None:
-        """Compose one step's odometry increment ``u`` onto the motion: ``q_slip`` is its slip
-        covariance, ``q_scale`` its calibration covariance matched at 1 m."""
+    def move(self, u: np.ndarray, q_slip: np.ndarray, g_c: np.ndarray) -> None:
+        """Compose one step's odometry increment ``u`` (slip covariance ``q_slip``, Jacobian
+        ``g_c`` by ``c``) onto the motion."""
         j_a, j_b = compose_jacobians(self.motion, u)
         self.motion = compose(self.motion, u)
-        self.distance += float(np.hypot(*u[:2]))
         self.slip_cov = j_a @ self.slip_cov @ j_a.T + j_b @ q_slip @ j_b.T
-        self.scale_cov = j_a @ self.scale_cov @ j_a.T + j_b @ q_scale @ j_b.T
-
-    @property
-    def motion_cov(self) -> np.ndarray:
-        return self.slip_cov + self.distance * self.scale_cov
+        self.by_calibration = j_a @ self.by_calibration + j_b @ g_c
 
 
 class LandmarkFusionEstimator(OdometryEstimator):
@@ -102,9 +94,12 @@ class LandmarkFusionEstimator(OdometryEstimator):
         position_std_per_m: float = 0.005,
         relocalise_after: int = 3,
         relocalise_inflation: float = 4.0,
-        calibration_length: float = 3.0,
+        mount_std: float = 0.005,
     ) -> None:
-        super().__init__(calibration_length)
+        super().__init__()
+        if mount_std < 0:
+            raise ValueError(f"mount_std must be non-negative, got {mount_std}")
+        self.mount_std = float(mount_std)
         if weights not in ("significance", "gls"):
             raise ValueError(f"stsf weights must be 'significance' or 'gls', got {weights!r}")
         self.max_track_frames, self.weights = max_track_frames, weights
@@ -121,29 +116,20 @@ class LandmarkFusionEstimator(OdometryEstimator):
         self.detector = FrameDetector(model.pattern, set(model.landmarks))
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
-        self.carried = CarriedPoses()
-        self.noise = self.model.odometry_noise
-        self.baseline_noises = (  # slip alone; calibration alone, matched at 1 m (see _Seen)
-            replace(self.noise, radius_var=0.0),
-            replace(self.noise, slip_var_per_m=0.0, calibration_length=1.0),
-        )
         self.frame_count = 0
         self.relocaliser.clear()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
-            self.carried.predict(*self.predict(obs))
-            calibration = self.model.calibration
-            travel = calibration.wheel_travel(obs["encoders"])
-            u, _, q = odometry_step(np.zeros(3), *travel, calibration.wheelbase, self.noise)
-            q_slip, q_scale = (
-                odometry_step(np.zeros(3), *travel, calibration.wheelbase, noise)[2]
-                for noise in self.baseline_noises
-            )
+            travel = self.predict(obs)
+            noise = self.model.odometry_noise
+            u, _, G, G_c = odometry_step(np.zeros(3), *travel, self.model.calibration.wheelbase)
+            q_slip = G @ np.diag(noise.slip_variances(*travel)) @ G.T
             for seen in self.seen.values():
-                seen.move(u, q_slip, q_scale)
+                seen.move(u, q_slip, G_c)
+            q_track = q_slip + G_c @ noise.calibration_cov @ G_c.T  # for the weights (eq. 4-5)
             for track in self.tracks.values():
-                track.move(u, q)
+                track.move(u, q_track)
         if obs["image_new"]:
             self._frame(obs)
         return self.mean, self.cov
@@ -183,31 +169,48 @@ class LandmarkFusionEstimator(OdometryEstimator):
 
     def _pair_measurement(
         self, previous: _Seen, current: LandmarkObservation
-    ) -> tuple[np.ndarray, np.ndarray] | None:
-        """``z`` with its range from motion stereo between the two frames, and covariance."""
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """``z`` with its range from motion stereo between the two frames, its covariance
+        (pixels, slip, floors) and its Jacobian by the calibration errors ``c``."""
         prev_obs = previous.observation
         camera_from_robot = current.robot_from_camera[:3, :3].T
         phi = current.z[2]
         normal = camera_from_robot @ -np.array([np.cos(phi), np.sin(phi), 0.0])
-        prev_from_curr = (
-            np.linalg.inv(prev_obs.robot_from_camera)
-            @ to_se3(previous.motion)
-            @ current.robot_from_camera
-        )
-        measured = pair_range(
-            dict(zip(prev_obs.indices.tolist(), prev_obs.image_points, strict=True)),
-            dict(zip(current.indices.tolist(), current.image_points, strict=True)),
-            self.model.camera_matrix,
-            prev_from_curr,
-            normal,
-            previous.motion_cov,
-            camera_from_robot,
-            self.sigma_px,
-        )
+        points_prev = dict(zip(prev_obs.indices.tolist(), prev_obs.image_points, strict=True))
+        points_curr = dict(zip(current.indices.tolist(), current.image_points, strict=True))
+
+        def stereo(motion: np.ndarray) -> tuple[float, float] | None:
+            prev_from_curr = (
+                np.linalg.inv(prev_obs.robot_from_camera)
+                @ to_se3(motion)
+                @ current.robot_from_camera
+            )
+            return pair_range(
+                points_prev,
+                points_curr,
+                self.model.camera_matrix,
+                prev_from_curr,
+                normal,
+                previous.slip_cov,
+                camera_from_robot,
+                self.sigma_px,
+            )
+
+        measured = stereo(previous.motion)
         if measured is None:
             return None
         D, var_D = measured
-        if var_D > (self.max_relative_range_std * D) ** 2:
+        by_motion = np.zeros(3)  # dD / d(motion), by forward differences
+        for i, step in enumerate(np.eye(3) * 1e-6):
+            shifted = stereo(previous.motion + step)
+            if shifted is None:
+                return None
+            by_motion[i] = (shifted[0] - D) / 1e-6
+        by_calibration = by_motion @ previous.by_calibration  # dD / dc
+        calibration_var = (
+            by_calibration @ self.model.odometry_noise.calibration_cov @ by_calibration
+        )
+        if var_D + calibration_var > (self.max_relative_range_std * D) ** 2:
             self.counters["imprecise"] += 1  # beyond where the first-order variance holds
             return None
         # the board centre along its PnP ray, at the plane distance D from the camera
@@ -231,22 +234,29 @@ class LandmarkFusionEstimator(OdometryEstimator):
         # play): independent floors, which also keep the PnP covariance from being singular
         position_std = self.position_std_floor + self.position_std_per_m * np.hypot(*z[:2])
         cov += np.diag([position_std**2, position_std**2, self.orientation_var_floor])
-        return z, cov
+        by_range = np.append(current.robot_from_camera[:2, :3] @ (scale * ray), 0.0)  # dz / dD
+        return z, cov, np.outer(by_range, by_calibration)
 
-    def _fuse(self, current: LandmarkObservation, z: np.ndarray, cov: np.ndarray) -> None:
-        """Add the frame's measurement ``z`` to the landmark's track, fuse the track (eq. 2-5)
-        and merge the robot pose it gives with the estimate (eq. 23-24, gated, with the carried
-        correlation). A rejected frame goes to the re-localisation rule
-        (:mod:`stsf_gym.estimators.relocalise`) with the robot pose of its board alone (PnP):
-        a motion-stereo range needs the odometry, which is what may have gone wrong."""
+    def _fuse(
+        self, current: LandmarkObservation, z: np.ndarray, cov: np.ndarray, by_calibration
+    ) -> None:
+        """Add the frame's measurement ``z`` (covariance ``cov``, Jacobian ``by_calibration``
+        by ``c``) to the landmark's track, fuse the track (eq. 2-5) and merge the robot pose it
+        gives with the estimate (eq. 23-24, gated, with its correlations kept). A rejected
+        frame goes to the re-localisation rule (:mod:`stsf_gym.estimators.relocalise`) with the
+        robot pose of its board alone (PnP): a motion-stereo range needs the odometry, which is
+        what may have gone wrong."""
         landmark = current.landmark
         track = self.tracks.setdefault(landmark.id, STSFTrack(self.max_track_frames))
-        track.add(z, cov)
-        _, pose_cov = robot_pose_from_landmark(landmark, z, cov)
+        calibration_cov = self.model.odometry_noise.calibration_cov
+        track.add(z, cov + by_calibration @ calibration_cov @ by_calibration.T)
+        jac = robot_pose_jacobian(landmark, z)
         self.frame_count += 1
-        self.carried.add((landmark.id, self.frame_count), pose_cov)
-        keys = [key for key in self.carried.keys if key[0] == landmark.id]
-        self.carried.remove(keys[: len(keys) - len(track)])  # the frames the track let go
+        # a camera mounted m off puts the landmark -m off in the robot frame
+        by_considered = np.hstack([jac @ by_calibration, -jac[:, :2]])
+        self.errors.add((landmark.id, self.frame_count), jac @ cov @ jac.T, by_considered)
+        keys = [key for key in self.errors.keys if key[0] == landmark.id]
+        self.errors.remove(keys[: len(keys) - len(track)])  # the frames the track let go
         fused = track.fuse(self.weights)
         # the weights on the landmark's pose, as weights on the robot poses it gives
         jac = robot_pose_jacobian(landmark, fused.x)
@@ -257,27 +267,26 @@ class LandmarkFusionEstimator(OdometryEstimator):
         fused_pose, _ = robot_pose_from_landmark(landmark, fused.x, fused.cov)
         innovation = fused_pose - self.mean
         innovation[2] = wrap_angle(innovation[2])
-        merged = self.carried.merge(self.cov, weights, innovation, self.gate)
-        if merged is None:
+        correction = self.errors.merge(weights, innovation, self.gate)
+        if correction is None:
             self.counters["gated_out"] += 1
             self._drop_track(landmark.id)
             candidate = robot_pose_from_landmark(landmark, current.z, current.cov)
             found = self.relocaliser.rejected(*candidate, self.mean)
             if found is not None:  # lost (kidnapped): start again from the landmarks
-                self.mean, self.cov = found
+                self.restart(*found)
                 self.tracks.clear()
-                self.carried.clear()
                 self.counters["relocalised"] += 1
             return
         self.relocaliser.clear()
-        correction, self.cov = merged
         self.mean = self.mean + correction
         self.mean[2] = wrap_angle(self.mean[2])
+        self.cov = self.errors.P
         self.counters["landmark_updates"] += 1
 
     def _drop_track(self, landmark_id: int) -> None:
         self.tracks.pop(landmark_id, None)
-        self.carried.remove([key for key in self.carried.keys if key[0] == landmark_id])
+        self.errors.remove([key for key in self.errors.keys if key[0] == landmark_id])
 
 
 class ConventionalEstimator(LandmarkFusionEstimator):

@@ -10,31 +10,46 @@ import numpy as np
 
 @dataclass(frozen=True)
 class OdometryNoise:
-    """Wheel-travel noise an estimator assumes, per wheel and per step: a random walk,
-    ``var(d) = (slip_var_per_m + radius_var * calibration_length) * |d|`` for a wheel that
-    rolled ``d`` metres.
+    """The wheel-travel errors an estimator assumes.
 
-    Slip is a random walk. The wheel-radius calibration error (relative variance
-    ``radius_var``) is not: it is one unknown scale per wheel and episode, so its drift grows
-    linearly with distance, which a per-step model cannot follow. It is modelled as the random
-    walk with the same variance after ``calibration_length`` metres: a filter's covariance is
-    right at that distance, too wide before it and too narrow after. Dead reckoning should
-    match it at the length of a run; a filter corrected by landmarks at the length it drives
-    between corrections.
+    Slip is a random walk per wheel: ``var(d) = slip_var_per_m * |d|`` for a wheel that rolled
+    ``d`` metres. The calibration errors are not: one relative error per wheel radius
+    (variance ``radius_var``) and one of the wheelbase (``wheelbase_var``), drawn per episode,
+    make the drift grow *linearly* with distance. The estimators carry them as the
+    considered parameters ``c`` of :class:`~stsf_gym.estimators.pose_errors.PoseErrors`
+    (``calibration_cov``, with the Jacobian of :func:`odometry_step`).
+    :meth:`random_walk_variances` instead folds the radius error into a random walk that has
+    the same variance after ``calibration_length`` metres (right at that distance only), for a
+    per-step model (:func:`propagate`).
     """
 
     slip_var_per_m: float
     radius_var: float = 0.0
+    wheelbase_var: float = 0.0
     calibration_length: float = 5.0
 
     @classmethod
-    def from_encoders(cls, slip_std: float, radius_error_std: float, wheel_radius: float):
+    def from_encoders(
+        cls,
+        slip_std: float,
+        radius_error_std: float,
+        wheelbase_error_std: float,
+        wheel_radius: float,
+    ):
         """Matching the env's encoder model: slip ``slip_std`` rad per sqrt(rad) of rotation,
-        and a wheel-radius error of relative std ``radius_error_std`` that the robot cannot
-        know."""
-        return cls(slip_std**2 * wheel_radius, radius_error_std**2)
+        and relative wheel-radius and wheelbase errors of std ``radius_error_std`` and
+        ``wheelbase_error_std`` that the robot cannot know."""
+        return cls(slip_std**2 * wheel_radius, radius_error_std**2, wheelbase_error_std**2)
 
-    def wheel_variances(self, d_left: float, d_right: float) -> np.ndarray:
+    @property
+    def calibration_cov(self) -> np.ndarray:
+        """Covariance of ``c`` = relative errors of left radius, right radius, wheelbase."""
+        return np.diag([self.radius_var, self.radius_var, self.wheelbase_var])
+
+    def slip_variances(self, d_left: float, d_right: float) -> np.ndarray:
+        return self.slip_var_per_m * np.abs(np.array([d_left, d_right]))
+
+    def random_walk_variances(self, d_left: float, d_right: float) -> np.ndarray:
         var_per_m = self.slip_var_per_m + self.radius_var * self.calibration_length
         return var_per_m * np.abs(np.array([d_left, d_right]))
 
@@ -55,17 +70,15 @@ def integrate_wheel_travel(
 
 
 def odometry_step(
-    pose: np.ndarray,
-    d_left: float,
-    d_right: float,
-    wheelbase: float,
-    noise: OdometryNoise,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`integrate_wheel_travel`, its Jacobian ``F`` by the pose and its noise in pose
-    coordinates ``Q = G N G^T`` (``G``: Jacobian by the two wheel travels, ``N``:
-    :meth:`OdometryNoise.wheel_variances`)."""
+    pose: np.ndarray, d_left: float, d_right: float, wheelbase: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`integrate_wheel_travel` and its Jacobians: ``F`` by the pose, ``G`` by the two
+    wheel travels and ``G_c`` by the calibration errors ``c`` (:class:`OdometryNoise`): a wheel
+    whose radius is believed ``1 + c_i`` times too large reports ``d c_i`` too much travel, a
+    wheelbase believed ``1 + c_3`` times too large turns ``turn c_3`` too little."""
     distance = (d_left + d_right) / 2
-    mid = pose[2] + (d_right - d_left) / (2 * wheelbase)
+    turn = (d_right - d_left) / wheelbase
+    mid = pose[2] + turn / 2
     c, s = math.cos(mid), math.sin(mid)
     F = np.array([[1.0, 0.0, -distance * s], [0.0, 1.0, distance * c], [0.0, 0.0, 1.0]])
     k = distance / (2 * wheelbase)
@@ -76,8 +89,9 @@ def odometry_step(
             [-1 / wheelbase, 1 / wheelbase],
         ]
     )
-    Q = G @ np.diag(noise.wheel_variances(d_left, d_right)) @ G.T
-    return integrate_wheel_travel(pose, d_left, d_right, wheelbase), F, Q
+    by_turn = np.array([-distance * s / 2, distance * c / 2, 1.0])
+    G_c = np.column_stack([G[:, 0] * d_left, G[:, 1] * d_right, -turn * by_turn])
+    return integrate_wheel_travel(pose, d_left, d_right, wheelbase), F, G, G_c
 
 
 def propagate(
@@ -88,8 +102,8 @@ def propagate(
     wheelbase: float,
     noise: OdometryNoise,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`integrate_wheel_travel` with first-order covariance ``F C F^T + Q``
-    (:func:`odometry_step`)."""
-    new_pose, F, Q = odometry_step(pose, d_left, d_right, wheelbase, noise)
-    new_cov = F @ cov @ F.T + Q
+    """:func:`integrate_wheel_travel` with the per-step covariance ``F C F^T + G N G^T``, ``N``
+    from :meth:`OdometryNoise.random_walk_variances`."""
+    new_pose, F, G, _ = odometry_step(pose, d_left, d_right, wheelbase)
+    new_cov = F @ cov @ F.T + G @ np.diag(noise.random_walk_variances(d_left, d_right)) @ G.T
     return new_pose, (new_cov + new_cov.T) / 2

@@ -119,7 +119,7 @@ class Table1Run:
         self.detector = LandmarkDetector(u.config.world.landmark_pattern)
         enc = u.config.encoders
         self.noise = OdometryNoise.from_encoders(
-            enc.slip_std, enc.radius_error_std, self.robot_cfg.wheel_radius
+            enc.slip_std, enc.radius_error_std, enc.wheelbase_error_std, self.robot_cfg.wheel_radius
         )
         self.result = SeedResult()
         self.frames: list[_Frame] = []
