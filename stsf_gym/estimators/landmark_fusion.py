@@ -179,7 +179,7 @@ class LandmarkFusionEstimator(OdometryEstimator):
         points_prev = dict(zip(prev_obs.indices.tolist(), prev_obs.image_points, strict=True))
         points_curr = dict(zip(current.indices.tolist(), current.image_points, strict=True))
 
-        def stereo(motion: np.ndarray) -> tuple[float, float] | None:
+        def stereo(motion: np.ndarray, motion_cov: np.ndarray | None) -> tuple[float, float] | None:
             prev_from_curr = (
                 np.linalg.inv(prev_obs.robot_from_camera)
                 @ to_se3(motion)
@@ -191,18 +191,18 @@ class LandmarkFusionEstimator(OdometryEstimator):
                 self.model.camera_matrix,
                 prev_from_curr,
                 normal,
-                previous.slip_cov,
+                motion_cov,
                 camera_from_robot,
                 self.sigma_px,
             )
 
-        measured = stereo(previous.motion)
+        measured = stereo(previous.motion, previous.slip_cov)
         if measured is None:
             return None
         D, var_D = measured
         by_motion = np.zeros(3)  # dD / d(motion), by forward differences
         for i, step in enumerate(np.eye(3) * 1e-6):
-            shifted = stereo(previous.motion + step)
+            shifted = stereo(previous.motion + step, None)
             if shifted is None:
                 return None
             by_motion[i] = (shifted[0] - D) / 1e-6

@@ -19,12 +19,13 @@ def pair_range(
     camera_matrix: np.ndarray,
     prev_from_curr: np.ndarray,
     normal: np.ndarray,
-    motion_cov: np.ndarray,
+    motion_cov: np.ndarray | None,
     camera_from_robot: np.ndarray,
     sigma_px: float,
     min_points: int = 4,
 ) -> tuple[float, float] | None:
-    """Plane distance ``D`` from camera k and its variance, or ``None`` when not measurable.
+    """Plane distance ``D`` from camera k and its variance (0 without ``motion_cov``: ``D``
+    alone is wanted), or ``None`` when not measurable.
 
     Args:
         points_prev, points_curr: pixel of each square index in frames k-1 and k.
@@ -43,12 +44,17 @@ def pair_range(
         return np.column_stack([uv, np.full(len(common), f)])
 
     R, t = prev_from_curr[:3, :3], prev_from_curr[:3, 3]
+    q_prev, q_curr = rays(points_prev), rays(points_curr)
+    if motion_cov is None:
+        try:
+            return motion_stereo_range(q_prev, q_curr, R, t, normal), 0.0
+        except DegenerateGeometryError:
+            return None
     cov_xy = np.zeros((3, 3))
     cov_xy[:2, :2] = motion_cov[:2, :2]
     cov_t = camera_from_robot @ cov_xy @ camera_from_robot.T
     axis = camera_from_robot[:, 2]
     cov_rot = motion_cov[2, 2] * np.outer(axis, axis)
-    q_prev, q_curr = rays(points_prev), rays(points_curr)
     try:
         D = motion_stereo_range(q_prev, q_curr, R, t, normal)
         var = motion_stereo_variance(q_prev, q_curr, R, t, normal, sigma_px, cov_t, cov_rot)
