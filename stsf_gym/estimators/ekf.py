@@ -114,10 +114,10 @@ class EKFEstimator(OdometryEstimator):
         gate_probability: float = 0.99,
         min_range: float = 0.3,
         max_range: float = 15.0,
-        range_std_floor: float = 0.01,
-        range_std_fraction: float = 0.01,
+        range_std_floor: float = 0.003,
+        range_std_fraction: float = 0.005,
         bearing_std_floor: float = 0.002,
-        mount_std: float = 0.005,
+        mount_std: float = 0.003,
         relocalise_after: int = 15,
         relocalise_inflation: float = 4.0,
     ) -> None:

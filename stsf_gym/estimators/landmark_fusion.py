@@ -90,11 +90,11 @@ class LandmarkFusionEstimator(OdometryEstimator):
         min_baseline: float = 0.1,
         max_relative_range_std: float = 0.25,
         orientation_std_floor: float = 0.006,
-        position_std_floor: float = 0.01,
-        position_std_per_m: float = 0.005,
+        position_std_floor: float = 0.003,
+        position_std_per_m: float = 0.002,
         relocalise_after: int = 3,
         relocalise_inflation: float = 4.0,
-        mount_std: float = 0.005,
+        mount_std: float = 0.003,
     ) -> None:
         super().__init__()
         if mount_std < 0:
