@@ -16,7 +16,13 @@ class OdometryEstimator(PoseEstimator):
     """
 
     name = "odometry"
-    mount_std = 0.0  # m: estimators with a camera consider its mount's position error too
+
+    def __init__(self, *, mount_std: float = 0.0) -> None:
+        """``mount_std`` (m): estimators with a camera consider its mount's position error."""
+        super().__init__()
+        if not mount_std >= 0:
+            raise ValueError(f"mount_std must be non-negative, got {mount_std}")
+        self.mount_std = float(mount_std)
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)

@@ -121,7 +121,7 @@ class EKFEstimator(OdometryEstimator):
         relocalise_after: int = 15,
         relocalise_inflation: float = 4.0,
     ) -> None:
-        super().__init__()
+        super().__init__(mount_std=mount_std)
         if not 0.0 <= min_range < max_range:
             raise ValueError(f"ekf needs 0 <= min_range < max_range, got {min_range}, {max_range}")
         if sigma_px <= 0 or min(range_std_floor, range_std_fraction, bearing_std_floor) < 0:
@@ -135,9 +135,6 @@ class EKFEstimator(OdometryEstimator):
             float(range_std_fraction),
         )
         self.bearing_std_floor = float(bearing_std_floor)
-        if mount_std < 0:
-            raise ValueError(f"ekf.mount_std must be non-negative, got {mount_std}")
-        self.mount_std = float(mount_std)
         self.relocaliser = Relocaliser(
             relocalise_after, relocalise_inflation, chi_square_gate(self.gate_probability, dof=3)
         )

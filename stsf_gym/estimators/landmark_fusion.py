@@ -96,10 +96,7 @@ class LandmarkFusionEstimator(OdometryEstimator):
         relocalise_inflation: float = 4.0,
         mount_std: float = 0.003,
     ) -> None:
-        super().__init__()
-        if mount_std < 0:
-            raise ValueError(f"mount_std must be non-negative, got {mount_std}")
-        self.mount_std = float(mount_std)
+        super().__init__(mount_std=mount_std)
         if weights not in ("significance", "gls"):
             raise ValueError(f"stsf weights must be 'significance' or 'gls', got {weights!r}")
         self.max_track_frames, self.weights = max_track_frames, weights
