@@ -158,7 +158,7 @@ class CameraConfig:
     rate_hz: Positive
     near: Positive
     far: Positive
-    renderer: Literal["auto", "egl", "tiny"]
+    renderer: Literal["auto", "gl", "egl", "tiny"]
     pan_deg: Degrees
     tilt_deg: Degrees
     control: Literal["none", "pan", "pan_tilt"]
