@@ -206,6 +206,10 @@ class Simulator:
             raise RuntimeError("this simulator was built without a renderer (camera disabled)")
         if self._gl is not None:
             return self._gl.render(width, height, view, projection)
+        if self.renderer == "tiny":  # its rasteriser draws half a pixel right and up
+            shift = np.eye(4)
+            shift[:2, 3] = -1.0 / width, -1.0 / height
+            projection = shift @ projection
         flag = (
             pybullet.ER_BULLET_HARDWARE_OPENGL
             if self.renderer == "egl"

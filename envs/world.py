@@ -12,6 +12,7 @@ import numpy as np
 
 from envs.config import LandmarkSpec, WorldConfig
 from envs.scene import Board, Box, Cylinder
+from envs.sensors.camera import PinholeCamera
 from envs.simulator import Simulator
 from stsf_gym.vision.landmarks import (
     board_corners,
@@ -23,6 +24,7 @@ from stsf_gym.vision.landmarks import (
 WALL_RGBA = (0.78, 0.76, 0.72, 1.0)
 FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
 OBSTACLE_RGBA = (0.55, 0.35, 0.2, 1.0)
+RAY_CLEARANCE = 0.1  # m
 BOARD_OFFSET = 0.02  # landmark board in front of the wall face (m), clear of depth fighting
 
 
@@ -47,6 +49,10 @@ class Landmark:
     def to_world(self, plane_xy: np.ndarray) -> np.ndarray:
         """World points of landmark-plane coordinates (..., 2)."""
         return plane_to_world(self.centre, self.right, self.up, plane_xy)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
 
 
 def plane_to_world(centre, right, up, plane_xy: np.ndarray) -> np.ndarray:
@@ -90,6 +96,28 @@ class CorridorWorld:
         pattern = self.cfg.landmark_pattern
         texture = landmark_image(spec.id, pattern)
         return self.sim.add(Board(centre, right, up, normal, pattern.size, texture))
+
+    def landmarks_in_view(self, camera: PinholeCamera, pose: np.ndarray) -> list[int]:
+        """Ids of landmarks wholly inside the frame of ``camera`` at world-from-camera
+        ``pose``, facing it, present (a fault may remove one) and not occluded."""
+        eye = pose[:3, 3]
+        candidates = []
+        for landmark in self.landmarks:
+            facing = np.dot(landmark.normal, eye - landmark.centre) > 0
+            if not (facing and self.board_visible(self.boards[landmark.id])):
+                continue
+            uv = camera.project(pose, landmark.board_corners)
+            inside = np.all((uv >= -0.5) & (uv <= (camera.width - 0.5, camera.height - 0.5)))
+            if inside and np.linalg.norm(landmark.centre - eye) < camera.far:
+                candidates.append(landmark)
+        if not candidates:
+            return []
+        # rays start a little ahead of the optical centre, which sits on the robot's own mast
+        starts = [eye + RAY_CLEARANCE * _unit(lm.centre - eye) for lm in candidates]
+        hits = self.sim.client.rayTestBatch(
+            [p.tolist() for p in starts], [lm.centre.tolist() for lm in candidates]
+        )
+        return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
 
     def board_visible(self, body: int) -> bool:
         return body not in self.sim.scene.hidden

@@ -227,7 +227,7 @@ def test_images_are_bit_identical_per_renderer_serial_and_parallel():
     rasterise differently, so their images differ."""
     soak = _soak_module()
     renderers = _renderers_here()
-    camera = {"camera__width": 64, "camera__height": 48, "camera__noise_std": 0.0}
+    camera = {"camera__width": 64, "camera__height": 48, "camera__profile": "ideal"}
     hashes = {}
     for renderer in renderers:
         report = soak.soak(60, 2, seed=1, env_kwargs={**camera, "camera__renderer": renderer})

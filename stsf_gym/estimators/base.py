@@ -17,6 +17,7 @@ import numpy as np
 from scipy.special import gammaincinv
 
 from envs.sensors.encoders import OdometryCalibration
+from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.estimators.odometry import OdometryNoise
 
 
@@ -32,10 +33,16 @@ class MapLandmark:
 
 @dataclass(frozen=True)
 class SensorModel:
-    """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map."""
+    """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map.
+
+    ``camera_calibration`` is the camera as the robot believes it is (K and distortion, with
+    this episode's calibration error); detections are undistorted with it, so the estimators
+    use ``camera_matrix`` (its K) as an ideal pinhole camera.
+    """
 
     calibration: OdometryCalibration
     odometry_noise: OdometryNoise
+    camera_calibration: CameraCalibration
     camera_matrix: np.ndarray
     image_size: tuple[int, int]  # width, height
     robot_from_camera: Callable[[float, float], np.ndarray]
@@ -56,7 +63,8 @@ class SensorModel:
                 cfg.encoders.wheelbase_error_std,
                 cfg.robot.wheel_radius,
             ),
-            camera_matrix=u.camera_matrix,
+            camera_calibration=u.camera_calibration,
+            camera_matrix=u.camera_calibration.K,
             image_size=(cfg.camera.width, cfg.camera.height),
             robot_from_camera=u.robot_from_camera,
             landmarks={
