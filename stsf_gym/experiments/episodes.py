@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.episode_env import make_episode_env
+from stsf_gym.estimators import estimator_settings
 from stsf_gym.experiments.cache import run_cached
+from stsf_gym.wrappers import TRUTH
 
 TRACE_EVERY = 10  # steps between stored trajectory samples
 RESULT_VERSION = 4  # bumped when EpisodeResult changes, so older episode files are rerun
@@ -63,6 +65,12 @@ class EpisodeResult:
     finite: bool  # pose and covariance finite at every step
     min_cov_eigenvalue: float  # smallest eigenvalue of the covariance over the steps
     stage_ms_per_step: dict[str, float]
+
+
+def estimator_options(source: str) -> dict:
+    """The settings of pose source ``source`` (``configs/estimators/<name>.yaml``) as plain
+    values, recorded with every episode (part of its cache key); ``truth`` has none."""
+    return {} if source == TRUTH else asdict(estimator_settings(source))
 
 
 def agent_label(agent: str) -> str:
