@@ -85,7 +85,8 @@ def dead_reckoning(model: SensorModel, pose: np.ndarray) -> OdometryEstimator:
     return odometry
 
 
-def restart(odometry: OdometryEstimator) -> None:
+def restart_at_origin(odometry: OdometryEstimator) -> None:
+    """Measure the motion from here on: the origin, with no uncertainty."""
     odometry.restart(np.zeros(3), np.zeros((3, 3)))
 
 
@@ -181,7 +182,7 @@ class Table1Run:
 
     def _sweep(self, location: int, direction: float) -> None:
         heading = direction * math.pi / 2
-        restart(self.since_frame)
+        restart_at_origin(self.since_frame)
         count = len(self.frames)
         while len(self.frames) - count < self.cfg.frames_per_location:
             steer = -2.0 * wrap_angle(self.info["true_pose"][2] - heading)
@@ -199,7 +200,7 @@ class Table1Run:
             float(pose[2]),
             self.since_frame.cov.copy(),
         )
-        restart(self.since_frame)
+        restart_at_origin(self.since_frame)
         previous = self.frames[-1] if self.frames else None
         self.frames.append(frame)
         camera = self.info["camera_pose"][:3, 3]
@@ -246,7 +247,7 @@ class Table1Run:
             self.steps.append(self._range_step(self.last_heading))
         self.track.append((D, var))
         self.last_heading = frame.heading
-        restart(self.since_measurement)
+        restart_at_origin(self.since_measurement)
         ranges, variances = zip(*self.track, strict=True)
         steps, step_variances = zip(*self.steps, strict=True) if self.steps else ((), ())
         rho, cov = to_inverse_range(
