@@ -43,6 +43,10 @@ def sensor_model(env: gym.Env) -> SensorModel:
             cfg.robot.wheel_radius,
         ),
         camera_calibration=u.camera_calibration,
+        camera_calibration_std=(
+            cfg.camera.calibration_error.principal_point_std_px / u.camera_calibration.K[0, 0],
+            cfg.camera.calibration_error.focal_std,
+        ),
         camera_matrix=u.camera_calibration.K,
         image_size=(cfg.camera.width, cfg.camera.height),
         robot_from_camera=u.robot_from_camera,

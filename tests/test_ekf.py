@@ -99,7 +99,8 @@ def test_ekf_is_not_wildly_overconfident(straight_run):
 def test_ekf_counts_updates_and_times_stages(straight_run):
     counters = straight_run["counters"]
     assert counters["frames"] == straight_run["frames"] > 250
-    assert counters["landmark_updates"] > 200
+    # the paper's camera finds a board out to about 5 m: in about a third of these frames
+    assert counters["landmark_updates"] > 0.3 * counters["frames"]
     assert counters.get("gated_out", 0) < 0.05 * counters["landmark_updates"]
     assert counters["detections"] == (
         counters["landmark_updates"]
