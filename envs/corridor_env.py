@@ -44,7 +44,10 @@ class CorridorEnv(gym.Env):
 
     - ``image``: ``Box(0, 255, (H, W, 3), uint8)``, the latest camera frame (default 320x240);
       frames are taken at ``camera.rate_hz`` of simulated time, independent of the control
-      period, so between frames the previous one is repeated.
+      period, so between frames the previous one is repeated. The frame is rendered
+      (``camera.renderer``) through the lens and sensor of ``camera.profile``
+      (:mod:`envs.sensors.rendered_camera`: distortion, vignetting, defocus, motion blur over
+      the exposure, gain and noise).
     - ``image_new``: ``Discrete(2)``, 1 when a camera frame was taken during this step (or reset).
     - With ``camera.mode: fast`` (no rendering; :mod:`envs.sensors.fast_camera`) ``image`` is
       replaced by the frame's simulated detections: ``landmark_ids`` ``Box((L,), int64)``
@@ -73,8 +76,15 @@ class CorridorEnv(gym.Env):
 
     ## Info
     ``true_pose`` ([x, y, yaw], privileged: for evaluation only), ``camera_pose`` (4x4
-    world-from-camera, OpenCV axes, of the frame in ``image``), ``collision``,
-    ``distance_travelled`` (m, true), ``progress`` (m along the path), ``sim_time`` (s).
+    world-from-camera, OpenCV axes, of the frame in ``image``, at the middle of its exposure),
+    ``collision``, ``distance_travelled`` (m, true), ``progress`` (m along the path),
+    ``sim_time`` (s).
+
+    ## Camera
+    ``camera_matrix`` (K) and ``dist_coeffs`` (OpenCV ``k1 k2 p1 p2 k3``) are the TRUE camera of
+    ``image``, for evaluation; ``camera_calibration`` is what the robot believes (K and
+    distortion with this episode's calibration error, drawn at reset from ``np_random``), the
+    only calibration an estimator may use. ``renderer`` names the renderer in use.
 
     ## Arguments
     - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
