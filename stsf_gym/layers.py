@@ -7,7 +7,7 @@ then any violation, and exits with status 1 when there is one. The rules (:data:
     stsf_gym.cli, stsf_gym.experiments -> agents -> stsf_gym.wrappers -> stsf_gym.estimators
         -> stsf_gym.fusion / vision / geometry;   envs -> stsf_gym.vision.landmarks / geometry
 
-plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``). Also
+plus the neutral leaves both sides share (``camera_model``, ``validation``, ``yaml_layers``). Also
 checked: no module imports another's private (``_name``) name, and no import cycle between
 modules.
 """
@@ -21,7 +21,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("stsf_gym", "envs", "agents")
 EXTERNAL = ("pybullet", "pybullet_utils")  # third-party layers the rules name
-LEAVES = ("stsf_gym.geometry", "stsf_gym.validation", "stsf_gym.yaml_layers", "stsf_gym.io")
+LEAVES = (
+    "stsf_gym.geometry",
+    "stsf_gym.camera_model",
+    "stsf_gym.validation",
+    "stsf_gym.yaml_layers",
+    "stsf_gym.io",
+)
 CORE = (*LEAVES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
 ESTIMATION = (*CORE, "stsf_gym.estimators")
 EPISODE = (*ESTIMATION, "stsf_gym", "stsf_gym.wrappers", "stsf_gym.episode_env", "envs")
@@ -37,13 +43,14 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.episode_env": ("stsf_gym.wrappers", "envs"),
     "stsf_gym.wrappers": ESTIMATION,
     "stsf_gym": (),  # the package's __init__: registration only
-    "envs": ("stsf_gym.geometry", "stsf_gym.vision.landmarks", *LEAVES[1:], *EXTERNAL),
+    "envs": (*LEAVES[:4], "stsf_gym.vision.landmarks", *EXTERNAL),
     "stsf_gym.estimators": CORE,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
     "stsf_gym.vision": ("stsf_gym.vision.landmarks", "stsf_gym.geometry"),
     "stsf_gym.vision.landmarks": (),
     "stsf_gym.yaml_layers": ("stsf_gym.validation",),
     "stsf_gym.geometry": (),
+    "stsf_gym.camera_model": (),
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
     "stsf_gym.layers": (),

@@ -29,7 +29,8 @@ POSE_SOURCES = (*ESTIMATORS, TRUTH)
 
 def sensor_model(env: gym.Env) -> SensorModel:
     """The model of ``env``'s robot for the current episode (call after each reset): its
-    believed odometry calibration, the encoder noise, camera, mount and landmark map."""
+    believed odometry calibration, the encoder noise, its believed camera calibration
+    (``env.unwrapped.camera_calibration``), mount and landmark map."""
     u = env.unwrapped
     cfg = u.config
     return SensorModel(
@@ -40,7 +41,8 @@ def sensor_model(env: gym.Env) -> SensorModel:
             cfg.encoders.wheelbase_error_std,
             cfg.robot.wheel_radius,
         ),
-        camera_matrix=u.camera_matrix,
+        camera_calibration=u.camera_calibration,
+        camera_matrix=u.camera_calibration.K,
         image_size=(cfg.camera.width, cfg.camera.height),
         robot_from_camera=u.robot_from_camera,
         landmarks={

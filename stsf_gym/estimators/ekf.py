@@ -126,7 +126,7 @@ class EKFEstimator(OdometryEstimator):
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = FrameDetector(model.pattern, set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
         self.relocaliser.clear()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:

@@ -99,7 +99,7 @@ class LandmarkFusionEstimator(OdometryEstimator):
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = FrameDetector(model.pattern, set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
         self.frame_count = 0
