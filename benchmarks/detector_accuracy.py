@@ -56,7 +56,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--height", type=int, default=240)
     p.add_argument("--vfov", type=float, default=45.0, help="vertical field of view (deg)")
     p.add_argument("--near", type=float, default=None, help="camera near plane (m)")
-    p.add_argument("--profile", default=None, help="camera profile (configs/cameras; default paper)")
+    p.add_argument(
+        "--profile", default=None, help="camera profile (configs/cameras; default paper)"
+    )
     p.add_argument("--noise", type=float, default=None, help="sensor read noise (grey levels)")
     p.add_argument(
         "--min-board-px",

@@ -7,7 +7,8 @@ then any violation, and exits with status 1 when there is one. The rules (:data:
     stsf_gym.cli, stsf_gym.experiments -> agents -> stsf_gym.wrappers -> stsf_gym.estimators
         -> stsf_gym.fusion / vision / geometry;   envs -> stsf_gym.vision.landmarks / geometry
 
-plus the neutral leaves both sides share (``camera_model``, ``validation``, ``yaml_layers``). Also
+plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``,
+``camera_model``: the lens model the simulator renders with and the estimators undistort with). Also
 checked: no module imports another's private (``_name``) name, and no import cycle between
 modules.
 """
@@ -23,10 +24,10 @@ PACKAGES = ("stsf_gym", "envs", "agents")
 EXTERNAL = ("pybullet", "pybullet_utils")  # third-party layers the rules name
 LEAVES = (
     "stsf_gym.geometry",
-    "stsf_gym.camera_model",
     "stsf_gym.validation",
     "stsf_gym.yaml_layers",
     "stsf_gym.io",
+    "stsf_gym.camera_model",
 )
 CORE = (*LEAVES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
 ESTIMATION = (*CORE, "stsf_gym.estimators")
@@ -43,16 +44,16 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.episode_env": ("stsf_gym.wrappers", "envs"),
     "stsf_gym.wrappers": ESTIMATION,
     "stsf_gym": (),  # the package's __init__: registration only
-    "envs": (*LEAVES[:4], "stsf_gym.vision.landmarks", *EXTERNAL),
+    "envs": ("stsf_gym.geometry", "stsf_gym.vision.landmarks", *LEAVES[1:], *EXTERNAL),
     "stsf_gym.estimators": CORE,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
     "stsf_gym.vision": ("stsf_gym.vision.landmarks", "stsf_gym.geometry"),
     "stsf_gym.vision.landmarks": (),
     "stsf_gym.yaml_layers": ("stsf_gym.validation",),
     "stsf_gym.geometry": (),
-    "stsf_gym.camera_model": (),
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
+    "stsf_gym.camera_model": (),
     "stsf_gym.layers": (),
 }
 

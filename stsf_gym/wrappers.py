@@ -29,8 +29,9 @@ POSE_SOURCES = (*ESTIMATORS, TRUTH)
 
 def sensor_model(env: gym.Env) -> SensorModel:
     """The model of ``env``'s robot for the current episode (call after each reset): its
-    believed odometry calibration, the encoder noise, its believed camera calibration
-    (``env.unwrapped.camera_calibration``), mount and landmark map."""
+    believed odometry calibration, the encoder noise, believed camera calibration, mount and
+    landmark map (never the true camera: ``camera_matrix`` and ``dist_coeffs`` are for
+    evaluation)."""
     u = env.unwrapped
     cfg = u.config
     return SensorModel(

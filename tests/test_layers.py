@@ -44,10 +44,10 @@ def test_the_import_graph_points_one_way():
         assert not graph[core] & {"envs", "pybullet", "agents", "stsf_gym.wrappers"}, core
     assert graph["envs"] - {"pybullet", "pybullet_utils"} <= {
         "stsf_gym.geometry",
-        "stsf_gym.camera_model",
         "stsf_gym.vision.landmarks",
         "stsf_gym.validation",
         "stsf_gym.yaml_layers",
+        "stsf_gym.camera_model",
     }
     assert "envs" not in graph["stsf_gym.wrappers"]  # the episode env builder joins the two
 

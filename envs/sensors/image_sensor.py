@@ -3,7 +3,8 @@
 A rendered frame is the scene's radiance in grey levels. :class:`ImageSensor` multiplies it by
 the lens's relative illumination (vignetting) and by a per-frame exposure gain ``1 + g``,
 ``g ~ N(0, gain_std^2)``, adds noise of variance ``read_noise^2 + shot_noise * I`` (read noise
-and photon shot noise, Gaussian at these counts) and rounds to 8 bits.
+and photon shot noise, Gaussian at these counts; ``I`` the signal rounded to a grey level for
+the variance) and rounds to 8 bits.
 
 Drawing a fresh normal deviate for every pixel of every frame costs more than the rest of the
 frame's handling, so the sensor draws ``BANK_FRAMES`` frames' worth of standard normal
@@ -13,6 +14,7 @@ offset of that bank: within a frame the noise is independent per pixel and chann
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from envs.config import SensorConfig
@@ -21,12 +23,17 @@ BANK_FRAMES = 4
 
 
 class ImageSensor:
-    """``sensor(radiance, rng) -> uint8 image`` for frames of ``shape`` (H, W, 3)."""
+    """``sensor(radiance, rng) -> uint8 image`` for frames of ``shape`` (H, W, 3); ``gain`` is
+    the lens's relative illumination (H, W, 1)."""
 
     def __init__(self, cfg: SensorConfig, shape: tuple[int, ...], gain: np.ndarray) -> None:
-        self.cfg, self.shape, self.gain = cfg, shape, gain
+        self.cfg, self.shape = cfg, shape
+        self.gain = np.ascontiguousarray(np.broadcast_to(gain, shape), np.float32)
         self.size = int(np.prod(shape))
         self.noisy = cfg.read_noise > 0 or cfg.shot_noise > 0
+        # noise std (grey levels) of each whole grey level of signal
+        levels = np.arange(256, dtype=np.float32)
+        self.std = np.sqrt(cfg.read_noise**2 + cfg.shot_noise * levels).astype(np.float32)
         self.bank = np.zeros(0, np.float32)
 
     def reset(self, rng: np.random.Generator) -> None:
@@ -36,13 +43,11 @@ class ImageSensor:
     def __call__(self, radiance: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         cfg = self.cfg
         exposure = 1.0 + cfg.gain_std * rng.standard_normal() if cfg.gain_std > 0 else 1.0
-        signal = radiance.astype(np.float32) * (self.gain * np.float32(exposure))
-        if self.noisy:
-            offset = int(rng.integers(len(self.bank) - self.size + 1))
-            normal = self.bank[offset : offset + self.size].reshape(self.shape)
-            if cfg.shot_noise > 0:
-                std = np.sqrt(cfg.read_noise**2 + cfg.shot_noise * np.maximum(signal, 0.0))
-            else:
-                std = np.float32(cfg.read_noise)
-            signal += std * normal
-        return np.clip(np.rint(signal), 0, 255).astype(np.uint8)
+        # OpenCV's arithmetic: one pass each, and saturating, rounding casts to 8 bits
+        signal = cv2.multiply(radiance, self.gain, scale=exposure, dtype=cv2.CV_32F)
+        if not self.noisy:
+            return cv2.add(signal, 0.0, dtype=cv2.CV_8U)
+        offset = int(rng.integers(len(self.bank) - self.size + 1))
+        normal = self.bank[offset : offset + self.size].reshape(self.shape)
+        std = cv2.LUT(cv2.convertScaleAbs(signal), self.std)  # signal >= 0: abs changes nothing
+        return cv2.add(signal, cv2.multiply(std, normal), dtype=cv2.CV_8U)

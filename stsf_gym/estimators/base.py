@@ -40,8 +40,7 @@ class SensorModel:
     this episode's calibration error); detections are undistorted with it, so the estimators
     use ``camera_matrix`` (its K) as an ideal pinhole camera. Built from an env by
     :func:`stsf_gym.wrappers.sensor_model` (the one place that reads an env), or from logged
-    data by hand.
-    """
+    data by hand."""
 
     calibration: OdometryCalibration
     odometry_noise: OdometryNoise
