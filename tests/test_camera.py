@@ -126,9 +126,9 @@ def test_feature_error_matches_the_profile(make_env, profile):
     episode's believed calibration), err by the profile's ``feature_rms_px`` within 20 %; the
     ideal camera stays under 0.1 px. Each view is a new episode: a new calibration draw."""
     env = make_env("stsf_gym/Straight10m-v0", world=room_world(), camera__profile=profile)
-    records = detection_records(env, np.random.default_rng(3), distances=(1.5, 2.0, 3.0))
+    records = detection_records(env, np.random.default_rng(3), repeats=2)  # 1-8 m, 0-60 deg
     summary = summarise_records(records)
-    assert summary["detection_rate"] > 0.8
+    assert summary["detection_rate"] > 0.5
     target = env.unwrapped.config.camera.feature_rms_px
     assert summary["calibrated_feature_rms_px"] == pytest.approx(target, rel=0.2)
     if profile == "ideal":
