@@ -235,7 +235,8 @@ class CorridorEnv(gym.Env):
         self.camera_calibration = believed_calibration(
             self.camera.calibration, self.config.camera.calibration_error, self.np_random
         )
-        self.camera_sensor.reset(self.np_random)
+        if self.config.camera.enabled:
+            self.camera_sensor.reset(self.np_random)
         self._time = 0.0
         self._yaw_command = 0.0
         self._distance = 0.0
@@ -324,7 +325,7 @@ class CorridorEnv(gym.Env):
             eye = np.array([x, y, 1.6]) - 1.8 * heading
             pose = look_at(eye, np.array([x, y, 0.5]) + 1.0 * heading, np.array([0.0, 0.0, 1.0]))
         view_camera = PinholeCamera(cfg.width, cfg.height, RENDER_VFOV_DEG, 0.05, 100.0)
-        return self.sim.render(
+        return self.sim.render_bodies(
             cfg.width, cfg.height, view_matrix(pose), view_camera.projection_matrix()
         )
 

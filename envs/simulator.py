@@ -201,19 +201,27 @@ class Simulator:
     def render(
         self, width: int, height: int, view: np.ndarray, projection: np.ndarray
     ) -> np.ndarray:
-        """RGB uint8 image (height, width, 3) for OpenGL 4x4 view and projection matrices."""
+        """The robot camera's RGB uint8 image (height, width, 3) for OpenGL 4x4 view and
+        projection matrices, drawn by :attr:`renderer` (``gl`` draws the scene, not the robot)."""
         if self.renderer == "none":
             raise RuntimeError("this simulator was built without a renderer (camera disabled)")
         if self._gl is not None:
             return self._gl.render(width, height, view, projection)
-        if self.renderer == "tiny":  # its rasteriser draws half a pixel right and up
+        return self.render_bodies(width, height, view, projection)
+
+    def render_bodies(
+        self, width: int, height: int, view: np.ndarray, projection: np.ndarray
+    ) -> np.ndarray:
+        """Every PyBullet body, the robot's included (a view for people), with PyBullet's own
+        renderer: its EGL plugin when loaded, TinyRenderer otherwise."""
+        if self.renderer != "egl":  # TinyRenderer draws half a pixel right and up
             shift = np.eye(4)
             shift[:2, 3] = -1.0 / width, -1.0 / height
             projection = shift @ projection
         flag = (
             pybullet.ER_BULLET_HARDWARE_OPENGL
             if self.renderer == "egl"
-            else (pybullet.ER_TINY_RENDERER)
+            else pybullet.ER_TINY_RENDERER
         )
         _, _, rgba, _, _ = self.client.getCameraImage(
             width,
