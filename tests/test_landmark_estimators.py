@@ -81,10 +81,15 @@ def test_wrong_landmark_is_gated_out():
         {"centre": np.array([5.0, 0.0, 0.9]), "normal": np.array([-1.0, 0.0, 0.0]), "id": 1},
     )()
     estimator.tracks, estimator.frame_count = {}, 0
-    estimator.errors = PoseErrors(estimator.cov, np.zeros((5, 5)))
+    estimator.errors = PoseErrors(estimator.cov, np.zeros((7, 7)))
     estimator.model = SimpleNamespace(odometry_noise=OdometryNoise(0.0))
     z, cov = np.array([2.0, 0.0, math.pi]), np.diag([1e-4, 1e-4, 1e-4])
-    estimator._fuse(SimpleNamespace(landmark=landmark, z=z, cov=cov), z, cov, np.zeros((3, 3)))
+    estimator._fuse(
+        SimpleNamespace(landmark=landmark, z=z, cov=cov, by_camera=lambda: np.zeros((3, 2))),
+        z,
+        cov,
+        np.zeros((3, 3)),
+    )
     assert estimator.counters["gated_out"] == 1
     np.testing.assert_array_equal(estimator.mean, [2.0, 0.0, 0.0])
     assert estimator.errors.keys == [] and estimator.tracks == {}
