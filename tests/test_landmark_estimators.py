@@ -94,7 +94,12 @@ def test_wrong_landmark_is_gated_out():
     np.testing.assert_array_equal(estimator.mean, [2.0, 0.0, 0.0])
     assert estimator.errors.keys == [] and estimator.tracks == {}
     z = np.array([3.0, 0.01, math.pi])
-    estimator._fuse(SimpleNamespace(landmark=landmark, z=z, cov=cov), z, cov, np.zeros((3, 3)))
+    estimator._fuse(
+        SimpleNamespace(landmark=landmark, z=z, cov=cov, by_camera=lambda: np.zeros((3, 2))),
+        z,
+        cov,
+        np.zeros((3, 3)),
+    )
     assert estimator.counters["landmark_updates"] == 1
 
 
