@@ -18,15 +18,28 @@ ESTIMATORS: dict[str, str] = {
     "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
 }
+#: Privileged pose sources built like estimators but handed the true pose (``see``) by the
+#: wrapper: for the accuracy curve only, never a real estimator.
+PRIVILEGED: dict[str, str] = {
+    "degraded-truth": "stsf_gym.estimators.degraded_truth:DegradedTruth",
+}
 
-__all__ = ["ESTIMATORS", "MapLandmark", "PoseEstimator", "SensorModel", "make_estimator"]
+__all__ = [
+    "ESTIMATORS",
+    "PRIVILEGED",
+    "MapLandmark",
+    "PoseEstimator",
+    "SensorModel",
+    "make_estimator",
+]
 
 
 def make_estimator(name: str, **options) -> PoseEstimator:
     """A fresh estimator ``name`` with options from its YAML file overridden by ``options``."""
-    if name not in ESTIMATORS:
-        raise ValueError(f"unknown estimator {name!r}; known: {', '.join(sorted(ESTIMATORS))}")
-    module, _, class_name = ESTIMATORS[name].partition(":")
+    known = {**ESTIMATORS, **PRIVILEGED}
+    if name not in known:
+        raise ValueError(f"unknown estimator {name!r}; known: {', '.join(sorted(known))}")
+    module, _, class_name = known[name].partition(":")
     cls = getattr(importlib.import_module(module), class_name)
     path = CONFIG_DIR / "estimators" / f"{name}.yaml"
     merged = {**(read_yaml(path) if path.is_file() else {}), **options}
