@@ -32,7 +32,8 @@ def _common(
 
 
 def _demo(args: argparse.Namespace) -> dict:
-    from stsf_gym.experiments.demo import run_demo
+    from stsf_gym.experiments.demo import COLUMNS, run_demo
+    from stsf_gym.results import rendered
 
     _check_counts(args)
     env = _env_overrides(args)
@@ -46,10 +47,11 @@ def _demo(args: argparse.Namespace) -> dict:
         from rich.table import Table
 
         table = Table(title=f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})")
-        for column in summary["table"][0]:
+        cells = [rendered(row, COLUMNS) for row in summary["rows"]]
+        for column in cells[0]:
             table.add_column(column)
-        for row in summary["table"]:
-            table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row.values()))
+        for row in cells:
+            table.add_row(*row.values())
         console = Console()
         console.print(table)
         console.print(

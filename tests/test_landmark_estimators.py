@@ -13,8 +13,8 @@ from stsf_gym.estimators.landmark_fusion import ConventionalEstimator
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.pose_errors import PoseErrors
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
-from stsf_gym.experiments.evaluate import nees_consistency
 from stsf_gym.experiments.figures import PATH_ONLY
+from stsf_gym.experiments.scoring import nees_consistency
 from stsf_gym.wrappers import PoseEstimateWrapper
 
 STEPS = 450  # about 5 m at 12.2 cm/s

@@ -4,9 +4,9 @@
 agent on each pose source; ``{estimator}`` in a model path is replaced by the pose source, so
 each source is driven by the agent trained on it. Every pair runs the same seeded episodes as
 :func:`stsf_gym.experiments.evaluate.evaluate` (same env, wrapper and scoring), in parallel,
-with resume. Writes ``comparison.json``, ``comparison.md`` (one row per pair: success rate,
-collisions, errors, NEES, ...) and ``comparison.png`` (success rate and RMS position error per
-pair).
+with resume. Writes ``comparison.json`` (the results schema: numbers), ``comparison.md`` (one
+row per pair: success rate, collisions, ATE, RPE, NEES, ...) and ``comparison.png`` (success
+rate and RMS position error per pair).
 """
 
 from __future__ import annotations
@@ -16,20 +16,23 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
-from stsf_gym.experiments.evaluate import _pyplot, estimator_options, summarise
+from stsf_gym.experiments.evaluate import _pyplot, estimator_options
+from stsf_gym.experiments.scoring import summarise
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.results import SCHEMA_VERSION, rendered
 
 SUMMARY_COLUMNS = (
     "agent",
     "estimator",
     "episodes",
-    "success rate",
-    "collisions",
-    "distance before failure (m)",
-    "final error (m)",
-    "RMS error (m)",
-    "RMS heading error (deg)",
-    "NEES",
+    "success_rate",
+    "collision_rate",
+    "distance_before_failure_m",
+    "ate_rmse_m",
+    "rpe_trans_m_per_m",
+    "final_error_m",
+    "rms_heading_error_deg",
+    "nees_mean",
 )
 
 
@@ -72,15 +75,16 @@ def compare(
         ]
         for a, e in pairs
     }
-    rows = [{"agent": a, **summarise(e, episodes)} for (a, e), episodes in by_pair.items()]
+    rows = [summarise(e, episodes, a) for (a, e), episodes in by_pair.items()]
     summary = {
+        "schema_version": SCHEMA_VERSION,
         "world": world,
         "agents": agents,
         "seeds": [seed, seed + seeds - 1],
         "rows": rows,
     }
     write_json(out / "comparison.json", summary)
-    table = markdown_table([{k: row[k] for k in SUMMARY_COLUMNS} for row in rows])
+    table = markdown_table([rendered(row, SUMMARY_COLUMNS) for row in rows])
     write_atomic(out / "comparison.md", f"# Agents x pose sources on {world}\n\n{table}")
     summary["figures"] = [str(plot_comparison(by_pair, out / "comparison.png"))]
     return summary

@@ -1,23 +1,26 @@
 """``stsf-gym evaluate``: an agent driving on each estimator's pose, over seeded episodes.
 
-Writes ``results.json``, ``results.md`` (one row per estimator), ``trajectories.png`` (true
-vs estimated paths over the map, with 2-sigma ellipses) and ``errors.png`` (position and
-heading error against distance driven). Finished episodes are kept in ``episodes/`` and
-reused by a rerun with the same ``--out``. With fault files, every fault set runs on every
-estimator instead (:mod:`stsf_gym.experiments.fault_runs`).
+Writes ``results.json`` (numbers, :mod:`stsf_gym.results`), ``results.md`` (one row per
+estimator, rendered from it), ``trajectories.png`` (true vs estimated paths over the map, with
+2-sigma ellipses), ``errors.png`` (position and heading error against distance driven),
+``nees.png`` (NEES over time with its chi-square bounds) and each episode's TUM trajectories
+(``episodes/trajectories/<episode>/{truth,estimate}.txt``). Finished episodes are kept in
+``episodes/`` and reused by a rerun with the same ``--out``. With fault files, every fault
+set runs on every estimator instead (:mod:`stsf_gym.experiments.fault_runs`).
 """
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import chi2
 
 from envs.config import CONFIG_DIR, read_yaml
+from stsf_gym.experiments.consistency_plot import plot_nees
 from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
+from stsf_gym.experiments.scoring import summarise
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.results import SCHEMA_VERSION, rendered
 
 
 def evaluate(
@@ -53,8 +56,14 @@ def evaluate(
     ]
     results = run_episodes(specs, out / "episodes", workers, desc=f"evaluate {world}")
     by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
-    rows = [summarise(name, episodes) for name, episodes in by_estimator.items()]
-    summary = {"world": world, "agent": agent, "seeds": [seed, seed + seeds - 1], "rows": rows}
+    rows = [summarise(name, episodes, agent) for name, episodes in by_estimator.items()]
+    summary = {
+        "schema_version": SCHEMA_VERSION,
+        "world": world,
+        "agent": agent,
+        "seeds": [seed, seed + seeds - 1],
+        "rows": rows,
+    }
     title = agent
     if agent != "follower":  # a saved model: record what it was trained on
         from agents.sb3_agent import training_record
@@ -62,10 +71,12 @@ def evaluate(
         summary["trained"] = training_record(agent)
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
     write_json(out / "results.json", summary)
-    write_atomic(out / "results.md", f"# Evaluation: {title} on {world}\n\n" + markdown_table(rows))
+    table = markdown_table([rendered(row) for row in rows])
+    write_atomic(out / "results.md", f"# Evaluation: {title} on {world}\n\n{table}")
     summary["figures"] = [
         str(plot_trajectories(world, by_estimator, out / "trajectories.png")),
         str(plot_errors(by_estimator, out / "errors.png")),
+        str(plot_nees(by_estimator, out / "nees.png")),
     ]
     return summary, by_estimator
 
@@ -74,60 +85,6 @@ def estimator_options(name: str) -> dict:
     """The options in ``configs/estimators/<name>.yaml``, recorded with every episode."""
     path = CONFIG_DIR / "estimators" / f"{name}.yaml"
     return read_yaml(path) if path.is_file() else {}
-
-
-def summarise(estimator: str, episodes: list[EpisodeResult]) -> dict:
-    """One table row: success, failures, errors, consistency, landmark matching, timing."""
-    final = [e.errors[-1] for e in episodes]
-    rms = [math.sqrt(np.mean(np.square(e.errors))) for e in episodes]
-    worst = [max(e.errors) for e in episodes]
-    heading = [math.sqrt(np.mean(np.square(e.heading_errors))) for e in episodes]
-    nees_in_bounds, (lo, hi) = nees_consistency(episodes)
-    failed = [e.distance for e in episodes if e.outcome != "goal"]
-    frames = sum(e.frames for e in episodes)
-    stages = sorted({k for e in episodes for k in e.stage_ms_per_step})
-    return {
-        "estimator": estimator,
-        "episodes": len(episodes),
-        "success rate": np.mean([e.outcome == "goal" for e in episodes]),
-        "collisions": sum(e.outcome == "collision" for e in episodes),
-        "distance before failure (m)": float(np.mean(failed)) if failed else "-",
-        "final error (m)": _mean_std(final),
-        "RMS error (m)": _mean_std(rms),
-        "max error (m)": _mean_std(worst),
-        "RMS heading error (deg)": _mean_std(np.degrees(heading)),
-        "NEES": float(np.mean([e.nees for e in episodes])),
-        "NEES 95% bounds": f"{lo:.2f}-{hi:.2f}",
-        "NEES in bounds": nees_in_bounds,
-        "landmark in view": sum(e.frames_in_view for e in episodes)
-        / max(1, sum(e.camera_frames for e in episodes)),
-        "landmark match rate": sum(e.frames_matched for e in episodes) / frames if frames else "-",
-        "ms per step": ", ".join(
-            f"{k} {np.mean([e.stage_ms_per_step.get(k, 0.0) for e in episodes]):.2f}"
-            for k in stages
-        ),
-    }
-
-
-def nees_consistency(episodes: list[EpisodeResult]) -> tuple[float, tuple[float, float]]:
-    """Monte-Carlo NEES test (Bar-Shalom, Li and Kirubarajan 2001, sect. 5.4).
-
-    At each stored sample k, the NEES averaged over the M runs times M is chi-square with 3M
-    degrees of freedom for a consistent estimator; returns the fraction of samples (up to the
-    shortest run) whose average lies inside the two-sided 95 % bounds, and the bounds. The
-    bounds also serve for the time average in the table (time-averaging only narrows the
-    spread, so they are conservative for it); samples within a run are correlated, so using
-    every step as a degree of freedom would give far too narrow bounds.
-    """
-    m = len(episodes)
-    lo, hi = chi2.ppf([0.025, 0.975], 3 * m) / m
-    length = min(len(e.nees_trace) for e in episodes)
-    average = np.mean([e.nees_trace[:length] for e in episodes], axis=0)
-    return float(np.mean((average >= lo) & (average <= hi))), (float(lo), float(hi))
-
-
-def _mean_std(values) -> str:
-    return f"{np.mean(values):.3f} ± {np.std(values):.3f}"
 
 
 def _pyplot():
@@ -154,10 +111,9 @@ def plot_trajectories(world: str, by_estimator: dict, path: Path) -> Path:
         true_xy, est_xy = np.array(episode.true_xy), np.array(episode.estimate_xy)
         ax.plot(*true_xy.T, color="tab:green", label="true")
         ax.plot(*est_xy.T, color="tab:red", ls="--", label="estimate")
-        for xy, cov in list(zip(est_xy, episode.covariances, strict=True))[
-            :: max(1, len(est_xy) // 12)
-        ]:
-            _ellipse(ax, xy, np.reshape(cov, (2, 2)))
+        covs = episode.cov_matrices[:, :2, :2]
+        for xy, cov in list(zip(est_xy, covs, strict=True))[:: max(1, len(est_xy) // 12)]:
+            _ellipse(ax, xy, cov)
         ax.set_title(f"{name} (seed {episode.spec['seed']}): {episode.outcome}")
         ax.legend(fontsize=8)
     try:

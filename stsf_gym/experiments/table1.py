@@ -38,6 +38,7 @@ from stsf_gym.fusion import (
 )
 from stsf_gym.geometry import to_se3, wrap_angle
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.results import SCHEMA_VERSION, rendered
 from stsf_gym.vision.detector import LandmarkDetector
 
 #: Table I of the paper: world distance, conventional estimate and error, STSF estimate and error.
@@ -302,7 +303,12 @@ def run_table1(
         )
     ]
     rows = summarise(cfg, results)
-    summary = {"config": cfg.__dict__, "seeds": [seed, seed + cfg.seeds - 1], "rows": rows}
+    summary = {
+        "schema_version": SCHEMA_VERSION,
+        "config": cfg.__dict__,
+        "seeds": [seed, seed + cfg.seeds - 1],
+        "rows": rows,
+    }
     write_json(out / "results.json", summary)
     write_atomic(out / "table1.md", _markdown(rows, cfg))
     summary["figure"] = str(_plot(cfg, results, out / "table1.png"))
@@ -331,26 +337,24 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
             {
                 "row": i + 1,
                 "world (m)": distance,
-                "conventional (m)": float(np.mean(conv_est)) if conv_est else math.nan,
+                "conventional (m)": float(np.mean(conv_est)) if conv_est else None,
                 "conventional error (m)": _rms(conv_err),
-                "conventional spread (m)": float(np.std(np.abs(conv_err)))
-                if conv_err
-                else math.nan,
-                "STSF (m)": float(np.mean(stsf_est)) if stsf_est else math.nan,
+                "conventional spread (m)": float(np.std(np.abs(conv_err))) if conv_err else None,
+                "STSF (m)": float(np.mean(stsf_est)) if stsf_est else None,
                 "STSF error (m)": _rms(stsf_err),
-                "STSF spread (m)": float(np.std(np.abs(stsf_err))) if stsf_err else math.nan,
+                "STSF spread (m)": float(np.std(np.abs(stsf_err))) if stsf_err else None,
                 "STSF-GLS error (m)": _rms(gls_err),
                 "bound (m)": float(stereo_range_bound(distance, focal, baseline, cfg.sigma_px)),
-                "paper conventional error (m)": paper[distance][2] if distance in paper else "-",
-                "paper STSF error (m)": paper[distance][4] if distance in paper else "-",
+                "paper conventional error (m)": paper[distance][2] if distance in paper else None,
+                "paper STSF error (m)": paper[distance][4] if distance in paper else None,
                 "pairs": len(conv_err),
             }
         )
     return rows
 
 
-def _rms(errors: list[float]) -> float:
-    return float(np.sqrt(np.mean(np.square(errors)))) if errors else math.nan
+def _rms(errors: list[float]) -> float | None:
+    return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
 
 
 def _markdown(rows: list[dict], cfg: Table1Config) -> str:
@@ -361,7 +365,7 @@ def _markdown(rows: list[dict], cfg: Table1Config) -> str:
         "RMS over seeds (conventional: over every pair at the place; STSF: at its last frame); "
         f"bound: sqrt(2) Z^2 sigma_px / (f b) with sigma_px = {cfg.sigma_px}.\n\n"
     )
-    return head + markdown_table(rows)
+    return head + markdown_table([rendered(row) for row in rows])
 
 
 def _plot(cfg: Table1Config, results: list[SeedResult], path: Path) -> Path:
