@@ -3,7 +3,7 @@
 Every number lives in ``configs/``: ``configs/default.yaml`` holds the robot, sensors and task,
 ``configs/worlds/<name>.yaml`` the worlds. :func:`load_config` merges, in order, the defaults,
 a user config (YAML path or dict), then keyword overrides, and builds an :class:`EnvConfig`.
-Every number has an allowed range (``Annotated[..., Range(...)]``, :mod:`envs.validation`) and
+Every number has an allowed range (``Annotated[..., Range(...)]``, :mod:`stsf_gym.validation`) and
 the world's geometry is checked (:mod:`envs.world_checks`). A misspelt or unknown key, a value of
 the wrong type or out of range raises :class:`ConfigError` naming the YAML file that set it, the
 full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius must be > 0, got -0.1``.
@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from envs.fault_spec import FaultSpec
-from envs.validation import (
+from envs.world_checks import check_clearance, check_world
+from stsf_gym.validation import (
     ConfigError,
     Count,
     Degrees,
@@ -30,8 +31,8 @@ from envs.validation import (
     build,
     require,
 )
-from envs.world_checks import check_clearance, check_world
-from envs.yaml_layers import (
+from stsf_gym.vision.landmarks import LandmarkPattern
+from stsf_gym.yaml_layers import (
     CONFIG_DIR,
     deep_merge,
     overrides_to_tree,
@@ -39,7 +40,6 @@ from envs.yaml_layers import (
     shown,
     world_files,
 )
-from stsf_gym.vision.landmarks import LandmarkPattern
 
 __all__ = [  # re-exported: the config API lives here
     "CONFIG_DIR",

@@ -13,13 +13,14 @@ from envs.config import EnvConfig, load_config
 from envs.faults import FaultInjector
 from envs.robot import DiffDriveRobot
 from envs.sensors.camera import PinholeCamera, look_at, view_matrix
-from envs.sensors.encoders import OdometryCalibration, WheelEncoders
+from envs.sensors.encoders import WheelEncoders
 from envs.sensors.fast_camera import SimulatedDetector
 from envs.sensors.image_noise import ImageNoise
 from envs.sensors.sonar import SonarRing
 from envs.simulator import Simulator
 from envs.task import PathTask
 from envs.world import CorridorWorld, Landmark
+from stsf_gym.geometry import OdometryCalibration
 
 MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
 RENDER_VFOV_DEG = 60.0

@@ -43,6 +43,11 @@ METRICS: dict[str, str] = {
 }
 
 
+def finite_or_none(value: float) -> float | None:
+    """``value`` as a float, or None for NaN or infinity (JSON has no NaN)."""
+    return float(value) if math.isfinite(value) else None
+
+
 def stat(values: Iterable[float | bool | None]) -> dict[str, Any]:
     """``{"mean", "std", "count", "values"}`` of ``values``; None and NaN are kept in
     ``values`` (as null) but not counted. Booleans count as 0/1, so their mean is a rate."""

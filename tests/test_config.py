@@ -201,4 +201,4 @@ def _unranged_numbers(cls: type, seen: set) -> list[str]:
 
 def test_every_number_in_the_env_config_has_a_range():
     unranged = set(_unranged_numbers(EnvConfig, set())) - ANY_FINITE - CHECKED_BY_OWNER
-    assert not unranged, f"give these fields a Range (envs/validation.py): {sorted(unranged)}"
+    assert not unranged, f"give these fields a Range (stsf_gym/validation.py): {sorted(unranged)}"

@@ -10,6 +10,21 @@ from stsf_gym.estimators.degraded_truth import DegradedTruth
 from stsf_gym.metrics import chi2_bounds, fraction_inside, nees, pose_error
 
 DT = 0.1
+#: No error of any kind: each test sets the errors it studies.
+NONE = {
+    "noise_std": [0.0, 0.0],
+    "bias_std": [0.0, 0.0],
+    "drift_std": [0.0, 0.0],
+    "rate_hz": None,
+    "latency_s": 0.0,
+    "dropout_probability": 0.0,
+    "scale": 1.0,
+}
+
+
+def dial(**options) -> DegradedTruth:
+    """A degraded-truth source with only ``options``' errors."""
+    return make_estimator("degraded-truth", **{**NONE, **options})
 
 
 def drive(source: DegradedTruth, seed: int, steps: int = 300, velocity=(0.12, 0.0, 0.05)):
@@ -35,7 +50,7 @@ def monte_carlo_nees(runs: int = 40, speeds=None, **options) -> tuple[np.ndarray
     values = []
     for seed in range(runs):
         velocity = (0.12, 0.0, 0.05) if speeds is None else speeds(seed)
-        errors, covs, _ = drive(DegradedTruth(**options), seed, velocity=velocity)
+        errors, covs, _ = drive(dial(**options), seed, velocity=velocity)
         values.append(nees(errors, covs))
     return np.mean(values, axis=0), chi2_bounds(3, runs)
 
@@ -71,30 +86,30 @@ def test_rate_latency_and_dropouts_are_consistent_for_motion_within_the_model():
 
 def test_an_understated_covariance_is_caught():
     """The test above can fail: report half the noise it adds and the NEES leaves its bounds."""
-    source = DegradedTruth(noise_std=(0.05, 0.02))
+    source = dial(noise_std=(0.05, 0.02))
     errors, covs, _ = drive(source, 0)
     assert np.mean(nees(errors, covs / 4)) > chi2_bounds(3)[1]
 
 
 def test_error_sizes_follow_the_model():
-    errors, _, _ = drive(DegradedTruth(noise_std=(0.05, 0.02)), 1, steps=2000)
+    errors, _, _ = drive(dial(noise_std=(0.05, 0.02)), 1, steps=2000)
     assert np.std(errors[:, 0]) == pytest.approx(0.05, rel=0.1)
     assert np.std(errors[:, 2]) == pytest.approx(0.02, rel=0.1)
-    scaled, _, _ = drive(DegradedTruth(noise_std=(0.05, 0.02), scale=3.0), 1, steps=2000)
+    scaled, _, _ = drive(dial(noise_std=(0.05, 0.02), scale=3.0), 1, steps=2000)
     np.testing.assert_allclose(scaled, 3 * errors, atol=1e-9)  # the dial scales the same draws
-    _, _, held = drive(DegradedTruth(noise_std=(0.05, 0.02), rate_hz=1.0), 1, steps=50)
+    _, _, held = drive(dial(noise_std=(0.05, 0.02), rate_hz=1.0), 1, steps=50)
     assert len(np.unique(held[:, 0])) == 6  # at the first step, then at t = 1, 2, ... 5 s
-    _, _, late = drive(DegradedTruth(scale=0.0, latency_s=0.5), 1, steps=50)
+    _, _, late = drive(dial(scale=0.0, latency_s=0.5), 1, steps=50)
     np.testing.assert_allclose(late[10:, 0], 0.12 * DT * (np.arange(11, 51) - 5), atol=1e-12)
 
 
 def test_same_seed_same_errors_and_zero_dial_is_truth():
-    a, _, _ = drive(DegradedTruth(bias_std=(0.1, 0.0), drift_std=(0.05, 0.0)), 7)
-    b, _, _ = drive(DegradedTruth(bias_std=(0.1, 0.0), drift_std=(0.05, 0.0)), 7)
-    c, _, _ = drive(DegradedTruth(bias_std=(0.1, 0.0), drift_std=(0.05, 0.0)), 8)
+    a, _, _ = drive(dial(bias_std=(0.1, 0.0), drift_std=(0.05, 0.0)), 7)
+    b, _, _ = drive(dial(bias_std=(0.1, 0.0), drift_std=(0.05, 0.0)), 7)
+    c, _, _ = drive(dial(bias_std=(0.1, 0.0), drift_std=(0.05, 0.0)), 8)
     np.testing.assert_array_equal(a, b)
     assert not np.allclose(a, c)
-    zero, covs, _ = drive(DegradedTruth(scale=0.0), 7)
+    zero, covs, _ = drive(dial(scale=0.0), 7)
     np.testing.assert_allclose(zero, 0.0, atol=1e-12)
     assert np.all(np.linalg.eigvalsh(covs) > 0)
 
@@ -102,9 +117,11 @@ def test_same_seed_same_errors_and_zero_dial_is_truth():
 def test_options_come_from_the_yaml_file_and_bad_values_are_named():
     source = make_estimator("degraded-truth")
     assert source.noise[0] > 0  # configs/estimators/degraded-truth.yaml
-    with pytest.raises(ValueError, match=r"degraded-truth\.noise_std"):
-        DegradedTruth(noise_std=(-1.0, 0.0))
+    with pytest.raises(ValueError, match=r"degraded-truth\.noise_std\[0\] must be >= 0"):
+        dial(noise_std=(-1.0, 0.0))
     with pytest.raises(ValueError, match=r"degraded-truth\.dropout_probability"):
-        DegradedTruth(dropout_probability=1.0)
-    with pytest.raises(ValueError, match=r"unknown option degraded-truth\.nosie"):
+        dial(dropout_probability=1.0)
+    with pytest.raises(ValueError, match=r"degraded-truth\.rate_hz"):
+        dial(rate_hz=0)
+    with pytest.raises(ValueError, match=r"degraded-truth\.nosie"):
         make_estimator("degraded-truth", nosie=1.0)

@@ -10,8 +10,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from envs.sensors.fast_camera import apparent_size_px, detection_probability
 from stsf_gym.experiments.detector_views import detection_records, room_world, summarise_records
-from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
-from stsf_gym.experiments.evaluate import estimator_options
+from stsf_gym.experiments.episodes import EpisodeSpec, estimator_options, run_episode
 
 
 @pytest.fixture(scope="module")

@@ -62,7 +62,8 @@ def test_grid_and_one_at_a_time_cells(tmp_path):
     assert len(slip) == 8 and all("camera" not in c["env"] for c in slip)
     assert all(c["env"]["sim"]["max_episode_seconds"] == 9 for c in cells)  # base env kept
     assert {c["env"]["camera"]["noise_std"] for c in cells if c not in slip} == {1.0, 4.0, 8.0}
-    assert cells[0]["options"] == {} and cells[-1]["options"]["sigma_px"] > 0  # ekf's file
+    assert cells[0]["options"] == {"mount_std": 0.0}  # odometry.yaml
+    assert cells[-1]["options"]["sigma_px"] > 0  # ekf.yaml
 
 
 def test_fault_sets_by_name(tmp_path):

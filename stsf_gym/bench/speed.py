@@ -50,7 +50,7 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
 
     import stsf_gym  # noqa: F401 - registers the ids
     from agents.follower import PathFollower
-    from stsf_gym.experiments.evaluate import estimator_options
+    from stsf_gym.experiments.episodes import estimator_options
     from stsf_gym.wrappers import PoseEstimateWrapper
 
     overrides, source = CASES[name]

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import gammaincinv
 
-from envs.sensors.encoders import OdometryCalibration
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.geometry import OdometryCalibration
+from stsf_gym.vision.landmarks import LandmarkPattern
 
 
 @dataclass(frozen=True)
@@ -32,7 +33,10 @@ class MapLandmark:
 
 @dataclass(frozen=True)
 class SensorModel:
-    """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map."""
+    """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map.
+
+    Built from an env by :func:`stsf_gym.wrappers.sensor_model` (the one place that reads an
+    env), or from logged data by hand."""
 
     calibration: OdometryCalibration
     odometry_noise: OdometryNoise
@@ -40,32 +44,8 @@ class SensorModel:
     image_size: tuple[int, int]  # width, height
     robot_from_camera: Callable[[float, float], np.ndarray]
     landmarks: dict[int, MapLandmark]
-    pattern: object  # stsf_gym.vision.landmarks.LandmarkPattern
+    pattern: LandmarkPattern
     walls: np.ndarray  # (K, 4) wall centre-line segments x1, y1, x2, y2 of the map
-
-    @classmethod
-    def from_env(cls, env) -> SensorModel:
-        """The model of ``env``'s robot for the current episode (call after each reset)."""
-        u = env.unwrapped
-        cfg = u.config
-        return cls(
-            calibration=u.odometry_calibration,
-            odometry_noise=OdometryNoise.from_encoders(
-                cfg.encoders.slip_std,
-                cfg.encoders.radius_error_std,
-                cfg.encoders.wheelbase_error_std,
-                cfg.robot.wheel_radius,
-            ),
-            camera_matrix=u.camera_matrix,
-            image_size=(cfg.camera.width, cfg.camera.height),
-            robot_from_camera=u.robot_from_camera,
-            landmarks={
-                lm.id: MapLandmark(lm.id, lm.centre, lm.normal, lm.square_centres)
-                for lm in u.landmarks
-            },
-            pattern=cfg.world.landmark_pattern,
-            walls=np.array(cfg.world.walls, dtype=float).reshape(-1, 4),
-        )
 
 
 def chi_square_gate(probability: float, dof: int) -> float:

@@ -26,11 +26,14 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from dataclasses import dataclass
+from typing import Annotated, ClassVar
 
 import numpy as np
 
 from stsf_gym.estimators.base import PoseEstimator, SensorModel
 from stsf_gym.geometry import wrap_angle
+from stsf_gym.validation import NonNegative, Range, require
 
 NAME = "degraded-truth"
 #: Salt mixed into the episode seed, so the dial's draws differ from the env's own stream.
@@ -39,47 +42,52 @@ SEED_SALT = 0x5D1A1
 VARIANCE_FLOOR = 1e-12
 
 
-def _pair(name: str, value, unit: str) -> np.ndarray:
-    """A ``(position, yaw)`` standard deviation as the (x, y, yaw) vector."""
-    pair = np.asarray(value, dtype=float).ravel()
-    if pair.shape != (2,) or not np.all(np.isfinite(pair)) or np.any(pair < 0):
-        raise ValueError(f"{NAME}.{name} must be two non-negative numbers ({unit}), got {value!r}")
-    return pair[[0, 0, 1]]
+#: A (position in m, yaw in rad) pair of standard deviations (or their rates).
+StdPair = tuple[NonNegative, NonNegative]
+
+
+@dataclass(frozen=True)
+class DegradedTruthSettings:
+    """The error model (``degraded-truth.yaml``); pairs are (position, yaw)."""
+
+    noise_std: StdPair  # m, rad: white noise per measurement
+    bias_std: StdPair  # m, rad: a constant offset per episode
+    drift_std: StdPair  # m, rad per sqrt(m) travelled: a random walk
+    rate_hz: float | None  # measurements per second; None: every control step
+    latency_s: NonNegative  # age of the true pose a measurement reports
+    dropout_probability: Annotated[float, Range(ge=0, lt=1)]
+    motion_std: StdPair  # m/s, rad/s: assumed motion during a measurement's age
+    scale: NonNegative  # multiplies noise, bias and drift: the accuracy curve's dial
+
+    def __post_init__(self) -> None:
+        rate = self.rate_hz
+        require(
+            rate is None or (isinstance(rate, int | float) and math.isfinite(rate) and rate > 0),
+            "rate_hz",
+            f"must be a positive number or null, got {rate!r}",
+        )
+
+
+def _vector(pair: tuple[float, float], scale: float = 1.0) -> np.ndarray:
+    """A (position, yaw) pair as the (x, y, yaw) vector."""
+    return scale * np.asarray(pair, dtype=float)[[0, 0, 1]]
 
 
 class DegradedTruth(PoseEstimator):
     """The true pose with white noise, bias, drift, rate, latency and dropouts (module doc)."""
 
     name = NAME
+    settings_type: ClassVar[type] = DegradedTruthSettings
 
-    def __init__(
-        self,
-        noise_std=(0.02, 0.01),
-        bias_std=(0.0, 0.0),
-        drift_std=(0.0, 0.0),
-        rate_hz: float | None = None,
-        latency_s: float = 0.0,
-        dropout_probability: float = 0.0,
-        motion_std=(0.25, 1.0),
-        scale: float = 1.0,
-    ) -> None:
+    def __init__(self, settings: DegradedTruthSettings) -> None:
         super().__init__()
-        if not (isinstance(scale, int | float) and scale >= 0 and math.isfinite(scale)):
-            raise ValueError(f"{NAME}.scale must be a non-negative number, got {scale!r}")
-        self.noise = scale * _pair("noise_std", noise_std, "m, rad")
-        self.bias_std = scale * _pair("bias_std", bias_std, "m, rad")
-        self.drift = scale * _pair("drift_std", drift_std, "m/sqrt(m), rad/sqrt(m)")
-        self.motion = _pair("motion_std", motion_std, "m/s, rad/s")
-        if rate_hz is not None and not rate_hz > 0:
-            raise ValueError(f"{NAME}.rate_hz must be positive or null, got {rate_hz!r}")
-        if not latency_s >= 0:
-            raise ValueError(f"{NAME}.latency_s must be non-negative, got {latency_s!r}")
-        if not 0 <= dropout_probability < 1:
-            raise ValueError(
-                f"{NAME}.dropout_probability must be in [0, 1), got {dropout_probability!r}"
-            )
-        self.rate_hz, self.latency = rate_hz, float(latency_s)
-        self.dropout = float(dropout_probability)
+        self.settings = settings
+        self.noise = _vector(settings.noise_std, settings.scale)
+        self.bias_std = _vector(settings.bias_std, settings.scale)
+        self.drift = _vector(settings.drift_std, settings.scale)
+        self.motion = _vector(settings.motion_std)
+        self.rate_hz, self.latency = settings.rate_hz, settings.latency_s
+        self.dropout = settings.dropout_probability
         self.rng: np.random.Generator | None = None
         self.history: deque = deque()
 

@@ -74,6 +74,7 @@ the true pose (``tests/test_ekf.py``) checks the whole.
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -86,13 +87,14 @@ from stsf_gym.estimators.landmark_observation import (
     robot_pose_from_landmark,
 )
 from stsf_gym.estimators.relocalise import Relocaliser
+from stsf_gym.estimators.settings import EKFSettings
 from stsf_gym.geometry import wrap_angle
 
 
 class EKFEstimator(OdometryEstimator):
     """Odometry prediction, then one range/bearing EKF update per map landmark seen.
 
-    Args (``configs/estimators/ekf.yaml``):
+    Settings (:class:`EKFSettings`, ``configs/estimators/ekf.yaml``):
         sigma_px: pixel noise of the square centres assumed for the observation covariance.
         gate_probability: Mahalanobis gate, the chi-square (2 dof) probability kept.
         min_range, max_range: boards outside this range (m) from the robot are not used.
@@ -107,36 +109,18 @@ class EKFEstimator(OdometryEstimator):
     """
 
     name = "ekf"
+    settings_type: ClassVar[type] = EKFSettings
 
-    def __init__(
-        self,
-        sigma_px: float = 0.15,
-        gate_probability: float = 0.99,
-        min_range: float = 0.3,
-        max_range: float = 15.0,
-        range_std_floor: float = 0.003,
-        range_std_fraction: float = 0.005,
-        bearing_std_floor: float = 0.002,
-        mount_std: float = 0.003,
-        relocalise_after: int = 15,
-        relocalise_inflation: float = 4.0,
-    ) -> None:
-        super().__init__(mount_std=mount_std)
-        if not 0.0 <= min_range < max_range:
-            raise ValueError(f"ekf needs 0 <= min_range < max_range, got {min_range}, {max_range}")
-        if sigma_px <= 0 or min(range_std_floor, range_std_fraction, bearing_std_floor) < 0:
-            raise ValueError("ekf.sigma_px must be positive and the std floors non-negative")
-        self.sigma_px = float(sigma_px)
-        self.gate_probability = float(gate_probability)
-        self.gate = chi_square_gate(self.gate_probability, dof=2)
-        self.min_range, self.max_range = float(min_range), float(max_range)
-        self.range_std_floor, self.range_std_fraction = (
-            float(range_std_floor),
-            float(range_std_fraction),
-        )
-        self.bearing_std_floor = float(bearing_std_floor)
+    def __init__(self, settings: EKFSettings) -> None:
+        super().__init__(settings)
+        s = settings
+        self.sigma_px, self.gate_probability = s.sigma_px, s.gate_probability
+        self.gate = chi_square_gate(s.gate_probability, dof=2)
+        self.min_range, self.max_range = s.min_range, s.max_range
+        self.range_std_floor, self.range_std_fraction = s.range_std_floor, s.range_std_fraction
+        self.bearing_std_floor = s.bearing_std_floor
         self.relocaliser = Relocaliser(
-            relocalise_after, relocalise_inflation, chi_square_gate(self.gate_probability, dof=3)
+            s.relocalise_after, s.relocalise_inflation, chi_square_gate(s.gate_probability, dof=3)
         )
         self.detector: FrameDetector | None = None
 

@@ -21,7 +21,7 @@ from pathlib import Path
 from envs.config import ConfigError, deep_merge, load_config
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.curve_plot import plot_curve
-from stsf_gym.experiments.evaluate import estimator_options
+from stsf_gym.experiments.episodes import estimator_options
 from stsf_gym.experiments.sweep import cell_name, forget_failures
 from stsf_gym.experiments.sweep_backends import make_runner
 from stsf_gym.experiments.sweep_cells import run_cell

@@ -1,9 +1,10 @@
 """``stsf-gym evaluate``: an agent driving on each estimator's pose, over seeded episodes.
 
-Writes ``results.json`` (numbers, :mod:`stsf_gym.results`), ``results.md`` (one row per
-estimator, rendered from it), ``trajectories.png`` (true vs estimated paths over the map, with
-2-sigma ellipses), ``errors.png`` (position and heading error against distance driven),
-``nees.png`` (NEES over time with its chi-square bounds) and each episode's TUM trajectories
+Writes ``results.json`` (numbers: the results schema, :mod:`stsf_gym.results`), ``results.md``
+(one row per estimator, :func:`~stsf_gym.experiments.statistics.summarise`, rendered from the
+JSON), ``trajectories.png`` (true vs estimated paths over the map, with 2-sigma ellipses),
+``errors.png`` (position and heading error against distance driven), ``nees.png`` (NEES over
+time with its chi-square bounds) and each episode's TUM trajectories
 (``episodes/trajectories/<episode>/{truth,estimate}.txt``). Finished episodes are kept in
 ``episodes/`` and reused by a rerun with the same ``--out``. With fault files, every fault
 set runs on every estimator instead (:mod:`stsf_gym.experiments.fault_runs`).
@@ -13,13 +14,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
-from envs.config import CONFIG_DIR, read_yaml
 from stsf_gym.experiments.consistency_plot import plot_nees
-from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
-from stsf_gym.experiments.scoring import summarise
-from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.experiments.episodes import (
+    EpisodeResult,
+    EpisodeSpec,
+    estimator_options,
+    run_episodes,
+)
+from stsf_gym.experiments.fault_runs import evaluate_faults
+from stsf_gym.experiments.plots import plot_errors, plot_trajectories
+from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.statistics import summarise
+from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, rendered
 
 
@@ -41,8 +47,6 @@ def evaluate(
     ``faults`` (fault files), the episodes run per fault set and estimator instead.
     """
     if faults:
-        from stsf_gym.experiments.fault_runs import evaluate_faults
-
         return evaluate_faults(
             out, estimators, seeds, seed, world, agent, workers, env or {}, faults
         )
@@ -70,101 +74,11 @@ def evaluate(
 
         summary["trained"] = training_record(agent)
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
-    write_json(out / "results.json", summary)
     table = markdown_table([rendered(row) for row in rows])
-    write_atomic(out / "results.md", f"# Evaluation: {title} on {world}\n\n{table}")
+    write_report(out, summary, f"Evaluation: {title} on {world}", table)
     summary["figures"] = [
         str(plot_trajectories(world, by_estimator, out / "trajectories.png")),
         str(plot_errors(by_estimator, out / "errors.png")),
         str(plot_nees(by_estimator, out / "nees.png")),
     ]
     return summary, by_estimator
-
-
-def estimator_options(name: str) -> dict:
-    """The options in ``configs/estimators/<name>.yaml``, recorded with every episode."""
-    path = CONFIG_DIR / "estimators" / f"{name}.yaml"
-    return read_yaml(path) if path.is_file() else {}
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def plot_trajectories(world: str, by_estimator: dict, path: Path) -> Path:
-    """True and estimated paths of the first episode per estimator, over the map."""
-    from envs.config import load_config
-    from stsf_gym.experiments.plots import draw_world_config
-
-    plt = _pyplot()
-    cfg = load_config(world=world)
-    n = len(by_estimator)
-    fig, axes = plt.subplots(1, n, figsize=(5 * n, 4.5), squeeze=False)
-    for ax, (name, episodes) in zip(axes[0], by_estimator.items(), strict=True):
-        draw_world_config(ax, cfg.world)
-        episode = episodes[0]
-        true_xy, est_xy = np.array(episode.true_xy), np.array(episode.estimate_xy)
-        ax.plot(*true_xy.T, color="tab:green", label="true")
-        ax.plot(*est_xy.T, color="tab:red", ls="--", label="estimate")
-        covs = episode.cov_matrices[:, :2, :2]
-        for xy, cov in list(zip(est_xy, covs, strict=True))[:: max(1, len(est_xy) // 12)]:
-            _ellipse(ax, xy, cov)
-        ax.set_title(f"{name} (seed {episode.spec['seed']}): {episode.outcome}")
-        ax.legend(fontsize=8)
-    try:
-        return save_figure(fig, path)
-    finally:
-        plt.close(fig)
-
-
-def _ellipse(ax, xy: np.ndarray, cov: np.ndarray, sigma: float = 2.0) -> None:
-    values, vectors = np.linalg.eigh(cov)
-    angle = np.linspace(0, 2 * np.pi, 40)
-    circle = np.stack([np.cos(angle), np.sin(angle)])
-    points = vectors @ (sigma * np.sqrt(np.maximum(values, 0))[:, None] * circle)
-    ax.plot(xy[0] + points[0], xy[1] + points[1], color="tab:red", lw=0.6, alpha=0.6)
-
-
-def error_curves(episodes: list[EpisodeResult], grid: np.ndarray):
-    """Mean position and heading error of the episodes on a grid of distance driven."""
-    position, heading = [], []
-    for e in episodes:
-        inside = grid <= e.travelled[-1]
-        position.append(np.where(inside, np.interp(grid, e.travelled, e.errors), np.nan))
-        h = np.degrees(np.abs(e.heading_errors))
-        heading.append(np.where(inside, np.interp(grid, e.travelled, h), np.nan))
-    return _mean_over_episodes(position), _mean_over_episodes(heading)
-
-
-def _mean_over_episodes(curves: list[np.ndarray]) -> np.ndarray:
-    """Mean of the curves where at least one episode got that far (NaN elsewhere)."""
-    stacked = np.array(curves)
-    count = np.sum(~np.isnan(stacked), axis=0)
-    total = np.nansum(stacked, axis=0)
-    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
-
-
-def plot_errors(by_estimator: dict, path: Path) -> Path:
-    """Position and orientation error vs distance driven, mean over episodes (Fig. 11 style)."""
-    plt = _pyplot()
-    longest = max(e.travelled[-1] for episodes in by_estimator.values() for e in episodes)
-    grid = np.linspace(0, longest, 200)
-    fig, (ax_p, ax_h) = plt.subplots(1, 2, figsize=(12, 4))
-    for name, episodes in by_estimator.items():
-        position, heading = error_curves(episodes, grid)
-        ax_p.plot(grid, position, label=name)
-        ax_h.plot(grid, heading, label=name)
-    ax_p.set(xlabel="distance driven (m)", ylabel="position error (m)", title="(a) position")
-    ax_h.set(
-        xlabel="distance driven (m)", ylabel="orientation error (deg)", title="(b) orientation"
-    )
-    ax_p.legend()
-    try:
-        return save_figure(fig, path)
-    finally:
-        plt.close(fig)

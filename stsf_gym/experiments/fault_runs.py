@@ -27,9 +27,15 @@ import numpy as np
 
 from envs.config import ConfigError, load_config, read_yaml
 from envs.fault_spec import fault_span
-from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
-from stsf_gym.experiments.evaluate import estimator_options, plot_errors
-from stsf_gym.io import markdown_table, write_atomic, write_json
+from stsf_gym.experiments.episodes import (
+    EpisodeResult,
+    EpisodeSpec,
+    estimator_options,
+    run_episodes,
+)
+from stsf_gym.experiments.plots import plot_errors
+from stsf_gym.experiments.reports import write_report
+from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, rendered, stat
 
 RECOVERY_FLOOR = 0.10  # m: an error under this counts as recovered whatever it was before
@@ -90,10 +96,8 @@ def evaluate_faults(
         "recovery_floor_m": RECOVERY_FLOOR,
         "rows": rows,
     }
-    write_json(out / "results.json", summary)
-    title = f"# Fault runs: {agent} on {world}\n\n"
     table = markdown_table([rendered(row, headers=HEADERS) for row in rows])
-    write_atomic(out / "results.md", title + table)
+    write_report(out, summary, f"Fault runs: {agent} on {world}", table)
     summary["figures"] = figures
     return summary, runs
 

@@ -17,7 +17,8 @@ import numpy as np
 
 from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.experiments.evaluate import evaluate
-from stsf_gym.io import markdown_table, write_atomic, write_json
+from stsf_gym.experiments.reports import write_report
+from stsf_gym.io import markdown_table
 from stsf_gym.results import rendered, stat
 
 FIG10_PAPER = {
@@ -121,8 +122,8 @@ def _maximum(values: np.ndarray) -> float | None:
 
 def _write(out: Path, name: str, title: str, summary: dict, rows: list[dict]) -> dict:
     summary = {**summary, "paper_rows": rows}
-    write_json(out / f"{name}.json", summary)
     paper = markdown_table([rendered(row, headers=HEADERS) for row in rows])
     every = markdown_table([rendered(row) for row in summary["rows"]])
-    write_atomic(out / f"{name}.md", f"# {title}\n\n{paper}\n## All metrics\n\n{every}")
+    body = f"{paper}\n## All metrics\n\n{every}"
+    write_report(out, summary, title, body, f"{name}.json", f"{name}.md")
     return summary

@@ -52,9 +52,9 @@ def failure(err: BaseException, details: str = "") -> dict:
 
 def evaluate_cell(cell: dict) -> dict:
     """One episode of the agent on the estimator's pose: its outcome and the metrics of the
-    results schema (:func:`stsf_gym.experiments.scoring.episode_metrics`)."""
+    results schema (:func:`stsf_gym.experiments.statistics.episode_metrics`)."""
     from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
-    from stsf_gym.experiments.scoring import episode_metrics
+    from stsf_gym.experiments.statistics import episode_metrics
 
     spec = EpisodeSpec(
         cell["world"], cell["estimator"], cell["seed"], cell["agent"], cell["env"], cell["options"]

@@ -1,31 +1,26 @@
-"""Scoring recorded episodes with the standard metrics, as rows of the results schema.
+"""Metrics and statistics of episodes: results rows, NEES and NIS consistency, error curves.
 
-:func:`episode_metrics` gives one episode's numbers (:mod:`stsf_gym.metrics`: ATE, RPE per
-metre over :data:`RPE_DELTA_M`, NEES, NIS, ...); :func:`summarise` gives a results row over
-episodes: each metric a :func:`stsf_gym.results.stat`, plus the Monte-Carlo consistency tests
-of NEES and NIS with their chi-square bounds.
+Every experiment scores its episodes here, so a metric means the same in each table.
+:func:`episode_metrics` gives one episode's numbers with the standard metrics of
+:mod:`stsf_gym.metrics` (ATE, RPE per metre over :data:`RPE_DELTA_M`, NEES, NIS, ...);
+:func:`summarise` gives a row of the results schema over episodes: each metric a
+:func:`stsf_gym.results.stat`, plus the Monte-Carlo consistency tests of NEES and NIS with their
+chi-square bounds.
 """
 
 from __future__ import annotations
 
 import math
 from collections import Counter
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.metrics import ate_rmse, chi2_bounds, fraction_inside, rpe_per_metre
-from stsf_gym.results import stat, stats
-
-if TYPE_CHECKING:
-    from stsf_gym.experiments.episodes import EpisodeResult
+from stsf_gym.results import finite_or_none, stat, stats
 
 #: Travelled distance of the RPE's pose pairs (m): ``evo_rpe --delta 1 --delta_unit m``.
 RPE_DELTA_M = 1.0
-
-
-def _finite(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
 
 
 def episode_metrics(episode: EpisodeResult) -> dict[str, float | None]:
@@ -37,13 +32,13 @@ def episode_metrics(episode: EpisodeResult) -> dict[str, float | None]:
         "success_rate": float(episode.outcome == "goal"),
         "collision_rate": float(episode.outcome == "collision"),
         "ate_rmse_m": ate_rmse(episode.true_xy, episode.estimate_xy),
-        "rpe_trans_m_per_m": _finite(rpe.trans_m_per_m),
-        "rpe_rot_deg_per_m": _finite(rpe.rot_deg_per_m),
+        "rpe_trans_m_per_m": finite_or_none(rpe.trans_m_per_m),
+        "rpe_rot_deg_per_m": finite_or_none(rpe.rot_deg_per_m),
         "final_error_m": float(errors[-1]),
         "max_error_m": float(np.max(errors)),
-        "rms_heading_error_deg": math.degrees(math.sqrt(np.mean(episode.heading_errors**2))),
-        "path_error_rms_m": float(np.sqrt(np.mean(np.square(episode.path_errors)))),
-        "nees_mean": _finite(episode.nees),
+        "rms_heading_error_deg": math.degrees(rms(episode.heading_errors)),
+        "path_error_rms_m": rms(episode.path_errors),
+        "nees_mean": finite_or_none(episode.nees),
         "nis_mean": float(nis[:, 0].mean()) if len(nis) else None,
         "match_rate": episode.frames_matched / episode.frames if episode.frames else None,
         "landmark_in_view": episode.frames_in_view / episode.camera_frames
@@ -100,3 +95,27 @@ def nis_consistency(episodes: list[EpisodeResult]) -> tuple[float | None, list[f
     inside = [fraction_inside([v], chi2_bounds(int(dof))) for v, dof in nis]
     dof = Counter(int(d) for d in nis[:, 1]).most_common(1)[0][0]
     return float(np.mean(inside)), list(chi2_bounds(dof))
+
+
+def rms(values) -> float:
+    """Root mean square of ``values`` (NaN when there are none)."""
+    return float(np.sqrt(np.mean(np.square(values)))) if len(values) else math.nan
+
+
+def error_curves(episodes: list[EpisodeResult], grid: np.ndarray):
+    """Mean position and heading error of the episodes on a grid of distance driven."""
+    position, heading = [], []
+    for e in episodes:
+        inside = grid <= e.travelled[-1]
+        position.append(np.where(inside, np.interp(grid, e.travelled, e.errors), np.nan))
+        h = np.degrees(np.abs(e.heading_errors))
+        heading.append(np.where(inside, np.interp(grid, e.travelled, h), np.nan))
+    return mean_over_episodes(position), mean_over_episodes(heading)
+
+
+def mean_over_episodes(curves: list[np.ndarray]) -> np.ndarray:
+    """Mean of the curves where at least one episode got that far (NaN elsewhere)."""
+    stacked = np.array(curves)
+    count = np.sum(~np.isnan(stacked), axis=0)
+    total = np.nansum(stacked, axis=0)
+    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
