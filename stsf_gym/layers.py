@@ -8,9 +8,10 @@ then any violation, and exits with status 1 when there is one. The rules (:data:
         -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
     envs -> stsf_gym.vision.landmarks / geometry
 
-plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``). Also
-checked: no module imports another's private (``_name``) name, and no import cycle between
-modules.
+plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``,
+``camera_model``: the lens model the simulator renders with and the estimators undistort
+with). Also checked: no module imports another's private (``_name``) name, and no import
+cycle between modules.
 """
 
 from __future__ import annotations
@@ -22,7 +23,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("stsf_gym", "envs", "agents")
 EXTERNAL = ("pybullet", "pybullet_utils")  # third-party layers the rules name
-LEAVES = ("stsf_gym.geometry", "stsf_gym.validation", "stsf_gym.yaml_layers", "stsf_gym.io")
+LEAVES = (
+    "stsf_gym.geometry",
+    "stsf_gym.validation",
+    "stsf_gym.yaml_layers",
+    "stsf_gym.io",
+    "stsf_gym.camera_model",
+)
 #: Pure measurement code (numpy/scipy): metrics, the results schema, TUM trajectories.
 MEASURES = ("stsf_gym.metrics", "stsf_gym.results", "stsf_gym.tum")
 CORE = (*LEAVES, *MEASURES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
@@ -52,6 +59,7 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.geometry": (),
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
+    "stsf_gym.camera_model": (),
     "stsf_gym.layers": (),
 }
 

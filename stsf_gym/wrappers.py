@@ -37,7 +37,9 @@ POSE_SOURCES = (*ESTIMATORS, TRUTH, *PRIVILEGED)
 
 def sensor_model(env: gym.Env) -> SensorModel:
     """The model of ``env``'s robot for the current episode (call after each reset): its
-    believed odometry calibration, the encoder noise, camera, mount and landmark map."""
+    believed odometry calibration, the encoder noise, believed camera calibration, mount and
+    landmark map (never the true camera: ``camera_matrix`` and ``dist_coeffs`` are for
+    evaluation)."""
     u = env.unwrapped
     cfg = u.config
     return SensorModel(
@@ -48,7 +50,12 @@ def sensor_model(env: gym.Env) -> SensorModel:
             cfg.encoders.wheelbase_error_std,
             cfg.robot.wheel_radius,
         ),
-        camera_matrix=u.camera_matrix,
+        camera_calibration=u.camera_calibration,
+        camera_calibration_std=(
+            cfg.camera.calibration_error.principal_point_std_px / u.camera_calibration.K[0, 0],
+            cfg.camera.calibration_error.focal_std,
+        ),
+        camera_matrix=u.camera_calibration.K,
         image_size=(cfg.camera.width, cfg.camera.height),
         robot_from_camera=u.robot_from_camera,
         landmarks={

@@ -38,9 +38,12 @@ def straight_run():
 
     The odometry estimator is fed the same observations: as the follower drives on the true
     pose the trajectory does not depend on the estimate, so this is the odometry estimator's
-    run on the same seed, at half the simulation cost.
+    run on the same seed, at half the simulation cost. The ideal camera: these tests check the
+    filter's mechanics; on this seed's extreme wheel calibration (about 3 sigma) the paper's
+    camera, which finds the first wall board later, lets dead reckoning drift past its
+    first-order covariance and the filter re-localises (the figures measure that camera).
     """
-    env = PoseEstimateWrapper(gym.make("stsf_gym/Straight10m-v0"), "ekf")
+    env = PoseEstimateWrapper(gym.make("stsf_gym/Straight10m-v0", camera__profile="ideal"), "ekf")
     try:
         obs, info = env.reset(seed=RUN_SEED)
         ekf = env.estimator

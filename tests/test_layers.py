@@ -47,6 +47,7 @@ def test_the_import_graph_points_one_way():
         "stsf_gym.vision.landmarks",
         "stsf_gym.validation",
         "stsf_gym.yaml_layers",
+        "stsf_gym.camera_model",
     }
     assert "envs" not in graph["stsf_gym.wrappers"]  # the episode env builder joins the two
 

@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.estimators import SensorModel, make_estimator
 from stsf_gym.estimators.odometry import OdometryNoise, integrate_wheel_travel
 from stsf_gym.geometry import OdometryCalibration
@@ -21,9 +22,17 @@ def test_dead_reckoning_covariance_matches_monte_carlo():
     noise = OdometryNoise(slip_var_per_m=2e-5, radius_var=1e-4, wheelbase_var=1e-4)
     calibration = OdometryCalibration(ticks_per_rev, radius, radius, wheelbase)
     model = SensorModel(
-        calibration, noise, np.eye(3), (1, 1), lambda pan, tilt: np.eye(4), {},
-        LandmarkPattern(), np.zeros((0, 4)),
-    )  # fmt: skip
+        calibration=calibration,
+        odometry_noise=noise,
+        camera_calibration=CameraCalibration(np.eye(3), np.zeros(5)),
+        camera_calibration_std=(0.0, 0.0),
+        camera_matrix=np.eye(3),
+        image_size=(1, 1),
+        robot_from_camera=lambda pan, tilt: np.eye(4),
+        landmarks={},
+        pattern=LandmarkPattern(),
+        walls=np.zeros((0, 4)),
+    )
     estimator = make_estimator("odometry")
     estimator.reset(model, np.zeros(3), np.zeros((3, 3)))
     ticks = [(40, 40)] * 80 + [(25, 50)] * 40 + [(48, 32)] * 60

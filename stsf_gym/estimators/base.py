@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import gammaincinv
 
+from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.geometry import OdometryCalibration
 from stsf_gym.vision.landmarks import LandmarkPattern
@@ -35,11 +36,19 @@ class MapLandmark:
 class SensorModel:
     """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map.
 
-    Built from an env by :func:`stsf_gym.wrappers.sensor_model` (the one place that reads an
-    env), or from logged data by hand."""
+    ``camera_calibration`` is the camera as the robot believes it is (K and distortion, with
+    this episode's calibration error); detections are undistorted with it, so the estimators
+    use ``camera_matrix`` (its K) as an ideal pinhole camera. ``camera_calibration_std`` is
+    how far the robot knows that calibration may be off: its principal point as a heading
+    (std of the horizontal principal point error over the focal length, rad) and its focal
+    length (relative std); every estimator with a camera considers both. Built from an env by
+    :func:`stsf_gym.wrappers.sensor_model` (the one place that reads an env), or from logged
+    data by hand."""
 
     calibration: OdometryCalibration
     odometry_noise: OdometryNoise
+    camera_calibration: CameraCalibration
+    camera_calibration_std: tuple[float, float]  # rad, relative: see below
     camera_matrix: np.ndarray
     image_size: tuple[int, int]  # width, height
     robot_from_camera: Callable[[float, float], np.ndarray]

@@ -30,7 +30,11 @@ class OdometryEstimator(PoseEstimator):
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        considered = block_diag(model.odometry_noise.calibration_cov, self.mount_std**2 * np.eye(2))
+        considered = block_diag(
+            model.odometry_noise.calibration_cov,
+            self.mount_std**2 * np.eye(2),
+            np.diag(np.square(model.camera_calibration_std)),
+        )
         self.errors = PoseErrors(self.cov, considered)
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:

@@ -126,7 +126,7 @@ class EKFEstimator(OdometryEstimator):
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = FrameDetector(model.pattern, set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
         self.relocaliser.clear()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -154,7 +154,8 @@ class EKFEstimator(OdometryEstimator):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``z = [range, bearing]`` of the board centre, its covariance ``R`` (with floors) and
         its Jacobian by the considered parameters: a camera mounted ``m`` off puts the centre
-        ``-m`` off in the robot frame."""
+        ``-m`` off in the robot frame; the camera's calibration errors move it as
+        :meth:`LandmarkObservation.by_camera` says."""
         u, v = observation.z[:2]
         q = u * u + v * v
         r = math.sqrt(q)
@@ -166,7 +167,8 @@ class EKFEstimator(OdometryEstimator):
             ]
         )
         R = J @ observation.cov[:2, :2] @ J.T + floor
-        by_considered = np.hstack([np.zeros((2, 3)), -J])  # odometry calibration, mount
+        # odometry calibration, mount, camera calibration
+        by_considered = np.hstack([np.zeros((2, 3)), -J, J @ observation.by_camera()[:2]])
         return observation.range_bearing, (R + R.T) / 2, by_considered
 
     def predict_measurement(self, landmark: MapLandmark) -> tuple[np.ndarray, np.ndarray]:

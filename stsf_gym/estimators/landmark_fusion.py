@@ -99,7 +99,7 @@ class LandmarkFusionEstimator(OdometryEstimator):
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = FrameDetector(model.pattern, set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
         self.frame_count = 0
@@ -239,7 +239,8 @@ class LandmarkFusionEstimator(OdometryEstimator):
         jac = robot_pose_jacobian(landmark, z)
         self.frame_count += 1
         # a camera mounted m off puts the landmark -m off in the robot frame
-        by_considered = np.hstack([jac @ by_calibration, -jac[:, :2]])
+        by_camera = jac @ current.by_camera()
+        by_considered = np.hstack([jac @ by_calibration, -jac[:, :2], by_camera])
         self.errors.add((landmark.id, self.frame_count), jac @ cov @ jac.T, by_considered)
         keys = [key for key in self.errors.keys if key[0] == landmark.id]
         self.errors.remove(keys[: len(keys) - len(track)])  # the frames the track let go
