@@ -32,7 +32,8 @@ def _common(
 
 
 def _demo(args: argparse.Namespace) -> dict:
-    from stsf_gym.experiments.demo import run_demo
+    from stsf_gym.experiments.demo import COLUMNS, run_demo
+    from stsf_gym.results import rendered
 
     _check_counts(args)
     env = _env_overrides(args)
@@ -46,10 +47,11 @@ def _demo(args: argparse.Namespace) -> dict:
         from rich.table import Table
 
         table = Table(title=f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})")
-        for column in summary["table"][0]:
+        cells = [rendered(row, COLUMNS) for row in summary["rows"]]
+        for column in cells[0]:
             table.add_column(column)
-        for row in summary["table"]:
-            table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row.values()))
+        for row in cells:
+            table.add_row(*row.values())
         console = Console()
         console.print(table)
         console.print(
@@ -198,6 +200,53 @@ def _sweep(args: argparse.Namespace) -> dict:
     return summary
 
 
+def _accuracy_curve(args: argparse.Namespace) -> dict:
+    from stsf_gym.estimators import make_estimator
+    from stsf_gym.experiments.accuracy_curve import accuracy_curve
+    from stsf_gym.wrappers import POSE_SOURCES
+
+    _check_counts(args)
+    agents = _names(args.agent)
+    estimators = _names(args.estimators)
+    for name in estimators:
+        if name not in POSE_SOURCES:
+            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    models = [a for a in agents if a != "follower"]
+    if models:
+        from agents.sb3_agent import model_metadata
+
+        for model in models:
+            model_metadata(model)  # a missing or foreign model file fails here, clearly
+    try:
+        levels = [float(level) for level in _names(args.levels)]
+    except ValueError as err:
+        raise ConfigError(f"--levels must be comma-separated numbers, got {args.levels!r}") from err
+    dial = parse_overrides(args.dial)
+    make_estimator("degraded-truth", **dial)  # a bad dial option fails before any work
+    summary = accuracy_curve(
+        args.out,
+        agents,
+        args.world,
+        args.seeds,
+        args.seed,
+        levels,
+        estimators,
+        args.backend,
+        args.workers,
+        args.address,
+        _env_overrides(args, args.world),
+        dial,
+    )
+    _print_markdown(args, args.out / "curve.md")
+    for failed in summary["failed"]:
+        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
+    return summary
+
+
+def _names(text: str) -> list[str]:
+    return [name.strip() for name in text.split(",") if name.strip()]
+
+
 def _bench(args: argparse.Namespace) -> dict:
     from stsf_gym.bench import run_bench
 
@@ -266,6 +315,36 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
     sweep.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
     sweep.set_defaults(run=_sweep)
+    curve = commands.add_parser(
+        "accuracy-curve", help="success against localization error: how good must it be?"
+    )
+    _common(curve, "out/accuracy_curve")
+    curve.add_argument(
+        "--agent", default="follower", help="follower and/or saved models, comma-separated"
+    )
+    curve.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    curve.add_argument("--seeds", type=int, default=3, help="episodes per point (3)")
+    curve.add_argument(
+        "--levels",
+        default="0.5,1,2,4,6,8,11,16",
+        help="dial levels: scales of configs/estimators/degraded-truth.yaml's errors",
+    )
+    curve.add_argument(
+        "--dial",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a degraded-truth option, e.g. latency_s=0.3 or rate_hz=2",
+    )
+    curve.add_argument(
+        "--estimators",
+        default="odometry,conventional,stsf,ekf",
+        help="estimators placed as points on the curve (comma-separated; '' for none)",
+    )
+    curve.add_argument("--backend", choices=["local", "ray"], default="local", help="(local)")
+    curve.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
+    curve.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
+    curve.set_defaults(run=_accuracy_curve)
     bench = commands.add_parser("bench", help="the speed figures beside their targets")
     _common(bench, "out/bench")
     bench.add_argument(

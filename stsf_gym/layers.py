@@ -5,12 +5,13 @@
 then any violation, and exits with status 1 when there is one. The rules (:data:`ALLOWED`):
 
     stsf_gym.cli, stsf_gym.experiments -> agents -> stsf_gym.wrappers -> stsf_gym.estimators
-        -> stsf_gym.fusion / vision / geometry;   envs -> stsf_gym.vision.landmarks / geometry
+        -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
+    envs -> stsf_gym.vision.landmarks / geometry
 
 plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``,
-``camera_model``: the lens model the simulator renders with and the estimators undistort with). Also
-checked: no module imports another's private (``_name``) name, and no import cycle between
-modules.
+``camera_model``: the lens model the simulator renders with and the estimators undistort
+with). Also checked: no module imports another's private (``_name``) name, and no import
+cycle between modules.
 """
 
 from __future__ import annotations
@@ -29,7 +30,9 @@ LEAVES = (
     "stsf_gym.io",
     "stsf_gym.camera_model",
 )
-CORE = (*LEAVES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
+#: Pure measurement code (numpy/scipy): metrics, the results schema, TUM trajectories.
+MEASURES = ("stsf_gym.metrics", "stsf_gym.results", "stsf_gym.tum")
+CORE = (*LEAVES, *MEASURES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
 ESTIMATION = (*CORE, "stsf_gym.estimators")
 EPISODE = (*ESTIMATION, "stsf_gym", "stsf_gym.wrappers", "stsf_gym.episode_env", "envs")
 ANY = "*"
@@ -47,6 +50,9 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "envs": ("stsf_gym.geometry", "stsf_gym.vision.landmarks", *LEAVES[1:], *EXTERNAL),
     "stsf_gym.estimators": CORE,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
+    "stsf_gym.metrics": ("stsf_gym.geometry",),
+    "stsf_gym.results": (),
+    "stsf_gym.tum": ("stsf_gym.io",),
     "stsf_gym.vision": ("stsf_gym.vision.landmarks", "stsf_gym.geometry"),
     "stsf_gym.vision.landmarks": (),
     "stsf_gym.yaml_layers": ("stsf_gym.validation",),

@@ -12,7 +12,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from stsf_gym.estimators import ESTIMATORS, MapLandmark, PoseEstimator, SensorModel, make_estimator
+from stsf_gym.estimators import (
+    ESTIMATORS,
+    PRIVILEGED,
+    MapLandmark,
+    PoseEstimator,
+    SensorModel,
+    make_estimator,
+)
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
 
@@ -23,8 +30,9 @@ COV_LIMIT = 1e4
 TRUTH = "truth"
 #: Standard deviations (m, m, rad) reported with the true pose: tiny, fixed.
 TRUTH_STD = (0.001, 0.001, 0.001)
-#: Every pose source a wrapper accepts: the estimators and the privileged ``truth``.
-POSE_SOURCES = (*ESTIMATORS, TRUTH)
+#: Every pose source a wrapper accepts: the estimators, the privileged ``truth`` and the
+#: privileged ``degraded-truth`` (the accuracy curve's dial).
+POSE_SOURCES = (*ESTIMATORS, TRUTH, *PRIVILEGED)
 
 
 def sensor_model(env: gym.Env) -> SensorModel:
@@ -87,9 +95,11 @@ class PoseEstimateWrapper(gym.Wrapper):
       multi-input policies take it as it is.
 
     With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):
-    privileged, for reference runs only. The real estimators never see ``info``: each starts
-    an episode at the commanded start pose (the world's ``start`` or
-    ``options["start_pose"]``) with standard deviations ``start_std``.
+    privileged, for reference runs only; ``"degraded-truth"`` corrupts it with a configurable
+    error model (:mod:`stsf_gym.estimators.degraded_truth`), seeded by ``reset(seed=...)``.
+    The real estimators never see ``info``: each starts an episode at the commanded start
+    pose (the world's ``start`` or ``options["start_pose"]``) with standard deviations
+    ``start_std``.
     When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
     landmark from the pose estimate and the map (:class:`LandmarkPointer`) and the agent's
     action stays ``[v, w]``.
@@ -131,8 +141,10 @@ class PoseEstimateWrapper(gym.Wrapper):
         obs, info = self.env.reset(seed=seed, options=options)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
         model = sensor_model(self.env)
+        if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
+            self.estimator.seed(seed)
         self.estimator.reset(model, start, self.start_cov)
-        if isinstance(self.estimator, TruePose):
+        if hasattr(self.estimator, "see"):  # privileged: handed the true pose
             self.estimator.see(info["true_pose"])
         if self.pointer is not None:
             self.pointer.landmarks, self.pointer.walls = model.landmarks, model.walls
@@ -144,7 +156,7 @@ class PoseEstimateWrapper(gym.Wrapper):
             pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
             action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
         obs, reward, terminated, truncated, info = self.env.step(action)
-        if isinstance(self.estimator, TruePose):
+        if hasattr(self.estimator, "see"):
             self.estimator.see(info["true_pose"])
         mean, cov = self.estimator.update(obs, self.env.unwrapped.dt)
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info

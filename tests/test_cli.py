@@ -4,6 +4,8 @@ import sys
 
 import pytest
 
+from stsf_gym.results import check_rows
+
 CLI = [sys.executable, "-m", "stsf_gym.cli"]
 
 
@@ -18,13 +20,14 @@ def test_demo_json_and_files(tmp_path):
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)  # stdout holds nothing but the JSON
     assert summary["seeds"] == [1, 1] and summary["world"] == "irl_corridor"
-    assert [row["estimator"] for row in summary["table"]] == [
+    assert [row["estimator"] for row in summary["rows"]] == [
         "odometry",
         "conventional",
         "stsf",
         "ekf",
     ]
-    assert all(row["success rate"] == 0.0 for row in summary["table"])  # 3 s: not there yet
+    check_rows(summary["rows"])
+    assert all(row["success_rate"]["mean"] == 0.0 for row in summary["rows"])  # 3 s: too short
     assert (out / "trajectories.png").stat().st_size > 10_000
     assert json.loads((out / "results.json").read_text())["rows"][0]["episodes"] == 1
     assert "| estimator |" in (out / "results.md").read_text()

@@ -4,6 +4,7 @@ import json
 
 from stsf_gym.cli import main
 from stsf_gym.experiments.compare import agent_for, compare
+from stsf_gym.results import check_rows
 
 SHORT = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 8.0}}
 
@@ -21,11 +22,13 @@ def test_comparison_has_a_row_per_pair_and_a_figure(tmp_path):
         ("follower", "odometry"),
     ]
     assert all(r["episodes"] == 2 for r in rows)
-    assert rows[0]["final error (m)"].startswith("0.000")  # the true pose has no error
-    assert not rows[1]["final error (m)"].startswith("0.000")  # dead reckoning drifts
+    assert rows[0]["final_error_m"]["mean"] < 1e-4  # the true pose has no error
+    assert rows[1]["final_error_m"]["mean"] > 1e-3  # dead reckoning drifts
     assert (tmp_path / "comparison.png").stat().st_size > 0
     saved = json.loads((tmp_path / "comparison.json").read_text())
     assert [r["estimator"] for r in saved["rows"]] == ["truth", "odometry"]
+    check_rows(saved["rows"])
+    assert "| ATE RMSE (m) |" in (tmp_path / "comparison.md").read_text()
 
 
 def test_cli_names_a_missing_model_of_one_pose_source(tmp_path, capsys):

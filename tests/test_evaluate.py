@@ -6,6 +6,7 @@ import pytest
 
 import stsf_gym.experiments.episodes as episodes
 from stsf_gym.experiments.evaluate import evaluate
+from stsf_gym.results import SCHEMA_VERSION, check_rows
 
 FAST = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 4.0}}
 
@@ -16,9 +17,14 @@ def test_evaluate_writes_table_figures_and_resumes(tmp_path, monkeypatch):
     )
     row = summary["rows"][0]
     assert row["estimator"] == "odometry" and row["episodes"] == 2
-    assert row["success rate"] == 0.0  # 4 s is far too short for 10 m
-    for name in ("results.json", "results.md", "trajectories.png", "errors.png"):
+    assert row["success_rate"] == {"mean": 0.0, "std": 0.0, "count": 2, "values": [0.0, 0.0]}
+    for name in ("results.json", "results.md", "trajectories.png", "errors.png", "nees.png"):
         assert (tmp_path / name).stat().st_size > 0
+    for seed in (0, 1):  # every step of each episode, as TUM files
+        folder = tmp_path / "episodes" / "trajectories" / f"straight_10m-odometry-follower-{seed}"
+        lines = (folder / "estimate.txt").read_text().splitlines()
+        assert len(lines) == 1 + 41 and len(lines[1].split()) == 8  # header, t = 0 and 40 steps
+        assert (folder / "truth.txt").read_text().splitlines()[-1].startswith("4.0")
     files = sorted((tmp_path / "episodes").glob("*.json"))
     assert len(files) == 2
     stamps = [f.stat().st_mtime_ns for f in files]
@@ -64,14 +70,34 @@ def test_evaluate_cli_json_schema(tmp_path):
     summary = json.loads(result.stdout)
     assert set(summary) >= {"world", "agent", "seeds", "rows", "figures"}
     assert [row["estimator"] for row in summary["rows"]] == ["odometry", "ekf"]
+    assert summary["schema_version"] == SCHEMA_VERSION
     assert set(summary["rows"][0]) >= {
-        "success rate",
-        "final error (m)",
-        "NEES",
-        "NEES 95% bounds",
-        "landmark match rate",
-        "ms per step",
+        "agent",
+        "estimator",
+        "success_rate",
+        "collision_rate",
+        "ate_rmse_m",
+        "rpe_trans_m_per_m",
+        "rpe_rot_deg_per_m",
+        "final_error_m",
+        "nees_mean",
+        "nees_bounds",
+        "nees_in_bounds",
+        "nis_mean",
+        "nis_bounds",
+        "match_rate",
+        "ms_per_step",
     }
+    check_rows(summary["rows"])
+    ekf = summary["rows"][1]
+    assert ekf["nis_mean"]["count"] == 1 and ekf["nis_bounds"][0] < 2 < ekf["nis_bounds"][1]
+    assert summary["rows"][0]["nis_mean"] == {
+        "mean": None,
+        "std": None,
+        "count": 0,
+        "values": [None],
+    }
+    assert isinstance(ekf["ms_per_step"]["update"]["mean"], float)
 
 
 def test_unknown_estimator_rejected(tmp_path):

@@ -3,6 +3,7 @@ estimators surviving (finite estimate, positive definite covariance) and recover
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -12,6 +13,7 @@ from envs.config import ConfigError, load_config
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
 from stsf_gym.experiments.fault_runs import recovery
+from stsf_gym.results import check_rows
 
 STRAIGHT = "stsf_gym/Straight10m-v0"
 SIMULATED = {"camera__mode": "fast"}  # detections simulated: the camera faults without rendering
@@ -221,10 +223,10 @@ def test_evaluate_reports_fault_runs(tmp_path):
     )
     rows = {row["estimator"]: row for row in summary["rows"]}
     assert set(runs) == {"kidnap/odometry", "kidnap/ekf"}
-    assert rows["ekf"]["fault set"] == "kidnap" and rows["ekf"]["recovered"] == "1/1"
-    assert (
-        rows["odometry"]["recovered"] == "0/1" and rows["odometry"]["valid (finite, PD)"] == "1/1"
-    )
+    assert rows["ekf"]["fault_set"] == "kidnap" and rows["ekf"]["recovered_rate"]["mean"] == 1.0
+    assert rows["odometry"]["recovered_rate"]["mean"] == 0.0
+    assert rows["odometry"]["valid_rate"]["mean"] == 1.0
+    check_rows(json.loads((tmp_path / "out" / "results.json").read_text())["rows"])
     assert "recovery distance (m)" in (tmp_path / "out" / "results.md").read_text()
     bad = tmp_path / "bad.yaml"
     bad.write_text("faults:\n  - {kind: kidnap, start: 8.0}\nsonar: {}\n")

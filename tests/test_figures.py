@@ -3,6 +3,7 @@ import json
 import pytest
 
 from stsf_gym.experiments.figures import fig10, fig11
+from stsf_gym.results import check_rows
 
 SHORT = {"sim": {"max_episode_seconds": 3.0}}
 
@@ -21,6 +22,8 @@ def test_reproduce_figures_schema(tmp_path, run, estimators):
     assert [row["estimator"] for row in on_disk["paper_rows"]] == estimators
     assert [row["estimator"] for row in on_disk["rows"]] == estimators
     assert all("paper" in row for row in on_disk["paper_rows"])
+    check_rows(on_disk["rows"])
+    check_rows(on_disk["paper_rows"], "paper_rows")
     assert on_disk["seeds"] == summary["seeds"] == [0, 0]
     assert (tmp_path / f"{name}.md").read_text().startswith("# Fig.")
     assert (tmp_path / "errors.png").stat().st_size > 10_000

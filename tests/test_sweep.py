@@ -14,6 +14,7 @@ from envs.config import ConfigError
 from stsf_gym.experiments import sweep_cells
 from stsf_gym.experiments.sweep import load_sweep, run_sweep
 from stsf_gym.experiments.sweep_cells import CellKind
+from stsf_gym.results import check_rows
 
 TINY = {  # 2 estimators x 1 noise key x 2 levels x 1 seed, 12 s episodes, fast camera
     "base": {
@@ -123,8 +124,9 @@ def test_local_sweep_writes_summary_and_resumes(local_run, monkeypatch):
         (g["values"]["estimator"], g["values"]["env.encoders.radius_error_std"]): g["metrics"]
         for g in summary["groups"]
     }
-    assert len(groups) == 4 and all(m["final error (m)"]["n"] == 1 for m in groups.values())
-    odometry = [groups["odometry", level]["final error (m)"]["mean"] for level in (0.0033, 0.0264)]
+    assert len(groups) == 4 and all(m["final_error_m"]["count"] == 1 for m in groups.values())
+    check_rows([g["metrics"] for g in summary["groups"]], "groups")
+    odometry = [groups["odometry", level]["final_error_m"]["mean"] for level in (0.0033, 0.0264)]
     assert odometry[0] != odometry[1]  # the swept noise reached the env
     table = (out / "results.md").read_text()
     stamps = {f: f.stat().st_mtime_ns for f in (out / "cells").glob("*.json")}
@@ -141,7 +143,7 @@ def fake_cell(cell: dict) -> dict:
     if cell["estimator"] == "stsf":
         raise RuntimeError(f"no landmarks for seed {cell['seed']}")
     level = cell["values"]["env.encoders.slip_std"]
-    return {"metrics": {"final error (m)": level * (1 + cell["seed"]), "RMS error (m)": level}}
+    return {"metrics": {"final_error_m": level * (1 + cell["seed"]), "ate_rmse_m": level}}
 
 
 def test_failed_cells_are_reported_and_retried(tmp_path, monkeypatch):
@@ -163,7 +165,8 @@ def test_failed_cells_are_reported_and_retried(tmp_path, monkeypatch):
     assert summary["failed"][0]["error"] == "RuntimeError: no landmarks for seed 0"
     odometry = summary["groups"][0]
     assert odometry["values"] == {"estimator": "odometry", "env.encoders.slip_std": 0.01}
-    assert odometry["metrics"]["final error (m)"]["mean"] == pytest.approx(0.015)
+    assert odometry["metrics"]["final_error_m"]["mean"] == pytest.approx(0.015)
+    assert odometry["metrics"]["final_error_m"]["values"] == pytest.approx([0.01, 0.02])
     assert "## Failed cells" in (tmp_path / "out" / "results.md").read_text()
     calls.clear()
     monkeypatch.setitem(

@@ -8,6 +8,7 @@ import pytest
 
 from envs.config import ConfigError
 from stsf_gym.experiments.table1 import SeedResult, Table1Run, load_table1_config, summarise
+from stsf_gym.results import check_rows
 
 SMALL = {"distances": [5.06, 5.52], "frames_per_location": 5, "seeds": 1}
 
@@ -89,5 +90,6 @@ def test_cli_reproduce_table1_json(tmp_path):
     assert result.returncode == 0, result.stderr
     rows = json.loads(result.stdout)["rows"]
     assert len(rows) == 1 and rows[0]["pairs"] == 2
+    check_rows(rows)
     assert (tmp_path / "table1" / "table1.png").stat().st_size > 10_000
     assert "| row |" in (tmp_path / "table1" / "table1.md").read_text()

@@ -21,9 +21,15 @@ ESTIMATORS: dict[str, str] = {
     "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
 }
+#: Privileged pose sources built like estimators but handed the true pose (``see``) by the
+#: wrapper: for the accuracy curve only, never a real estimator.
+PRIVILEGED: dict[str, str] = {
+    "degraded-truth": "stsf_gym.estimators.degraded_truth:DegradedTruth",
+}
 
 __all__ = [
     "ESTIMATORS",
+    "PRIVILEGED",
     "MapLandmark",
     "PoseEstimator",
     "SensorModel",
@@ -33,10 +39,12 @@ __all__ = [
 
 
 def estimator_class(name: str) -> type[PoseEstimator]:
-    """The class of estimator ``name``; an unknown name lists the known ones."""
-    if name not in ESTIMATORS:
-        raise ValueError(f"unknown estimator {name!r}; known: {', '.join(sorted(ESTIMATORS))}")
-    module, _, class_name = ESTIMATORS[name].partition(":")
+    """The class of estimator (or privileged source) ``name``; an unknown name lists the
+    known ones."""
+    known = {**ESTIMATORS, **PRIVILEGED}
+    if name not in known:
+        raise ValueError(f"unknown estimator {name!r}; known: {', '.join(sorted(known))}")
+    module, _, class_name = known[name].partition(":")
     return getattr(importlib.import_module(module), class_name)
 
 

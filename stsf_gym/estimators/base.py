@@ -91,6 +91,10 @@ class PoseEstimator(ABC):
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Fold in one step's observation; return the pose estimate and its covariance."""
 
+    def innovations(self) -> list[tuple[float, int]]:
+        """NIS and dimension of every measurement innovation tested this episode."""
+        return []
+
     def timed(self, stage: str):
         """Context manager adding the wall time of a block to ``timings[stage]``."""
         return _Timer(self.timings, stage)

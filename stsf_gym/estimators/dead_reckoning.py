@@ -53,6 +53,9 @@ class OdometryEstimator(PoseEstimator):
         self.cov = self.errors.P
         return d_left, d_right
 
+    def innovations(self) -> list[tuple[float, int]]:
+        return list(self.errors.nis)
+
     def restart(self, mean: np.ndarray, cov: np.ndarray) -> None:
         """Start again from ``mean`` with covariance ``cov`` (re-localisation)."""
         self.mean = np.asarray(mean, dtype=float).copy()

@@ -54,6 +54,8 @@ class PoseErrors:
         self.joint = np.zeros((3 + k, 3 + k))
         self.joint[self.considered, self.considered] = considered_cov
         self.keys: list[Hashable] = []
+        #: ``(nu^T S^-1 nu, len(nu))`` of every innovation tested, gated out or not (NIS).
+        self.nis: list[tuple[float, int]] = []
         self.restart(cov)
 
     @property
@@ -153,6 +155,7 @@ class PoseErrors:
         except np.linalg.LinAlgError:
             return None
         whitened = np.linalg.solve(chol, innovation)
+        self.nis.append((float(whitened @ whitened), len(innovation)))
         if not whitened @ whitened <= gate:  # also rejects NaN
             return None
         K = -np.linalg.solve(S, L @ self.joint[:, POSE]).T  # -Cov(e, nu) S^-1

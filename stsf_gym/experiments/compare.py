@@ -4,9 +4,9 @@
 agent on each pose source; ``{estimator}`` in a model path is replaced by the pose source, so
 each source is driven by the agent trained on it. Every pair runs the same seeded episodes as
 :func:`stsf_gym.experiments.evaluate.evaluate` (same env, wrapper and scoring), in parallel,
-with resume. Writes ``comparison.json``, ``comparison.md`` (one row per pair: success rate,
-collisions, errors, NEES, ...) and ``comparison.png`` (success rate and RMS position error per
-pair).
+with resume. Writes ``comparison.json`` (the results schema: numbers), ``comparison.md`` (one
+row per pair: success rate, collisions, ATE, RPE, NEES, ...) and ``comparison.png`` (success
+rate and RMS position error per pair).
 """
 
 from __future__ import annotations
@@ -25,18 +25,20 @@ from stsf_gym.experiments.plots import pyplot
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms, summarise
 from stsf_gym.io import markdown_table, save_figure
+from stsf_gym.results import SCHEMA_VERSION, rendered
 
 SUMMARY_COLUMNS = (
     "agent",
     "estimator",
     "episodes",
-    "success rate",
-    "collisions",
-    "distance before failure (m)",
-    "final error (m)",
-    "RMS error (m)",
-    "RMS heading error (deg)",
-    "NEES",
+    "success_rate",
+    "collision_rate",
+    "distance_before_failure_m",
+    "ate_rmse_m",
+    "rpe_trans_m_per_m",
+    "final_error_m",
+    "rms_heading_error_deg",
+    "nees_mean",
 )
 
 
@@ -79,14 +81,15 @@ def compare(
         ]
         for a, e in pairs
     }
-    rows = [{"agent": a, **summarise(e, episodes)} for (a, e), episodes in by_pair.items()]
+    rows = [summarise(e, episodes, a) for (a, e), episodes in by_pair.items()]
     summary = {
+        "schema_version": SCHEMA_VERSION,
         "world": world,
         "agents": agents,
         "seeds": [seed, seed + seeds - 1],
         "rows": rows,
     }
-    table = markdown_table([{k: row[k] for k in SUMMARY_COLUMNS} for row in rows])
+    table = markdown_table([rendered(row, SUMMARY_COLUMNS) for row in rows])
     write_report(
         out, summary, f"Agents x pose sources on {world}", table, "comparison.json", "comparison.md"
     )

@@ -1,8 +1,10 @@
 """One seeded episode of an agent driving on an estimator's pose, and what it measured.
 
 The agent sees the wrapped observation (``obs["pose"]`` is the estimate); the true pose from
-``info`` is used only to score the run. A run of many episodes keeps each finished episode
-in its own JSON file, so an interrupted run resumes where it stopped.
+``info`` is used only to score the run. Every step is recorded (time, distance, true pose,
+estimate and covariance), and the estimator's innovations (NIS). A run of many episodes keeps
+each finished episode in its own JSON file, so an interrupted run resumes where it stopped,
+and writes each episode's true and estimated trajectories as TUM files.
 """
 
 from __future__ import annotations
@@ -16,10 +18,11 @@ import numpy as np
 from stsf_gym.episode_env import make_episode_env
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.experiments.cache import run_cached
+from stsf_gym.metrics import distance_to_path, nees, pose_error
+from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import TRUTH
 
-TRACE_EVERY = 10  # steps between stored trajectory samples
-RESULT_VERSION = 4  # bumped when EpisodeResult changes, so older episode files are rerun
+RESULT_VERSION = 5  # bumped when EpisodeResult changes, so older episode files are rerun
 
 
 @dataclass(frozen=True)
@@ -41,20 +44,21 @@ class EpisodeSpec:
 
 @dataclass
 class EpisodeResult:
+    """One episode, recorded at every control step (the estimator updates at each), starting
+    with the pose the estimator starts from at reset (time 0)."""
+
     spec: dict
     outcome: str  # goal | collision | time
     distance: float  # metres driven (true)
     sim_time: float
     steps: int
-    errors: list[float]  # position error per stored sample (m)
-    heading_errors: list[float]  # rad, per stored sample
-    travelled: list[float]  # distance driven at each sample (m)
-    times: list[float]  # simulated time of each sample (s)
-    true_xy: list[list[float]]
-    estimate_xy: list[list[float]]
-    covariances: list[list[float]]  # 2x2 position covariance per sample, flattened
-    nees: float  # time average of the 3-dof NEES
-    nees_trace: list[float]  # NEES at each stored sample
+    times: list[float]  # simulated time of each record (s)
+    travelled: list[float]  # distance driven at each record (m)
+    true_poses: list[list[float]]  # [x, y, yaw] (privileged, from info)
+    estimates: list[list[float]]  # [x, y, yaw] the agent saw
+    covariances: list[list[float]]  # upper triangle of each 3x3 covariance (xx xy xt yy yt tt)
+    nis: list[list[float]]  # [NIS, dof] of every measurement innovation the estimator tested
+    path_errors: list[float]  # true distance to the world's path (m), the agent's tracking
     frames: int
     camera_frames: int
     frames_in_view: int  # camera frames with a landmark wholly in view (true camera pose)
@@ -65,6 +69,46 @@ class EpisodeResult:
     finite: bool  # pose and covariance finite at every step
     min_cov_eigenvalue: float  # smallest eigenvalue of the covariance over the steps
     stage_ms_per_step: dict[str, float]
+
+    @property
+    def pose_errors(self) -> np.ndarray:
+        """``estimate - truth`` per record, yaw wrapped, ``(N, 3)``."""
+        return pose_error(self.estimates, self.true_poses)
+
+    @property
+    def errors(self) -> np.ndarray:
+        """Position error per record (m)."""
+        return np.hypot(*self.pose_errors[:, :2].T)
+
+    @property
+    def heading_errors(self) -> np.ndarray:
+        """Heading error per record (rad, signed)."""
+        return self.pose_errors[:, 2]
+
+    @property
+    def true_xy(self) -> np.ndarray:
+        return np.asarray(self.true_poses)[:, :2]
+
+    @property
+    def estimate_xy(self) -> np.ndarray:
+        return np.asarray(self.estimates)[:, :2]
+
+    @property
+    def cov_matrices(self) -> np.ndarray:
+        """The 3x3 covariance of each record, ``(N, 3, 3)``."""
+        upper = np.asarray(self.covariances)
+        full = upper[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]]
+        return full.reshape(-1, 3, 3)
+
+    @property
+    def nees_trace(self) -> np.ndarray:
+        """The 3-dof NEES of each record."""
+        return nees(self.pose_errors, self.cov_matrices)
+
+    @property
+    def nees(self) -> float:
+        """Time average of the NEES."""
+        return float(np.mean(self.nees_trace))
 
 
 def estimator_options(source: str) -> dict:
@@ -98,36 +142,33 @@ def make_agent(name: str, env, options: dict | None = None):
 
 
 def run_episode(spec: EpisodeSpec) -> EpisodeResult:
-    """Drive one episode to its end; score the estimate against the true pose."""
+    """Drive one episode to its end; record the estimate and the true pose at every step."""
     env = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
     try:
         act = make_agent(spec.agent, env, spec.agent_options)
         obs, info = env.reset(seed=spec.seed)
-        samples: dict[str, list] = {k: [] for k in ("e", "h", "d", "s", "t", "x", "c", "n")}
-        nees, steps, frames, in_view, terminated, truncated = [], 0, 0, 0, False, False
-        finite, min_eig = True, math.inf
-        while not (terminated or truncated):
+        path = np.asarray(env.unwrapped.config.world.path, dtype=float)
+        record: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
+        frames, in_view, terminated, truncated = 0, 0, False, False
+        finite, min_eig, steps = True, math.inf, 0
+        while True:
+            cov = obs["pose_cov"].reshape(3, 3).astype(float)
+            pose = obs["pose"].astype(float)
+            finite = finite and bool(np.isfinite(pose).all() and np.isfinite(cov).all())
+            if finite:
+                min_eig = min(min_eig, float(np.linalg.eigvalsh(cov)[0]))
+            record["t"].append(float(info["sim_time"]) if steps else 0.0)
+            record["d"].append(float(info["distance_travelled"]) if steps else 0.0)
+            record["true"].append(np.asarray(info["true_pose"], dtype=float).tolist())
+            record["est"].append(pose.tolist())
+            record["cov"].append(cov[np.triu_indices(3)].tolist())
+            if terminated or truncated:
+                break
             obs, _, terminated, truncated, info = env.step(act(obs))
             steps += 1
             if obs["image_new"]:
                 frames += 1
                 in_view += bool(env.unwrapped.landmarks_in_view())
-            error = obs["pose"].astype(float) - info["true_pose"]
-            error[2] = math.remainder(error[2], math.tau)
-            cov = obs["pose_cov"].reshape(3, 3).astype(float)
-            finite = finite and bool(np.isfinite(error).all() and np.isfinite(cov).all())
-            if finite:
-                min_eig = min(min_eig, float(np.linalg.eigvalsh(cov)[0]))
-            nees.append(float(error @ np.linalg.solve(cov, error)))
-            if steps % TRACE_EVERY == 0 or terminated or truncated:
-                samples["e"].append(float(np.hypot(*error[:2])))
-                samples["n"].append(nees[-1])
-                samples["h"].append(float(error[2]))
-                samples["d"].append(float(info["distance_travelled"]))
-                samples["s"].append(float(info["sim_time"]))
-                samples["t"].append(info["true_pose"][:2].tolist())
-                samples["x"].append(obs["pose"][:2].astype(float).tolist())
-                samples["c"].append(cov[:2, :2].ravel().tolist())
         counters = env.estimator.counters
         outcome = "collision" if info["collision"] else "goal" if terminated else "time"
         return EpisodeResult(
@@ -136,15 +177,13 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             distance=float(info["distance_travelled"]),
             sim_time=float(info["sim_time"]),
             steps=steps,
-            errors=samples["e"],
-            heading_errors=samples["h"],
-            travelled=samples["d"],
-            times=samples["s"],
-            true_xy=samples["t"],
-            estimate_xy=samples["x"],
-            covariances=samples["c"],
-            nees=float(np.mean(nees)),
-            nees_trace=samples["n"],
+            times=record["t"],
+            travelled=record["d"],
+            true_poses=record["true"],
+            estimates=record["est"],
+            covariances=record["cov"],
+            nis=[list(value) for value in env.estimator.innovations()],
+            path_errors=distance_to_path(np.array(record["true"])[:, :2], path).tolist(),
             frames=counters.get("frames", 0),
             camera_frames=frames,
             frames_in_view=in_view,
@@ -158,6 +197,15 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
         )
     finally:
         env.close()
+
+
+def write_trajectories(episode: EpisodeResult, folder: Path) -> Path:
+    """``truth.txt`` and ``estimate.txt`` (TUM format) of the episode in ``folder/<key>/``;
+    ``evo_ape tum truth.txt estimate.txt`` reads them unchanged."""
+    target = folder / _spec(episode.spec).key
+    write_tum(target / "truth.txt", episode.times, episode.true_poses)
+    write_tum(target / "estimate.txt", episode.times, episode.estimates)
+    return target
 
 
 def _spec(job: dict) -> EpisodeSpec:
@@ -175,7 +223,10 @@ def _name(job: dict) -> str:
 def run_episodes(
     specs: list[EpisodeSpec], folder: Path, workers: int = 1, desc: str = "episodes"
 ) -> list[EpisodeResult]:
-    """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``."""
+    """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``; the
+    TUM trajectories of each go to ``folder/trajectories/<episode>/``."""
     jobs = [{"version": RESULT_VERSION, **asdict(spec)} for spec in specs]
-    results = run_cached(_run, jobs, folder, _name, workers, desc)
-    return [EpisodeResult(**result) for result in results]
+    results = [EpisodeResult(**r) for r in run_cached(_run, jobs, folder, _name, workers, desc)]
+    for episode in results:
+        write_trajectories(episode, Path(folder) / "trajectories")
+    return results

@@ -1,17 +1,20 @@
 """``stsf-gym evaluate``: an agent driving on each estimator's pose, over seeded episodes.
 
-Writes ``results.json``, ``results.md`` (one row per estimator,
-:func:`~stsf_gym.experiments.statistics.summarise`), ``trajectories.png`` (true vs estimated
-paths over the map, with 2-sigma ellipses) and ``errors.png`` (position and heading error
-against distance driven). Finished episodes are kept in ``episodes/`` and reused by a rerun
-with the same ``--out``. With fault files, every fault set runs on every estimator instead
-(:mod:`stsf_gym.experiments.fault_runs`).
+Writes ``results.json`` (numbers: the results schema, :mod:`stsf_gym.results`), ``results.md``
+(one row per estimator, :func:`~stsf_gym.experiments.statistics.summarise`, rendered from the
+JSON), ``trajectories.png`` (true vs estimated paths over the map, with 2-sigma ellipses),
+``errors.png`` (position and heading error against distance driven), ``nees.png`` (NEES over
+time with its chi-square bounds) and each episode's TUM trajectories
+(``episodes/trajectories/<episode>/{truth,estimate}.txt``). Finished episodes are kept in
+``episodes/`` and reused by a rerun with the same ``--out``. With fault files, every fault
+set runs on every estimator instead (:mod:`stsf_gym.experiments.fault_runs`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.experiments.consistency_plot import plot_nees
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
@@ -23,6 +26,7 @@ from stsf_gym.experiments.plots import plot_errors, plot_trajectories
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import summarise
 from stsf_gym.io import markdown_table
+from stsf_gym.results import SCHEMA_VERSION, rendered
 
 
 def evaluate(
@@ -56,17 +60,25 @@ def evaluate(
     ]
     results = run_episodes(specs, out / "episodes", workers, desc=f"evaluate {world}")
     by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
-    rows = [summarise(name, episodes) for name, episodes in by_estimator.items()]
-    summary = {"world": world, "agent": agent, "seeds": [seed, seed + seeds - 1], "rows": rows}
+    rows = [summarise(name, episodes, agent) for name, episodes in by_estimator.items()]
+    summary = {
+        "schema_version": SCHEMA_VERSION,
+        "world": world,
+        "agent": agent,
+        "seeds": [seed, seed + seeds - 1],
+        "rows": rows,
+    }
     title = agent
     if agent != "follower":  # a saved model: record what it was trained on
         from agents.sb3_agent import training_record
 
         summary["trained"] = training_record(agent)
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
-    write_report(out, summary, f"Evaluation: {title} on {world}", markdown_table(rows))
+    table = markdown_table([rendered(row) for row in rows])
+    write_report(out, summary, f"Evaluation: {title} on {world}", table)
     summary["figures"] = [
         str(plot_trajectories(world, by_estimator, out / "trajectories.png")),
         str(plot_errors(by_estimator, out / "errors.png")),
+        str(plot_nees(by_estimator, out / "nees.png")),
     ]
     return summary, by_estimator

@@ -15,8 +15,8 @@ table (``results.md``, ``results.json``) has one row per fault set and estimator
   error never left that bound), and *error after recovery* the mean error from then on. A set
   whose faults all last to the episode's end has no recovery.
 
-Errors are sampled once a second of simulated time (``TRACE_EVERY`` steps), so a recovery
-distance is known to about one second of driving (12 cm at the nominal speed).
+Errors are recorded at every control step, so a recovery distance is known to one step of
+driving (1.2 cm at the nominal speed).
 """
 
 from __future__ import annotations
@@ -35,8 +35,8 @@ from stsf_gym.experiments.episodes import (
 )
 from stsf_gym.experiments.plots import plot_errors
 from stsf_gym.experiments.reports import write_report
-from stsf_gym.experiments.statistics import mean_std
 from stsf_gym.io import markdown_table
+from stsf_gym.results import SCHEMA_VERSION, rendered, stat
 
 RECOVERY_FLOOR = 0.10  # m: an error under this counts as recovered whatever it was before
 PRE_FAULT_SECONDS = 10.0  # s of simulated time before the first fault: the pre-fault level
@@ -89,13 +89,15 @@ def evaluate_faults(
             runs[f"{name}/{estimator}"] = episodes
         figures.append(str(plot_errors(by_estimator, out / f"errors-{name}.png")))
     summary = {
+        "schema_version": SCHEMA_VERSION,
         "world": world,
         "agent": agent,
         "seeds": [seed, seed + seeds - 1],
         "recovery_floor_m": RECOVERY_FLOOR,
         "rows": rows,
     }
-    write_report(out, summary, f"Fault runs: {agent} on {world}", markdown_table(rows))
+    table = markdown_table([rendered(row, headers=HEADERS) for row in rows])
+    write_report(out, summary, f"Fault runs: {agent} on {world}", table)
     summary["figures"] = figures
     return summary, runs
 
@@ -121,26 +123,38 @@ def recovery(episode: EpisodeResult, start: float, end: float | None) -> dict:
     return result
 
 
+#: Table headers of the fault rows' own keys (the rest: :data:`stsf_gym.results.METRICS`).
+HEADERS = {
+    "fault_set": "fault set",
+    "valid_rate": "valid (finite, PD)",
+    "pre_fault_error_m": "pre-fault error (m)",
+    "recovered_rate": "recovered",
+    "recovery_distance_m": "recovery distance (m)",
+    "max_recovery_distance_m": "max recovery distance (m)",
+    "error_after_recovery_m": "error after recovery (m)",
+}
+
+
 def summarise_faults(
     fault_set: str, estimator: str, episodes: list[EpisodeResult], start: float, end
 ) -> dict:
-    """One table row: a fault set on an estimator over its episodes."""
+    """One results row: a fault set on an estimator over its episodes (numbers only)."""
     recoveries = [recovery(e, start, end) for e in episodes]
     back = [r for r in recoveries if r.get("recovered")]
     return {
-        "fault set": fault_set,
+        "fault_set": fault_set,
         "estimator": estimator,
         "episodes": len(episodes),
-        "success rate": float(np.mean([e.outcome == "goal" for e in episodes])),
-        "collisions": sum(e.outcome == "collision" for e in episodes),
-        "valid (finite, PD)": f"{sum(e.finite and e.min_cov_eigenvalue > 0 for e in episodes)}"
-        f"/{len(episodes)}",
-        "final error (m)": mean_std([e.errors[-1] for e in episodes]),
-        "max error (m)": mean_std([max(e.errors) for e in episodes]),
-        "pre-fault error (m)": float(np.mean([r["pre_fault"] for r in recoveries])),
-        "recovered": "-" if end is None else f"{len(back)}/{len(episodes)}",
-        "recovery distance (m)": mean_std([r["distance"] for r in back]) if back else "-",
-        "max recovery distance (m)": max(r["distance"] for r in back) if back else "-",
-        "error after recovery (m)": mean_std([r["error_after"] for r in back]) if back else "-",
-        "relocalised": float(np.mean([e.relocalised for e in episodes])),
+        "seeds": [e.spec["seed"] for e in episodes],
+        "success_rate": stat(e.outcome == "goal" for e in episodes),
+        "collision_rate": stat(e.outcome == "collision" for e in episodes),
+        "valid_rate": stat(e.finite and e.min_cov_eigenvalue > 0 for e in episodes),
+        "final_error_m": stat(float(e.errors[-1]) for e in episodes),
+        "max_error_m": stat(float(np.max(e.errors)) for e in episodes),
+        "pre_fault_error_m": stat(r["pre_fault"] for r in recoveries),
+        "recovered_rate": stat(None if end is None else r["recovered"] for r in recoveries),
+        "recovery_distance_m": stat(r["distance"] for r in back),
+        "max_recovery_distance_m": max((r["distance"] for r in back), default=None),
+        "error_after_recovery_m": stat(r["error_after"] for r in back),
+        "relocalised": stat(e.relocalised for e in episodes),
     }

@@ -18,8 +18,8 @@ import numpy as np
 from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.reports import write_report
-from stsf_gym.experiments.statistics import mean_std
 from stsf_gym.io import markdown_table
+from stsf_gym.results import rendered, stat
 
 FIG10_PAPER = {
     "odometry": "about 0.40 m off after 10 m; max 0.212 m in x, 0.405 m in y",
@@ -36,8 +36,23 @@ LATTER_PART_M = 12.0
 PATH_ONLY = {"avoidance": {"enabled": False}}
 
 
+HEADERS = {
+    "final_x_error_m": "final x error (m)",
+    "final_y_error_m": "final y error (m)",
+    "max_x_error_m": "max x error (m)",
+    "max_y_error_m": "max y error (m)",
+    "max_error_after_5m_m": "max error after 5 m (m)",
+    "mean_error_after_12m_m": f"mean error after {LATTER_PART_M:g} m (m)",
+}
+
+
 def _axis_errors(episode: EpisodeResult) -> np.ndarray:
-    return np.abs(np.array(episode.estimate_xy) - np.array(episode.true_xy))
+    return np.abs(episode.estimate_xy - episode.true_xy)
+
+
+def _after(episode: EpisodeResult, distance: float) -> np.ndarray:
+    """Position errors once ``distance`` metres have been driven."""
+    return episode.errors[np.asarray(episode.travelled) >= distance]
 
 
 def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
@@ -55,21 +70,14 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
     for name in ("odometry", "stsf", "ekf"):
         episodes = by_estimator[name]
         axis = [_axis_errors(e) for e in episodes]
-        after5 = [
-            max(
-                (err for err, d in zip(e.errors, e.travelled, strict=True) if d >= 5.0),
-                default=np.nan,
-            )
-            for e in episodes
-        ]
         rows.append(
             {
                 "estimator": name,
-                "final x error (m)": mean_std([a[-1, 0] for a in axis]),
-                "final y error (m)": mean_std([a[-1, 1] for a in axis]),
-                "max x error (m)": mean_std([a[:, 0].max() for a in axis]),
-                "max y error (m)": mean_std([a[:, 1].max() for a in axis]),
-                "max error after 5 m (m)": mean_std(after5),
+                "final_x_error_m": stat(a[-1, 0] for a in axis),
+                "final_y_error_m": stat(a[-1, 1] for a in axis),
+                "max_x_error_m": stat(a[:, 0].max() for a in axis),
+                "max_y_error_m": stat(a[:, 1].max() for a in axis),
+                "max_error_after_5m_m": stat(_maximum(_after(e, 5.0)) for e in episodes),
                 "paper": FIG10_PAPER.get(name, "-"),
             }
         )
@@ -83,33 +91,39 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
     )
     rows = []
     for name, row in zip(names, summary["rows"], strict=True):
-        episodes = by_estimator[name]
-        latter = [
-            np.mean(
-                [err for err, d in zip(e.errors, e.travelled, strict=True) if d >= LATTER_PART_M]
-                or [np.nan]
-            )
-            for e in episodes
-        ]
+        latter = [_after(e, LATTER_PART_M) for e in by_estimator[name]]
         rows.append(
             {
                 "estimator": name,
-                "reached goal": f"{row['success rate']:.0%}",
-                "collisions": row["collisions"],
-                "distance before failure (m)": row["distance before failure (m)"],
-                f"mean error after {LATTER_PART_M:g} m (m)": mean_std(latter),
-                "RMS heading error (deg)": row["RMS heading error (deg)"],
-                "landmark in view": row["landmark in view"],
-                "landmark match rate": row["landmark match rate"],
-                "NEES (95% bounds)": f"{row['NEES']:.2f} ({row['NEES 95% bounds']})",
+                **{
+                    key: row[key]
+                    for key in ("success_rate", "collision_rate", "distance_before_failure_m")
+                },
+                "mean_error_after_12m_m": stat(a.mean() if a.size else None for a in latter),
+                **{
+                    key: row[key]
+                    for key in (
+                        "rms_heading_error_deg",
+                        "landmark_in_view",
+                        "match_rate",
+                        "nees_mean",
+                        "nees_bounds",
+                    )
+                },
                 "paper": FIG11_PAPER.get(name, "-"),
             }
         )
     return _write(out, "fig11", "Fig. 11: navigation along the IRL corridor", summary, rows)
 
 
+def _maximum(values: np.ndarray) -> float | None:
+    return float(values.max()) if values.size else None
+
+
 def _write(out: Path, name: str, title: str, summary: dict, rows: list[dict]) -> dict:
     summary = {**summary, "paper_rows": rows}
-    body = f"{markdown_table(rows)}\n## All metrics\n\n{markdown_table(summary['rows'])}"
+    paper = markdown_table([rendered(row, headers=HEADERS) for row in rows])
+    every = markdown_table([rendered(row) for row in summary["rows"]])
+    body = f"{paper}\n## All metrics\n\n{every}"
     write_report(out, summary, title, body, f"{name}.json", f"{name}.md")
     return summary

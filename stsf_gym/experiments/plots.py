@@ -56,10 +56,9 @@ def plot_trajectories(world: str, by_estimator: dict[str, list[EpisodeResult]], 
         true_xy, est_xy = np.array(episode.true_xy), np.array(episode.estimate_xy)
         ax.plot(*true_xy.T, color="tab:green", label="true")
         ax.plot(*est_xy.T, color="tab:red", ls="--", label="estimate")
-        for xy, cov in list(zip(est_xy, episode.covariances, strict=True))[
-            :: max(1, len(est_xy) // 12)
-        ]:
-            _ellipse(ax, xy, np.reshape(cov, (2, 2)))
+        covs = episode.cov_matrices[:, :2, :2]
+        for xy, cov in list(zip(est_xy, covs, strict=True))[:: max(1, len(est_xy) // 12)]:
+            _ellipse(ax, xy, cov)
         ax.set_title(f"{name} (seed {episode.spec['seed']}): {episode.outcome}")
         ax.legend(fontsize=8)
     try:

@@ -1,76 +1,105 @@
-"""Metrics and statistics of episodes: table rows, NEES consistency, error curves.
+"""Metrics and statistics of episodes: results rows, NEES and NIS consistency, error curves.
 
 Every experiment scores its episodes here, so a metric means the same in each table.
+:func:`episode_metrics` gives one episode's numbers with the standard metrics of
+:mod:`stsf_gym.metrics` (ATE, RPE per metre over :data:`RPE_DELTA_M`, NEES, NIS, ...);
+:func:`summarise` gives a row of the results schema over episodes: each metric a
+:func:`stsf_gym.results.stat`, plus the Monte-Carlo consistency tests of NEES and NIS with their
+chi-square bounds.
 """
 
 from __future__ import annotations
 
 import math
+from collections import Counter
 
 import numpy as np
-from scipy.stats import chi2
 
 from stsf_gym.experiments.episodes import EpisodeResult
+from stsf_gym.metrics import ate_rmse, chi2_bounds, fraction_inside, rpe_per_metre
+from stsf_gym.results import finite_or_none, stat, stats
+
+#: Travelled distance of the RPE's pose pairs (m): ``evo_rpe --delta 1 --delta_unit m``.
+RPE_DELTA_M = 1.0
+
+
+def episode_metrics(episode: EpisodeResult) -> dict[str, float | None]:
+    """The metrics of one episode (None where it has none, e.g. no landmark frames)."""
+    errors = episode.errors
+    rpe = rpe_per_metre(episode.true_poses, episode.estimates, RPE_DELTA_M)
+    nis = np.asarray(episode.nis, dtype=float).reshape(-1, 2)
+    return {
+        "success_rate": float(episode.outcome == "goal"),
+        "collision_rate": float(episode.outcome == "collision"),
+        "ate_rmse_m": ate_rmse(episode.true_xy, episode.estimate_xy),
+        "rpe_trans_m_per_m": finite_or_none(rpe.trans_m_per_m),
+        "rpe_rot_deg_per_m": finite_or_none(rpe.rot_deg_per_m),
+        "final_error_m": float(errors[-1]),
+        "max_error_m": float(np.max(errors)),
+        "rms_heading_error_deg": math.degrees(rms(episode.heading_errors)),
+        "path_error_rms_m": rms(episode.path_errors),
+        "nees_mean": finite_or_none(episode.nees),
+        "nis_mean": float(nis[:, 0].mean()) if len(nis) else None,
+        "match_rate": episode.frames_matched / episode.frames if episode.frames else None,
+        "landmark_in_view": episode.frames_in_view / episode.camera_frames
+        if episode.camera_frames
+        else None,
+    }
+
+
+def summarise(estimator: str, episodes: list[EpisodeResult], agent: str | None = None) -> dict:
+    """One results row: the metrics over ``episodes`` and their consistency tests."""
+    per_episode = stats([episode_metrics(e) for e in episodes])
+    nees_in_bounds, nees_bounds = nees_consistency(episodes)
+    nis_in_bounds, nis_bounds = nis_consistency(episodes)
+    stages = sorted({k for e in episodes for k in e.stage_ms_per_step})
+    failed = [e.distance for e in episodes if e.outcome != "goal"]
+    return {
+        "agent": agent or episodes[0].spec["agent"],
+        "estimator": estimator,
+        "episodes": len(episodes),
+        "seeds": [e.spec["seed"] for e in episodes],
+        **{k: per_episode[k] for k in ("success_rate", "collision_rate")},
+        "distance_before_failure_m": stat(failed),
+        **{k: v for k, v in per_episode.items() if k not in ("success_rate", "collision_rate")},
+        "nees_bounds": nees_bounds,
+        "nees_in_bounds": nees_in_bounds,
+        "nis_bounds": nis_bounds,
+        "nis_in_bounds": nis_in_bounds,
+        "ms_per_step": {k: stat(e.stage_ms_per_step.get(k, 0.0) for e in episodes) for k in stages},
+    }
+
+
+def nees_consistency(episodes: list[EpisodeResult]) -> tuple[float, list[float]]:
+    """Monte-Carlo NEES test (Bar-Shalom, Li and Kirubarajan 2001, sect. 5.4).
+
+    At each step k, the NEES averaged over the M runs times M is chi-square with 3M degrees of
+    freedom for a consistent estimator; returns the fraction of steps (up to the shortest run)
+    whose average lies inside the two-sided 95 % bounds, and the bounds. The bounds also serve
+    for the time average in the table (time-averaging only narrows the spread, so they are
+    conservative for it); steps within a run are correlated, so using every step as a degree
+    of freedom would give far too narrow bounds.
+    """
+    bounds = chi2_bounds(3, len(episodes))
+    length = min(len(e.times) for e in episodes)
+    average = np.mean([e.nees_trace[:length] for e in episodes], axis=0)
+    return fraction_inside(average, bounds), list(bounds)
+
+
+def nis_consistency(episodes: list[EpisodeResult]) -> tuple[float | None, list[float] | None]:
+    """Fraction of the innovations whose NIS lies inside the 95 % chi-square bounds of its
+    dimension, and the bounds of the most common dimension (None without innovations)."""
+    nis = np.concatenate([np.reshape(e.nis, (-1, 2)) for e in episodes])
+    if not len(nis):
+        return None, None
+    inside = [fraction_inside([v], chi2_bounds(int(dof))) for v, dof in nis]
+    dof = Counter(int(d) for d in nis[:, 1]).most_common(1)[0][0]
+    return float(np.mean(inside)), list(chi2_bounds(dof))
 
 
 def rms(values) -> float:
     """Root mean square of ``values`` (NaN when there are none)."""
     return float(np.sqrt(np.mean(np.square(values)))) if len(values) else math.nan
-
-
-def mean_std(values) -> str:
-    """``"mean ± std"`` of the finite ``values`` (NaN left out), ``"-"`` when none remain."""
-    values = [v for v in values if not np.isnan(v)]
-    return f"{np.mean(values):.3f} ± {np.std(values):.3f}" if values else "-"
-
-
-def summarise(estimator: str, episodes: list[EpisodeResult]) -> dict:
-    """One table row: success, failures, errors, consistency, landmark matching, timing."""
-    final = [e.errors[-1] for e in episodes]
-    worst = [max(e.errors) for e in episodes]
-    heading = [rms(e.heading_errors) for e in episodes]
-    nees_in_bounds, (lo, hi) = nees_consistency(episodes)
-    failed = [e.distance for e in episodes if e.outcome != "goal"]
-    frames = sum(e.frames for e in episodes)
-    stages = sorted({k for e in episodes for k in e.stage_ms_per_step})
-    return {
-        "estimator": estimator,
-        "episodes": len(episodes),
-        "success rate": np.mean([e.outcome == "goal" for e in episodes]),
-        "collisions": sum(e.outcome == "collision" for e in episodes),
-        "distance before failure (m)": float(np.mean(failed)) if failed else "-",
-        "final error (m)": mean_std(final),
-        "RMS error (m)": mean_std([rms(e.errors) for e in episodes]),
-        "max error (m)": mean_std(worst),
-        "RMS heading error (deg)": mean_std(np.degrees(heading)),
-        "NEES": float(np.mean([e.nees for e in episodes])),
-        "NEES 95% bounds": f"{lo:.2f}-{hi:.2f}",
-        "NEES in bounds": nees_in_bounds,
-        "landmark in view": sum(e.frames_in_view for e in episodes)
-        / max(1, sum(e.camera_frames for e in episodes)),
-        "landmark match rate": sum(e.frames_matched for e in episodes) / frames if frames else "-",
-        "ms per step": ", ".join(
-            f"{k} {np.mean([e.stage_ms_per_step.get(k, 0.0) for e in episodes]):.2f}"
-            for k in stages
-        ),
-    }
-
-
-def nees_consistency(episodes: list[EpisodeResult]) -> tuple[float, tuple[float, float]]:
-    """Monte-Carlo NEES test (Bar-Shalom, Li and Kirubarajan 2001, sect. 5.4).
-
-    At each stored sample k, the NEES averaged over the M runs times M is chi-square with 3M
-    degrees of freedom for a consistent estimator; returns the fraction of samples (up to the
-    shortest run) whose average lies inside the two-sided 95 % bounds, and the bounds. The
-    bounds also serve for the time average in the table (time-averaging only narrows the
-    spread, so they are conservative for it); samples within a run are correlated, so using
-    every step as a degree of freedom would give far too narrow bounds.
-    """
-    m = len(episodes)
-    lo, hi = chi2.ppf([0.025, 0.975], 3 * m) / m
-    length = min(len(e.nees_trace) for e in episodes)
-    average = np.mean([e.nees_trace[:length] for e in episodes], axis=0)
-    return float(np.mean((average >= lo) & (average <= hi))), (float(lo), float(hi))
 
 
 def error_curves(episodes: list[EpisodeResult], grid: np.ndarray):

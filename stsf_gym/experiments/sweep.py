@@ -111,7 +111,7 @@ def run_sweep(
     runner = make_runner(backend, workers, address)
     folder = out / "cells"
     cells = [_with_run_folder(cell, out) for cell in sweep.cells]
-    _forget_failures(cells, folder)
+    forget_failures(cells, folder)
     results = run_cached(run_cell, cells, folder, cell_name, workers, f"sweep {sweep.name}", runner)
     return write_report(sweep, results, out)
 
@@ -129,7 +129,7 @@ def _with_run_folder(cell: dict, out: Path) -> dict:
     return {**cell, "out": str((out / "runs" / cell_name(cell)).resolve())}
 
 
-def _forget_failures(cells: list[dict], folder: Path) -> None:
+def forget_failures(cells: list[dict], folder: Path) -> None:
     """Delete the files of failed cells, so that this run retries them."""
     for cell in cells:
         file = folder / f"{cell_name(cell)}.json"

@@ -51,9 +51,10 @@ def failure(err: BaseException, details: str = "") -> dict:
 
 
 def evaluate_cell(cell: dict) -> dict:
-    """One episode of the agent on the estimator's pose; its position errors and outcome."""
+    """One episode of the agent on the estimator's pose: its outcome and the metrics of the
+    results schema (:func:`stsf_gym.experiments.statistics.episode_metrics`)."""
     from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
-    from stsf_gym.experiments.statistics import rms
+    from stsf_gym.experiments.statistics import episode_metrics
 
     spec = EpisodeSpec(
         cell["world"], cell["estimator"], cell["seed"], cell["agent"], cell["env"], cell["options"]
@@ -62,13 +63,7 @@ def evaluate_cell(cell: dict) -> dict:
     return {
         "outcome": episode.outcome,
         "distance": episode.distance,
-        "metrics": {
-            "final error (m)": episode.errors[-1],
-            "RMS error (m)": rms(episode.errors),
-            "max error (m)": max(episode.errors),
-            "NEES": episode.nees,
-            "success": episode.outcome == "goal",
-        },
+        "metrics": episode_metrics(episode),
     }
 
 
@@ -101,8 +96,8 @@ def train_cell(cell: dict) -> dict:
     last = summary["last_evaluation"] or {}
     evaluation["metrics"]["timesteps"] = summary["timesteps"]
     if "success_rate" in last:
-        evaluation["metrics"]["training eval success rate"] = last["success_rate"]
-    return {**evaluation, "model": summary["model"], "train wall time (s)": summary["wall_time_s"]}
+        evaluation["metrics"]["training_eval_success_rate"] = last["success_rate"]
+    return {**evaluation, "model": summary["model"], "train_wall_time_s": summary["wall_time_s"]}
 
 
 def check_train_cell(cell: dict) -> None:

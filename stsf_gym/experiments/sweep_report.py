@@ -1,11 +1,11 @@
 """A sweep's summary: ``results.json``, ``results.md`` and ``errors.png``.
 
-Cells that differ only in their seed form a group; each metric of a group is its mean and
-standard deviation over the finished cells (booleans such as ``success`` become a rate).
-``errors.png`` has one panel per swept numeric ``env.*`` key: final (solid, with one std)
-and RMS (dashed) position error against the swept value, one line per estimator, both axes
-logarithmic (the value axis when its values are positive), means over seeds and any other
-swept values.
+Cells that differ only in their seed form a group; each metric of a group is a
+:func:`stsf_gym.results.stat` over its finished cells (mean, std, count and the per-seed
+values; a rate is the mean of 0/1 values). ``errors.png`` has one panel per swept numeric
+``env.*`` key: final (solid, with one std) and RMS (ATE, dashed) position error against the
+swept value, one line per estimator, both axes logarithmic (the value axis when its values are
+positive), means over seeds and any other swept values.
 """
 
 from __future__ import annotations
@@ -17,11 +17,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.results import METRICS, SCHEMA_VERSION, render, stats
 
 if TYPE_CHECKING:
     from stsf_gym.experiments.sweep import Sweep
 
-FINAL, RMS = "final error (m)", "RMS error (m)"
+FINAL, RMS = "final_error_m", "ate_rmse_m"
 FIGURE = "errors.png"
 
 
@@ -35,6 +36,7 @@ def write_report(sweep: Sweep, results: list[dict], out: Path) -> dict:
     ]
     figure = plot_errors(sweep.cells, results, out / FIGURE)
     summary = {
+        "schema_version": SCHEMA_VERSION,
         "sweep": sweep.name,
         "file": str(sweep.path),
         "kind": sweep.kind,
@@ -56,11 +58,7 @@ def markdown(name: str, groups: list[dict], failed: list[dict]) -> str:
     for group in groups:
         row = {_column(k): _value(group["values"].get(k, "base")) for k in keys}
         row.update(seeds=group["cells"] - group["failed"], failed=group["failed"])
-        for metric, stats in group["metrics"].items():
-            if "rate" in stats:
-                row[f"{metric} rate"] = stats["rate"]
-            else:
-                row[metric] = f"{stats['mean']:.3f} ± {stats['std']:.3f}"
+        row.update({METRICS.get(k, k): render(v) for k, v in group["metrics"].items()})
         rows.append(row)
     columns = list(dict.fromkeys(column for row in rows for column in row))
     text = f"# Sweep: {name}\n\n" + markdown_table(rows, columns)
@@ -113,20 +111,11 @@ def _by_group(cells: list[dict], results: list[dict]) -> list[tuple[dict, list[d
 
 def _group(label: dict, results: list[dict]) -> dict:
     finished = [r["metrics"] for r in results if "error" not in r]
-    names = list(dict.fromkeys(name for metrics in finished for name in metrics))
-    stats = {}
-    for name in names:
-        values = [metrics[name] for metrics in finished if name in metrics]
-        if all(isinstance(v, bool) for v in values):
-            stats[name] = {"rate": float(np.mean(values)), "n": len(values)}
-        else:
-            stats[name] = {"mean": float(np.mean(values)), "std": float(np.std(values))}
-            stats[name]["n"] = len(values)
     return {
         "values": label,
         "cells": len(results),
         "failed": len(results) - len(finished),
-        "metrics": stats,
+        "metrics": stats(finished),
     }
 
 

@@ -44,6 +44,7 @@ from stsf_gym.fusion import (
 )
 from stsf_gym.geometry import to_se3, wrap_angle
 from stsf_gym.io import markdown_table, save_figure
+from stsf_gym.results import SCHEMA_VERSION, finite_or_none, rendered
 from stsf_gym.vision.detector import LandmarkDetector
 from stsf_gym.wrappers import sensor_model
 
@@ -299,7 +300,12 @@ def run_table1(
         )
     ]
     rows = summarise(cfg, results)
-    summary = {"config": cfg.__dict__, "seeds": [seed, seed + cfg.seeds - 1], "rows": rows}
+    summary = {
+        "schema_version": SCHEMA_VERSION,
+        "config": cfg.__dict__,
+        "seeds": [seed, seed + cfg.seeds - 1],
+        "rows": rows,
+    }
     title = "Table I reproduced: distance to a landmark, conventional fusion vs STSF"
     write_report(out, summary, title, _markdown(rows, cfg), markdown_name="table1.md")
     summary["figure"] = str(_plot(cfg, results, out / "table1.png"))
@@ -328,18 +334,16 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
             {
                 "row": i + 1,
                 "world (m)": distance,
-                "conventional (m)": float(np.mean(conv_est)) if conv_est else math.nan,
-                "conventional error (m)": rms(conv_err),
-                "conventional spread (m)": float(np.std(np.abs(conv_err)))
-                if conv_err
-                else math.nan,
-                "STSF (m)": float(np.mean(stsf_est)) if stsf_est else math.nan,
-                "STSF error (m)": rms(stsf_err),
-                "STSF spread (m)": float(np.std(np.abs(stsf_err))) if stsf_err else math.nan,
-                "STSF-GLS error (m)": rms(gls_err),
+                "conventional (m)": float(np.mean(conv_est)) if conv_est else None,
+                "conventional error (m)": finite_or_none(rms(conv_err)),
+                "conventional spread (m)": float(np.std(np.abs(conv_err))) if conv_err else None,
+                "STSF (m)": float(np.mean(stsf_est)) if stsf_est else None,
+                "STSF error (m)": finite_or_none(rms(stsf_err)),
+                "STSF spread (m)": float(np.std(np.abs(stsf_err))) if stsf_err else None,
+                "STSF-GLS error (m)": finite_or_none(rms(gls_err)),
                 "bound (m)": float(stereo_range_bound(distance, focal, baseline, cfg.sigma_px)),
-                "paper conventional error (m)": paper[distance][2] if distance in paper else "-",
-                "paper STSF error (m)": paper[distance][4] if distance in paper else "-",
+                "paper conventional error (m)": paper[distance][2] if distance in paper else None,
+                "paper STSF error (m)": paper[distance][4] if distance in paper else None,
                 "pairs": len(conv_err),
             }
         )
@@ -353,7 +357,7 @@ def _markdown(rows: list[dict], cfg: Table1Config) -> str:
         "RMS over seeds (conventional: over every pair at the place; STSF: at its last frame); "
         f"bound: sqrt(2) Z^2 sigma_px / (f b) with sigma_px = {cfg.sigma_px}.\n\n"
     )
-    return head + markdown_table(rows)
+    return head + markdown_table([rendered(row) for row in rows])
 
 
 def _plot(cfg: Table1Config, results: list[SeedResult], path: Path) -> Path:

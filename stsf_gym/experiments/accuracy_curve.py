@@ -1,0 +1,217 @@
+"""``stsf-gym accuracy-curve``: how good must localization be for this agent?
+
+Each agent drives on the ``degraded-truth`` pose source (:mod:`stsf_gym.estimators.
+degraded_truth`) with its error model scaled by each level of the dial, over seeded episodes;
+success rate, collisions and path-following error (RMS distance of the true robot from the
+path) are set against the *measured* ATE of those episodes. The real estimators (odometry,
+conventional fusion, STSF, EKF) run with the same agents and seeds and are placed on the
+same axes as points. The reading is the agent's **tolerated ATE**: the largest measured ATE
+of the dial's levels up to which the agent reaches the goal in at least
+:data:`REQUIRED_SUCCESS` of episodes at every level.
+
+Every episode is a sweep cell (:mod:`stsf_gym.experiments.sweep_cells`), run on the sweep's
+local or Ray backend with its resume: each finished cell is a JSON file in ``<out>/cells/``.
+Writes ``curve.json`` (numbers, the results schema), ``curve.md`` and ``curve.png``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from envs.config import ConfigError, deep_merge, load_config
+from stsf_gym.experiments.cache import run_cached
+from stsf_gym.experiments.curve_plot import plot_curve
+from stsf_gym.experiments.episodes import estimator_options
+from stsf_gym.experiments.sweep import cell_name, forget_failures
+from stsf_gym.experiments.sweep_backends import make_runner
+from stsf_gym.experiments.sweep_cells import run_cell
+from stsf_gym.io import markdown_table, write_atomic, write_json
+from stsf_gym.results import SCHEMA_VERSION, rendered, stats
+
+DIAL = "degraded-truth"
+DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
+DEFAULT_ESTIMATORS = ("odometry", "conventional", "stsf", "ekf")
+REQUIRED_SUCCESS = 0.9
+CURVE_VERSION = 1  # bumped when a curve cell changes meaning, so older cell files are rerun
+#: The dial needs no camera; the estimators see simulated detections unless ``env`` says else.
+DIAL_ENV = {"camera": {"enabled": False}}
+ESTIMATOR_ENV = {"camera": {"mode": "fast"}}
+METRICS = (
+    "success_rate",
+    "collision_rate",
+    "path_error_rms_m",
+    "ate_rmse_m",
+    "final_error_m",
+    "rpe_trans_m_per_m",
+    "nees_mean",
+)
+
+
+def curve_cells(
+    agents: list[str],
+    world: str,
+    seeds: list[int],
+    levels: list[float],
+    estimators: list[str],
+    env: dict,
+    dial: dict,
+) -> list[dict]:
+    """The sweep cells of the curve: each agent on each dial level and on each estimator."""
+    cells = []
+    for agent in agents:
+        agent = str(Path(agent).resolve()) if agent.endswith(".zip") else agent
+        for level in levels:
+            options = {**estimator_options(DIAL), **dial, "scale": level}
+            cells += _cells(agent, world, seeds, DIAL, deep_merge(env, DIAL_ENV), options, level)
+        for estimator in estimators:
+            env_e = deep_merge(ESTIMATOR_ENV, env)
+            cells += _cells(agent, world, seeds, estimator, env_e, estimator_options(estimator))
+    return cells
+
+
+def _cells(agent, world, seeds, estimator, env, options, level=None) -> list[dict]:
+    values = {"agent": agent, "estimator": estimator}
+    if level is not None:
+        values["scale"] = level
+    return [
+        {
+            "kind": "evaluate",
+            "world": world,
+            "estimator": estimator,
+            "agent": agent,
+            "seed": seed,
+            "faults": "none",
+            "env": env,
+            "options": options,
+            "values": {**values, "seed": seed},
+            "version": CURVE_VERSION,
+        }
+        for seed in seeds
+    ]
+
+
+def accuracy_curve(
+    out: str | Path,
+    agents: list[str],
+    world: str = "irl_corridor",
+    seeds: int = 3,
+    seed: int = 0,
+    levels: list[float] = DEFAULT_LEVELS,
+    estimators: list[str] = DEFAULT_ESTIMATORS,
+    backend: str = "local",
+    workers: int = 2,
+    address: str | None = None,
+    env: dict | None = None,
+    dial: dict | None = None,
+) -> dict:
+    """Run (or resume) every cell of the curve; write curve.json, curve.md and curve.png."""
+    out, env, dial = Path(out), env or {}, dial or {}
+    if not levels or any(not level > 0 for level in levels):
+        raise ConfigError(f"levels must be positive numbers, got {levels!r}")
+    load_config(env, world=world)  # a bad world or env key fails before anything runs
+    cells = curve_cells(
+        agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
+    )
+    forget_failures(cells, out / "cells")
+    runner = make_runner(backend, workers, address)
+    results = run_cached(
+        run_cell, cells, out / "cells", cell_name, workers, "accuracy curve", runner
+    )
+    summary = summarise_curve(cells, results)
+    summary.update(
+        schema_version=SCHEMA_VERSION,
+        world=world,
+        seeds=[seed, seed + seeds - 1],
+        dial={**estimator_options(DIAL), **dial},
+    )
+    write_json(out / "curve.json", summary)
+    write_atomic(out / "curve.md", curve_markdown(summary))
+    summary["figures"] = [str(plot_curve(summary, out / "curve.png"))]
+    return summary
+
+
+def summarise_curve(cells: list[dict], results: list[dict]) -> dict:
+    """Per agent: the dial's points (by level), its tolerated ATE, and the estimators' points."""
+    groups: dict[tuple, list[dict]] = {}
+    failed = []
+    for cell, result in zip(cells, results, strict=True):
+        if "error" in result:
+            failed.append({"cell": cell["values"], "error": result["error"]})
+            continue
+        key = (cell["agent"], cell["estimator"], cell["values"].get("scale"))
+        groups.setdefault(key, []).append(result["metrics"])
+    curves, points = {}, []
+    for (agent, estimator, scale), metrics in groups.items():
+        summary = stats(metrics)
+        row = {"estimator": estimator, **{k: summary[k] for k in METRICS if k in summary}}
+        if estimator == DIAL:
+            curves.setdefault(agent, []).append({"scale": scale, **row})
+        else:
+            points.append({"agent": agent, **row})
+    agents = list(dict.fromkeys(cell["agent"] for cell in cells))
+    return {
+        "required_success_rate": REQUIRED_SUCCESS,
+        "curves": [
+            {
+                "agent": agent,
+                "label": agent_label(agent),
+                "tolerated_ate_m": tolerated_ate(curves.get(agent, [])),
+                "fails_within_levels": any(
+                    level["success_rate"]["mean"] < REQUIRED_SUCCESS
+                    for level in curves.get(agent, [])
+                ),
+                "levels": curves.get(agent, []),
+            }
+            for agent in agents
+        ],
+        "estimators": points,
+        "failed": failed,
+    }
+
+
+def agent_label(agent: str) -> str:
+    """``follower``, or a saved model's algorithm and the pose source it was trained on."""
+    if agent == "follower":
+        return agent
+    from agents.sb3_agent import training_record
+
+    record = training_record(agent)
+    return f"{record['algo'].upper()} trained on {record['estimator']}"
+
+
+def tolerated_ate(levels: list[dict]) -> float | None:
+    """The largest measured ATE (mean) of the levels, in increasing order, up to which every
+    level reaches the goal in at least :data:`REQUIRED_SUCCESS` of episodes (None: not even
+    the smallest)."""
+    tolerated = None
+    for level in sorted(levels, key=lambda level: level["scale"]):
+        if level["success_rate"]["mean"] < REQUIRED_SUCCESS:
+            break
+        tolerated = level["ate_rmse_m"]["mean"]
+    return tolerated
+
+
+def curve_markdown(summary: dict) -> str:
+    """The reading, then one table per agent's dial and one of the estimators' points."""
+    text = f"# Accuracy curve on {summary['world']}\n\n"
+    for curve in summary["curves"]:
+        ate = curve["tolerated_ate_m"]
+        reading = "not even at the smallest level" if ate is None else f"up to ATE {ate:.3f} m"
+        if ate is not None and not curve["fails_within_levels"]:
+            reading = f"at every level, at least up to ATE {ate:.3f} m (add larger --levels)"
+        text += (
+            f"- **{curve['label']}** reaches the goal in >= {REQUIRED_SUCCESS:.0%} of "
+            f"episodes {reading}\n"
+        )
+    for curve in summary["curves"]:
+        rows = [rendered(level) for level in curve["levels"]]
+        if rows:
+            text += f"\n## {curve['label']} on `{DIAL}`\n\n" + markdown_table(rows)
+    if summary["estimators"]:
+        labels = {curve["agent"]: curve["label"] for curve in summary["curves"]}
+        rows = [rendered({**p, "agent": labels[p["agent"]]}) for p in summary["estimators"]]
+        text += "\n## The estimators on the same axes\n\n" + markdown_table(rows)
+    if summary["failed"]:
+        rows = [{"cell": str(f["cell"]), "error": f["error"]} for f in summary["failed"]]
+        text += "\n## Failed cells\n\n" + markdown_table(rows)
+    return text
