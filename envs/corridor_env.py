@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any, ClassVar
 
@@ -9,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import EnvConfig, load_config
+from envs.config import EnvConfig, WorldConfig, load_config
 from envs.faults import FaultInjector
 from envs.robot import DiffDriveRobot
 from envs.sensors.camera import PinholeCamera, look_at, view_matrix
@@ -121,22 +122,13 @@ class CorridorEnv(gym.Env):
             cfg.camera.near,
             cfg.camera.far,
         )
-        self.fast_detector = SimulatedDetector(
-            cfg.camera.fast, self.camera, cfg.world.landmark_pattern, self.world.landmarks
-        )
         self.sonar = SonarRing(cfg.sonar, cfg.robot.body_radius)
         self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
-        self.task = PathTask(cfg.world, cfg.reward)
         self._projection = self.camera.projection_matrix()
         self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
         self.observation_space = self._observation_space()
-        self.faults = FaultInjector(cfg.faults, self.world, self.robot, self.observation_space)
-        self._mount_target = np.radians([cfg.camera.pan_deg, cfg.camera.tilt_deg])
-        self.robot.reset(cfg.world.start, *self._mount_target)
-        # Saved after the wheels settled on the floor: the state then holds the contacts too,
-        # so each reset starts the solver alike whatever the previous episode did.
-        self.sim.step(SETTLE_STEPS)
-        self._initial_state = self.sim.client.saveState()
+        self._initial_state: int | None = None
+        self._build_world(cfg.world)
         if self.sim.renderer == "egl" and self._rendered_camera:
             # The first two EGL frames of a client are shaded differently from all later ones
             # (its shadow state settles); discard them so every episode renders alike.
@@ -147,6 +139,31 @@ class CorridorEnv(gym.Env):
         self._detections = self.fast_detector.empty()
         self._frame_pan_tilt = np.zeros(2, np.float32)
         self._frame_pose = np.eye(4)
+
+    def _build_world(self, world: WorldConfig) -> None:
+        """Make ``world`` the env's world: its bodies in the simulator (the old world's
+        removed), the task, the fast detector's landmark map, the faults, and the settled start
+        state every :meth:`reset` restores (a saved state holds the bodies that existed when it
+        was saved, so it is saved anew whenever the bodies change)."""
+        if self.world.cfg != world:
+            self.world.remove()
+            self.world = CorridorWorld(self.sim, world)
+        self.config = dataclasses.replace(self.config, world=world)
+        self.task = PathTask(world, self.config.reward)
+        self.fast_detector = SimulatedDetector(
+            self.config.camera.fast, self.camera, world.landmark_pattern, self.world.landmarks
+        )
+        self.faults = FaultInjector(
+            self.config.faults, self.world, self.robot, self.observation_space
+        )
+        self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
+        self.robot.reset(world.start, *self._mount_target)
+        # Saved after the wheels settled on the floor: the state then holds the contacts too,
+        # so each reset starts the solver alike whatever the previous episode did.
+        self.sim.step(SETTLE_STEPS)
+        if self._initial_state is not None:
+            self.sim.client.removeState(self._initial_state)
+        self._initial_state = self.sim.client.saveState()
 
     # --- public geometry -------------------------------------------------------------------
     @property
@@ -212,7 +229,7 @@ class CorridorEnv(gym.Env):
         )
         limits = np.radians([cfg.robot.pan_limit_deg, cfg.robot.tilt_limit_deg]).astype(np.float32)
         if cfg.camera.mode == "fast":
-            slots, values = self.fast_detector.slots, self.fast_detector.values_per_slot
+            slots, values = cfg.camera.fast.max_detections, 2 * cfg.world.landmark_pattern.grid**2
             span = 2 * max(cfg.camera.width, cfg.camera.height)
             camera = {
                 "landmark_ids": spaces.Box(

@@ -82,6 +82,7 @@ class CorridorWorld:
 
     def __init__(self, sim: Simulator, cfg: WorldConfig) -> None:
         self.sim, self.cfg = sim, cfg
+        self._bodies: list[int] = []  # every body this world made, for remove()
         ids = [spec.id for spec in cfg.landmarks]
         if len(set(ids)) != len(ids):
             raise ValueError(f"world {cfg.name!r}: landmark ids must be unique, got {ids}")
@@ -115,11 +116,20 @@ class CorridorWorld:
             basePosition=centre.tolist(),
             baseOrientation=_quaternion(np.column_stack([right, up, normal])),
         )
+        self._made(body)
         grey = landmark_image(spec.id, pattern)
         _, png = cv2.imencode(".png", cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
         texture = c.loadTexture(str(cache_file(f"landmark{spec.id}.png", png.tobytes())))
         c.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
         return body
+
+    def remove(self) -> None:
+        """Take every body of this world (floor, walls, clutter, boards) out of the simulator."""
+        for body in self._bodies:
+            self.sim.client.removeBody(body)
+        self._bodies.clear()
+        self.boards.clear()
+        self._hidden.clear()
 
     def board_visible(self, body: int) -> bool:
         return body not in self._hidden
@@ -136,13 +146,18 @@ class CorridorWorld:
     def _box(self, xy, half_xy, half_z: float, z: float, yaw: float, rgba) -> int:
         c = self.sim.client
         half = [half_xy[0], half_xy[1], half_z]
-        return c.createMultiBody(
+        body = c.createMultiBody(
             baseMass=0,
             baseCollisionShapeIndex=c.createCollisionShape(c.GEOM_BOX, halfExtents=half),
             baseVisualShapeIndex=c.createVisualShape(c.GEOM_BOX, halfExtents=half, rgbaColor=rgba),
             basePosition=[xy[0], xy[1], z],
             baseOrientation=c.getQuaternionFromEuler([0, 0, yaw]),
         )
+        return self._made(body)
+
+    def _made(self, body: int) -> int:
+        self._bodies.append(body)
+        return body
 
     def _wall(self, segment) -> int:
         start, end = np.array(segment[:2]), np.array(segment[2:])
@@ -169,7 +184,7 @@ class CorridorWorld:
                 OBSTACLE_RGBA,
             )
         radius, height = spec.size
-        return c.createMultiBody(
+        body = c.createMultiBody(
             baseMass=0,
             baseCollisionShapeIndex=c.createCollisionShape(
                 c.GEOM_CYLINDER, radius=radius, height=height
@@ -179,6 +194,7 @@ class CorridorWorld:
             ),
             basePosition=[*spec.position, height / 2],
         )
+        return self._made(body)
 
     def _landmark(self, spec: LandmarkSpec) -> Landmark:
         pattern = self.cfg.landmark_pattern

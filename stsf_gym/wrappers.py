@@ -123,9 +123,12 @@ class PoseEstimateWrapper(gym.Wrapper):
         }
 
 
-def make_estimating_env(estimator: str, **env_kwargs) -> gym.Env:
-    """Entry point of the registered ``stsf_gym/<World>-<Estimator>-v0`` ids."""
+def make_estimating_env(estimator: str, generated: bool = False, **env_kwargs) -> gym.Env:
+    """Entry point of the registered ``stsf_gym/<World>-<Estimator>-v0`` ids (``generated``:
+    the ``Generated-<Estimator>-v0`` ids, a generated world per episode)."""
     from envs.corridor_env import CorridorEnv
+    from envs.generated_env import GeneratedCorridorEnv
 
     estimator_options = env_kwargs.pop("estimator_options", {})
-    return PoseEstimateWrapper(CorridorEnv(**env_kwargs), estimator, **estimator_options)
+    env = (GeneratedCorridorEnv if generated else CorridorEnv)(**env_kwargs)
+    return PoseEstimateWrapper(env, estimator, **estimator_options)

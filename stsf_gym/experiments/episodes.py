@@ -14,10 +14,12 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-import stsf_gym  # noqa: F401 - registers the env ids
+from stsf_gym import GENERATED_ID
 from stsf_gym.experiments.cache import run_cached
+from stsf_gym.experiments.generated_worlds import parse_world
 from stsf_gym.wrappers import PoseEstimateWrapper
 
+_CORRIDOR = "stsf_gym/Corridor-v0"
 TRACE_EVERY = 10  # steps between stored trajectory samples
 RESULT_VERSION = 4  # bumped when EpisodeResult changes, so older episode files are rerun
 
@@ -92,12 +94,13 @@ def make_agent(name: str, env, options: dict | None = None):
 
 
 def make_episode_env(world: str, estimator: str, env: dict, options: dict) -> gym.Env:
-    """The env every agent is run in: the world with the pan camera (pointed by the wrapper)
-    and ``env`` overrides, wrapped in :class:`PoseEstimateWrapper` for ``estimator``."""
+    """The env every agent is run in: the world (or ``generated:<split>``, a generated world
+    per episode) with the pan camera (pointed by the wrapper) and ``env`` overrides, wrapped
+    in :class:`PoseEstimateWrapper` for ``estimator``."""
+    split = parse_world(world)
+    where = {"id": GENERATED_ID, "split": split} if split else {"id": _CORRIDOR, "world": world}
     return PoseEstimateWrapper(
-        gym.make("stsf_gym/Corridor-v0", world=world, **{"camera__control": "pan", **env}),
-        estimator,
-        **options,
+        gym.make(**where, **{"camera__control": "pan", **env}), estimator, **options
     )
 
 
@@ -105,8 +108,8 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
     """Drive one episode to its end; score the estimate against the true pose."""
     env = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
     try:
+        obs, info = env.reset(seed=spec.seed)  # first: a generated world is drawn here
         act = make_agent(spec.agent, env, spec.agent_options)
-        obs, info = env.reset(seed=spec.seed)
         samples: dict[str, list] = {k: [] for k in ("e", "h", "d", "s", "t", "x", "c", "n")}
         nees, steps, frames, in_view, terminated, truncated = [], 0, 0, 0, False, False
         finite, min_eig = True, math.inf
