@@ -141,16 +141,15 @@ def _pyplot():
 
 def plot_trajectories(world: str, by_estimator: dict, path: Path) -> Path:
     """True and estimated paths of the first episode per estimator, over the map."""
-    from envs.config import load_config
+    from stsf_gym.experiments.generated_worlds import episode_world
     from stsf_gym.experiments.plots import draw_world_config
 
     plt = _pyplot()
-    cfg = load_config(world=world)
     n = len(by_estimator)
     fig, axes = plt.subplots(1, n, figsize=(5 * n, 4.5), squeeze=False)
     for ax, (name, episodes) in zip(axes[0], by_estimator.items(), strict=True):
-        draw_world_config(ax, cfg.world)
         episode = episodes[0]
+        draw_world_config(ax, episode_world(world, episode.spec["seed"]))
         true_xy, est_xy = np.array(episode.true_xy), np.array(episode.estimate_xy)
         ax.plot(*true_xy.T, color="tab:green", label="true")
         ax.plot(*est_xy.T, color="tab:red", ls="--", label="estimate")
