@@ -141,13 +141,18 @@ class CorridorEnv(gym.Env):
         self._frame_pose = np.eye(4)
 
     def _build_world(self, world: WorldConfig) -> None:
-        """Make ``world`` the env's world: its bodies in the simulator (the old world's
-        removed), the task, the fast detector's landmark map, the faults, and the settled start
-        state every :meth:`reset` restores (a saved state holds the bodies that existed when it
-        was saved, so it is saved anew whenever the bodies change)."""
+        """Make ``world`` the env's world: its bodies (rebuilt with the robot's from an empty
+        simulation when the world changes), the task, the fast detector's landmark map, the
+        faults, and the settled start state every :meth:`reset` restores (a saved state holds
+        the bodies that existed when it was saved, so it is saved anew)."""
+        if self._initial_state is not None:
+            self.sim.client.removeState(self._initial_state)
         if self.world.cfg != world:
-            self.world.remove()
+            # from an empty simulation, bodies made in the order of a fresh env: the same
+            # world then runs bit for bit alike, however many worlds came before it
+            self.sim.clear()
             self.world = CorridorWorld(self.sim, world)
+            self.robot = DiffDriveRobot(self.sim, self.config.robot)
         self.config = dataclasses.replace(self.config, world=world)
         self.task = PathTask(world, self.config.reward)
         self.fast_detector = SimulatedDetector(
@@ -161,8 +166,6 @@ class CorridorEnv(gym.Env):
         # Saved after the wheels settled on the floor: the state then holds the contacts too,
         # so each reset starts the solver alike whatever the previous episode did.
         self.sim.step(SETTLE_STEPS)
-        if self._initial_state is not None:
-            self.sim.client.removeState(self._initial_state)
         self._initial_state = self.sim.client.saveState()
 
     # --- public geometry -------------------------------------------------------------------

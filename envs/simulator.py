@@ -90,6 +90,12 @@ class Simulator:
             )
         return "tiny"
 
+    def clear(self) -> None:
+        """Remove every body (to build another world), keeping the time step and gravity."""
+        self.client.resetSimulation()
+        self.client.setTimeStep(self.time_step)
+        self.client.setGravity(0, 0, -9.81)
+
     def step(self, substeps: int) -> None:
         for _ in range(substeps):
             self.client.stepSimulation()
