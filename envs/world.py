@@ -5,8 +5,10 @@ TinyRenderer and the EGL renderer).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -14,6 +16,7 @@ import numpy as np
 from envs.config import LandmarkSpec, WorldConfig
 from envs.simulator import Simulator, cache_file
 from stsf_gym.vision.landmarks import (
+    LandmarkPattern,
     board_corners,
     landmark_image,
     square_centres,
@@ -117,9 +120,7 @@ class CorridorWorld:
             baseOrientation=_quaternion(np.column_stack([right, up, normal])),
         )
         self._made(body)
-        grey = landmark_image(spec.id, pattern)
-        _, png = cv2.imencode(".png", cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
-        texture = c.loadTexture(str(cache_file(f"landmark{spec.id}.png", png.tobytes())))
+        texture = c.loadTexture(str(_texture_file(spec.id, pattern)))
         c.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
         return body
 
@@ -211,6 +212,14 @@ class CorridorWorld:
             plane_to_world(*frame, square_corners(spec.id, pattern)),
             plane_to_world(*frame, board_corners(pattern)),
         )
+
+
+@functools.lru_cache(maxsize=1024)
+def _texture_file(landmark_id: int, pattern: LandmarkPattern) -> Path:
+    """The PNG of a landmark's pattern, drawn once per process (worlds are rebuilt often)."""
+    grey = landmark_image(landmark_id, pattern)
+    _, png = cv2.imencode(".png", cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
+    return cache_file(f"landmark{landmark_id}.png", png.tobytes())
 
 
 def _quaternion(rotation: np.ndarray) -> list[float]:

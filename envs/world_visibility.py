@@ -123,14 +123,16 @@ def seen_matrix(
     seen &= facing >= math.cos(math.radians(limits.max_view_deg))
     seen &= pan <= math.radians(view.pan_limit_deg)
     seen &= _in_frame(distance, facing, board_size, board_height, view, limits)
-    end = boards[None] - SIGHT_END * unit
-    start = np.broadcast_to(eye[:, None], end.shape)
+    rows, cols = np.nonzero(seen)  # sight lines tested only where all else holds
+    end = boards[cols] - SIGHT_END * unit[rows, cols]
+    start = eye[rows]
+    clear = np.ones(len(rows), bool)
     for wall in walls:
-        gap = segment_distances(start, end, wall[:2], wall[2:])
-        seen &= gap > thickness / 2
+        clear &= segment_distances(start, end, wall[:2], wall[2:]) > thickness / 2
     for x, y, radius in obstacles:
-        gap = segment_distances(start, end, np.array([x, y]), np.array([x, y]))
-        seen &= gap > radius
+        centre = np.array([x, y])
+        clear &= segment_distances(start, end, centre, centre) > radius
+    seen[rows[~clear], cols[~clear]] = False
     return seen
 
 
