@@ -317,7 +317,7 @@ def build_parser() -> argparse.ArgumentParser:
     world.add_argument(
         "--grid", type=int, help="draw this many worlds from --seed on as one PNG (--out)"
     )
-    world.set_defaults(run=_world_cmd)
+    world.set_defaults(run=_world_cmd, out_is_file=True)
     bench = commands.add_parser("bench", help="the speed figures beside their targets")
     _common(bench, "out/bench")
     bench.add_argument(
@@ -361,8 +361,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     error = f"stsf-gym {args.command}: error:"
     try:
-        if hasattr(args, "out"):
-            _check_writable(args.out.absolute())
+        if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
+            folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
+            _check_writable(folder.absolute())
         _silence_c_stdout()
         result = args.run(args)
     except (ConfigError, ValueError, FileNotFoundError, NotADirectoryError, PermissionError) as err:

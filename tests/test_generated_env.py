@@ -104,10 +104,11 @@ CLI = [sys.executable, "-m", "stsf_gym.cli"]
 
 def test_cli_world_yaml_and_grid(tmp_path):
     out = tmp_path / "w.yaml"
-    result = subprocess.run(
-        [*CLI, "world", "--seed", "1000003", "--out", str(out)], capture_output=True, text=True
-    )
-    assert result.returncode == 0, result.stderr
+    for _ in range(2):  # the second run replaces the file
+        result = subprocess.run(
+            [*CLI, "world", "--seed", "1000003", "--out", str(out)], capture_output=True, text=True
+        )
+        assert result.returncode == 0, result.stderr
     assert yaml.safe_load(out.read_text())["name"] == "generated-1000003"
     png = tmp_path / "grid.png"
     result = subprocess.run(
