@@ -94,6 +94,12 @@ def test_estimator_ids_and_policy_path_follow_the_world(make_env):
     assert obs.shape == policy.observation_space.shape
 
 
+def test_gymnasium_env_checker(make_env):
+    from gymnasium.utils.env_checker import check_env
+
+    check_env(make_env("stsf_gym/Generated-v0", split="test", camera__mode="fast").unwrapped)
+
+
 def test_world_is_not_an_argument(make_env):
     with pytest.raises(ValueError, match="draws its worlds"):
         make_env("stsf_gym/Generated-v0", world="irl_corridor")

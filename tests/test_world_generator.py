@@ -66,6 +66,9 @@ def test_worlds_pass_the_env_checks(worlds):
         length = np.sum(np.linalg.norm(np.diff(np.asarray(world.path), axis=0), axis=1))
         assert length >= GEN.min_path_length
         assert GEN.segments[0] <= len(world.path) - 1 <= GEN.segments[1]
+        # every world starts at the origin and stays inside the pose space the wrapper gives
+        # the first world (its bounds +-50 m)
+        assert world.start == (0.0, 0.0, 0.0) and np.abs(world.walls).max() < 49.0
 
 
 def test_a_landmark_is_seen_from_every_path_point(worlds):
