@@ -38,8 +38,8 @@ from agents.training_log import (
     plot_learning_curve,
 )
 from envs.config import ConfigError
-from stsf_gym.experiments.episodes import make_episode_env
-from stsf_gym.experiments.generated_worlds import parse_world
+from envs.generated_env import parse_world
+from stsf_gym.episode_env import make_episode_env
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.wrappers import POSE_SOURCES
 

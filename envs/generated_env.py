@@ -16,6 +16,47 @@ from envs.corridor_env import CorridorEnv
 from envs.generator_config import GeneratorConfig, load_generator_config
 from envs.world_generator import generate_world, world_tree
 
+GENERATED = "generated"  # the world name of generated worlds; ``generated:<split>`` labels
+
+
+def parse_world(world) -> str | None:
+    """The split of a generated-world label ``generated:<split>``, ``None`` for any other
+    world (a name, a YAML path or a mapping)."""
+    if not isinstance(world, str):
+        return None
+    name, _, split = world.partition(":")
+    if name != GENERATED:
+        return None
+    if not split:
+        raise ValueError("world 'generated' needs a split: generated:train or generated:test")
+    return split
+
+
+def generated_label(split: str) -> str:
+    """The world label of a split of generated worlds, e.g. ``generated:test``."""
+    load_generator_config().split_range(split)  # a bad split name fails here
+    return f"{GENERATED}:{split}"
+
+
+def make_world_env(world, **kwargs: Any) -> CorridorEnv:
+    """The env of ``world``: :class:`GeneratedCorridorEnv` for ``"generated"`` (``split`` in
+    ``kwargs``, default train) or ``"generated:<split>"``, else :class:`CorridorEnv`."""
+    if world == GENERATED:
+        return GeneratedCorridorEnv(**kwargs)
+    split = parse_world(world)
+    if split is not None:
+        return GeneratedCorridorEnv(split=split, **kwargs)
+    return CorridorEnv(world=world, **kwargs)
+
+
+def episode_world(world, seed: int, env: dict | None = None) -> WorldConfig:
+    """The world an episode of ``world`` (a label, name, path or mapping) reset with ``seed``
+    drives in."""
+    split = parse_world(world)
+    if split is None:
+        return load_config(world=world, **(env or {})).world
+    return world_for_seed(split, seed, load_config(**(env or {})))
+
 
 def world_seed_for(world_seeds: range, seed: int) -> int:
     """The world seed that ``reset(seed=seed)`` uses: the split's world ``seed`` (modulo its

@@ -1,7 +1,7 @@
 """Settings of the world generator: ranges read from ``configs/generator/*.yaml``, validated.
 
 Every ``[low, high]`` pair must have ``low <= high``; the splits must be disjoint. Errors
-name the file and the key, as for env configs (:mod:`envs.validation`).
+name the file and the key, as for env configs (:mod:`stsf_gym.validation`).
 """
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
-from envs.validation import ConfigError, Count, NonNegative, Positive, Range, build, require
-from envs.yaml_layers import CONFIG_DIR, deep_merge, read_yaml, shown
+from stsf_gym.validation import ConfigError, Count, NonNegative, Positive, Range, build, require
 from stsf_gym.vision.landmarks import LandmarkPattern
+from stsf_gym.yaml_layers import CONFIG_DIR, deep_merge, read_yaml, shown
 
 DEFAULT_GENERATOR = CONFIG_DIR / "generator" / "default.yaml"
 SPLITS = ("train", "test")

@@ -21,8 +21,9 @@ ENV_WORLDS: dict[str, str] = {
 }
 
 
-#: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-STSF-v0``: the env
-#: wrapped in :class:`stsf_gym.wrappers.PoseEstimateWrapper`, which points the camera.
+#: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-STSF-v0``: the env of
+#: an episode (:func:`stsf_gym.episode_env.make_episode_env`: the env wrapped in
+#: :class:`stsf_gym.wrappers.PoseEstimateWrapper`, which points the camera).
 ESTIMATOR_IDS: dict[str, str] = {
     "Odometry": "odometry",
     "Conventional": "conventional",
@@ -45,8 +46,8 @@ def register_envs() -> None:
         if estimating_id not in registry:
             register(
                 id=estimating_id,
-                entry_point="stsf_gym.wrappers:make_estimating_env",
-                kwargs={"generated": True, "estimator": estimator, "camera__control": "pan"},
+                entry_point="stsf_gym.episode_env:make_episode_env",
+                kwargs={"world": "generated", "estimator": estimator},
             )
     for env_id, world in ENV_WORLDS.items():
         if env_id not in registry:
@@ -58,9 +59,8 @@ def register_envs() -> None:
             if estimating_id not in registry:
                 register(
                     id=estimating_id,
-                    entry_point="stsf_gym.wrappers:make_estimating_env",
-                    # the wrapper keeps the pan camera on a landmark
-                    kwargs={"world": world, "estimator": estimator, "camera__control": "pan"},
+                    entry_point="stsf_gym.episode_env:make_episode_env",
+                    kwargs={"world": world, "estimator": estimator},
                 )
 
 

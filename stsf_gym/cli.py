@@ -83,7 +83,7 @@ def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
     if "world" in env:
         where = "use --world" if hasattr(args, "world") else "it uses its own world"
         raise ConfigError(f"--config/--set cannot change the world of this command ({where})")
-    from stsf_gym.experiments.generated_worlds import parse_world
+    from envs.generated_env import parse_world
 
     generated = world is not None and parse_world(world) is not None
     load_config(args.config, world=None if generated else world, **overrides)
@@ -92,7 +92,7 @@ def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
 
 def _world(args: argparse.Namespace) -> str:
     """``--world``, or ``generated:<split>`` for ``--world generated --split NAME``."""
-    from stsf_gym.experiments.generated_worlds import GENERATED, generated_label
+    from envs.generated_env import GENERATED, generated_label
 
     if args.world == GENERATED:
         if args.split is None:

@@ -1,8 +1,8 @@
 """``stsf-gym world``: a generated world written out as world YAML, or a grid of them drawn.
 
 ``--world generated --split NAME`` elsewhere in the CLI is the label ``generated:NAME``
-(:func:`parse_world`): episodes then run in ``stsf_gym/Generated-v0`` on that split, and the
-episode seed ``s`` is that split's world ``s`` (``reset(seed=s)``).
+(:func:`envs.generated_env.parse_world`): episodes then run in ``stsf_gym/Generated-v0`` on
+that split, and the episode seed ``s`` is that split's world ``s`` (``reset(seed=s)``).
 """
 
 from __future__ import annotations
@@ -15,32 +15,6 @@ from envs.config import load_config
 from envs.generator_config import load_generator_config
 from envs.world_generator import world_tree
 from stsf_gym.io import save_figure, write_atomic
-
-GENERATED = "generated"
-
-
-def generated_label(split: str) -> str:
-    """The world label of a split of generated worlds, e.g. ``generated:test``."""
-    load_generator_config().split_range(split)  # a bad split name fails here
-    return f"{GENERATED}:{split}"
-
-
-def parse_world(world: str) -> str | None:
-    """The split of a generated-world label, ``None`` for a world name or YAML path."""
-    if world == GENERATED:
-        raise ValueError("--world generated needs --split train or test")
-    name, _, split = world.partition(":")
-    return split if name == GENERATED and split else None
-
-
-def episode_world(world: str, seed: int, env: dict | None = None):
-    """The :class:`~envs.config.WorldConfig` an episode of ``world`` with ``seed`` drives in."""
-    split = parse_world(world)
-    if split is None:
-        return load_config(world=world, **(env or {})).world
-    from envs.generated_env import world_for_seed
-
-    return world_for_seed(split, seed, load_config(**(env or {})))
 
 
 def write_world_yaml(seed: int, out: str | Path, env: dict | None = None) -> Path:
