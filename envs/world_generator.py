@@ -110,7 +110,8 @@ def _branches(rng, gen: GeneratorConfig, points, widths, rects) -> list[Rect]:
         along = (b - a) / np.linalg.norm(b - a)
         width = _snap(rng.uniform(*gen.width), gen.grid)
         length = _snap(rng.uniform(*gen.branch_length), gen.grid)
-        if leg < len(widths) - 1 and rng.random() < 0.5:  # straight on past the turn
+        past_turn = leg < len(widths) - 1 and rng.random() < 0.5
+        if past_turn:  # straight on past the turn
             root, direction = b, along
             reach = widths[leg] / 2 + length
         else:  # perpendicular, from the middle of the leg
@@ -119,7 +120,8 @@ def _branches(rng, gen: GeneratorConfig, points, widths, rects) -> list[Rect]:
             reach = widths[leg] / 2 + length
         end = np.round(root + reach * direction, CAP)
         rect = Rect.around(root, end, width / 2, 0.0, 0.0)
-        others = [r for i, r in enumerate(rects) if not (i == leg or (i == leg + 1 and root is b))]
+        meets = {leg, leg + 1} if past_turn else {leg}  # the legs the branch opens into
+        others = [r for i, r in enumerate(rects) if i not in meets]
         if all(rect.gap(r) >= gen.min_gap for r in others + added):
             added.append(rect)
     return added

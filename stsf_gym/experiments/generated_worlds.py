@@ -36,6 +36,7 @@ def plot_world_grid(seeds: list[int], out: str | Path, env: dict | None = None) 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from envs.task import Polyline
     from envs.world_generator import generate_world
     from stsf_gym.experiments.plots import draw_world_config
 
@@ -48,12 +49,8 @@ def plot_world_grid(seeds: list[int], out: str | Path, env: dict | None = None) 
     for ax, seed in zip(axes.ravel(), seeds, strict=False):
         world = generate_world(seed, gen, env_cfg)
         draw_world_config(ax, world)
-        length = sum(
-            ((b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2) ** 0.5
-            for a, b in zip(world.path[:-1], world.path[1:], strict=True)
-        )
         ax.set_title(
-            f"world {seed}: {length:.1f} m, {len(world.landmarks)} landmarks, "
+            f"world {seed}: {Polyline(world.path).length:.1f} m, {len(world.landmarks)} landmarks, "
             f"{len(world.obstacles)} obstacles",
             fontsize=9,
         )
