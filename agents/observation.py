@@ -59,7 +59,7 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
             raise ValueError("PolicyObservation needs obs['pose']: wrap in PoseEstimateWrapper")
         self.config = config or ObservationConfig()
         cfg = env.unwrapped.config
-        self.path = Polyline(cfg.world.path)
+        self._world, self.path = cfg.world, Polyline(cfg.world.path)
         self.sonar_range = (cfg.sonar.min_range, cfg.sonar.max_range)
         top_wheel_speed = cfg.robot.max_speed / cfg.robot.wheel_radius  # rad/s
         self.ticks_at_top_speed = (
@@ -75,6 +75,9 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         return self.observation(obs), reward, terminated, truncated, info
 
     def observation(self, obs: dict) -> np.ndarray:
+        world = self.env.unwrapped.config.world
+        if world is not self._world:  # a generated world per episode: follow the new path
+            self._world, self.path = world, Polyline(world.path)
         x, y, yaw = (float(v) for v in obs["pose"])
         c, s = math.cos(yaw), math.sin(yaw)
         to_robot = np.array([[c, s], [-s, c]])

@@ -38,6 +38,7 @@ from agents.training_log import (
     plot_learning_curve,
 )
 from envs.config import ConfigError
+from envs.generated_env import parse_world
 from stsf_gym.episode_env import make_episode_env
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.wrappers import POSE_SOURCES
@@ -49,6 +50,8 @@ EVAL_SEED_OFFSET = 10_000  # the evaluation env's seed is the training seed plus
 def env_id_for(world: str, estimator: str) -> str | None:
     """The registered id of ``world`` driven on ``estimator`` (None if not registered)."""
     base = next((i for i, w in stsf_gym.ENV_WORLDS.items() if w == world), None)
+    if parse_world(world) is not None:
+        base = stsf_gym.GENERATED_ID
     suffix = next((s for s, e in stsf_gym.ESTIMATOR_IDS.items() if e == estimator), None)
     return base.replace("-v0", f"-{suffix}-v0") if base and suffix else None
 

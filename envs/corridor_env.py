@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any, ClassVar
 
@@ -9,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import EnvConfig, load_config
+from envs.config import EnvConfig, WorldConfig, load_config
 from envs.faults import FaultInjector
 from envs.robot import DiffDriveRobot
 from envs.sensors.camera import PinholeCamera, believed_calibration, look_at, view_matrix
@@ -130,23 +131,13 @@ class CorridorEnv(gym.Env):
             cfg.camera.lens.distortion,
         )
         self.camera_calibration: CameraCalibration = self.camera.calibration
-        self.camera_sensor = (
-            SimulatedDetector(cfg.camera.fast, self.camera, self.world)
-            if cfg.camera.mode == "fast"
-            else RenderedCamera(cfg.camera, self.camera, self.sim, self.robot)
-        )
+        self.camera_sensor = self._camera_sensor()
         self.sonar = SonarRing(cfg.sonar, cfg.robot.body_radius)
         self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
-        self.task = PathTask(cfg.world, cfg.reward)
         self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
         self.observation_space = self._observation_space()
-        self.faults = FaultInjector(cfg.faults, self.world, self.robot, self.observation_space)
-        self._mount_target = np.radians([cfg.camera.pan_deg, cfg.camera.tilt_deg])
-        self.robot.reset(cfg.world.start, *self._mount_target)
-        # Saved after the wheels settled on the floor: the state then holds the contacts too,
-        # so each reset starts the solver alike whatever the previous episode did.
-        self.sim.step(SETTLE_STEPS)
-        self._initial_state = self.sim.client.saveState()
+        self._initial_state: int | None = None
+        self._build_world(cfg.world)
         if self.sim.renderer == "egl" and self._rendered_camera:
             # The first two EGL frames of a client are shaded differently from all later ones
             # (its shadow state settles); discard them so every episode renders alike.
@@ -154,6 +145,38 @@ class CorridorEnv(gym.Env):
                 self.camera_sensor.radiance(self.robot.camera_pose())
         self._frame_pan_tilt = np.zeros(2, np.float32)
         self._frame_pose = np.eye(4)
+
+    def _build_world(self, world: WorldConfig) -> None:
+        """Make ``world`` the env's world: its bodies (rebuilt with the robot's from an empty
+        simulation when the world changes, and the camera sensor that reads them), the task, the
+        faults, and the settled start state every :meth:`reset` restores (a saved state holds
+        the bodies that existed when it was saved, so it is saved anew)."""
+        if self._initial_state is not None:
+            self.sim.client.removeState(self._initial_state)
+        if self.world.cfg != world:
+            # from an empty simulation, bodies made in the order of a fresh env: the same
+            # world then runs bit for bit alike, however many worlds came before it
+            self.sim.clear()
+            self.world = CorridorWorld(self.sim, world)
+            self.robot = DiffDriveRobot(self.sim, self.config.robot)
+            self.camera_sensor = self._camera_sensor()
+        self.config = dataclasses.replace(self.config, world=world)
+        self.task = PathTask(world, self.config.reward)
+        self.faults = FaultInjector(
+            self.config.faults, self.world, self.robot, self.observation_space
+        )
+        self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
+        self.robot.reset(world.start, *self._mount_target)
+        # Saved after the wheels settled on the floor: the state then holds the contacts too,
+        # so each reset starts the solver alike whatever the previous episode did.
+        self.sim.step(SETTLE_STEPS)
+        self._initial_state = self.sim.client.saveState()
+
+    def _camera_sensor(self) -> SimulatedDetector | RenderedCamera:
+        cfg = self.config.camera
+        if cfg.mode == "fast":
+            return SimulatedDetector(cfg.fast, self.camera, self.world)
+        return RenderedCamera(cfg, self.camera, self.sim, self.robot)
 
     # --- public geometry -------------------------------------------------------------------
     @property

@@ -136,6 +136,14 @@ class Scene:
             self.textures.append(shape.texture)
         self.version += 1
 
+    def clear(self) -> None:
+        """Forget every shape (the simulation was emptied for another world)."""
+        self.shapes.clear()
+        self.hidden.clear()
+        self.textures.clear()
+        self._layers.clear()
+        self.version += 1
+
     def set_visible(self, body: int, visible: bool) -> None:
         if visible == (body not in self.hidden):
             return

@@ -194,6 +194,15 @@ class Simulator:
             c.resetBasePositionAndOrientation(body, [0.0, 0.0, HIDDEN_DEPTH], [0, 0, 0, 1])
         self.scene.set_visible(body, visible)
 
+    def clear(self) -> None:
+        """Remove every body and the scene (to build another world), keeping the time step
+        and gravity."""
+        self.client.resetSimulation()
+        self.client.setTimeStep(self.time_step)
+        self.client.setGravity(0, 0, -9.81)
+        self.scene.clear()
+        self._hidden_from.clear()
+
     def step(self, substeps: int) -> None:
         for _ in range(substeps):
             self.client.stepSimulation()

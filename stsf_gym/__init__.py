@@ -4,6 +4,8 @@ Importing the package registers the environments with Gymnasium (idempotently):
 
 - ``stsf_gym/Corridor-v0``: the IRL corridor (about 24 m with a turn, 8 landmarks).
 - ``stsf_gym/Straight10m-v0``: a straight 10 m corridor (the paper's Fig. 10).
+- ``stsf_gym/Generated-v0``: a generated corridor world per episode (``split="train"`` or
+  ``"test"``, :mod:`envs.generated_env`).
 
 Each also has an id per pose source, e.g. ``stsf_gym/Corridor-STSF-v0`` (see below).
 """
@@ -31,8 +33,22 @@ ESTIMATOR_IDS: dict[str, str] = {
 }
 
 
+#: The id of generated worlds (``split="train" | "test"``, ``reset(options={"world_seed": k})``).
+GENERATED_ID = "stsf_gym/Generated-v0"
+
+
 def register_envs() -> None:
     """Register every stsf-gym id that is not registered yet."""
+    if GENERATED_ID not in registry:
+        register(id=GENERATED_ID, entry_point="envs.generated_env:GeneratedCorridorEnv")
+    for suffix, estimator in ESTIMATOR_IDS.items():
+        estimating_id = GENERATED_ID.replace("-v0", f"-{suffix}-v0")
+        if estimating_id not in registry:
+            register(
+                id=estimating_id,
+                entry_point="stsf_gym.episode_env:make_episode_env",
+                kwargs={"world": "generated", "estimator": estimator},
+            )
     for env_id, world in ENV_WORLDS.items():
         if env_id not in registry:
             register(

@@ -85,8 +85,40 @@ def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
     if "world" in env:
         where = "use --world" if hasattr(args, "world") else "it uses its own world"
         raise ConfigError(f"--config/--set cannot change the world of this command ({where})")
-    load_config(args.config, world=world, **overrides)
+    from envs.generated_env import parse_world
+
+    generated = world is not None and parse_world(world) is not None
+    load_config(args.config, world=None if generated else world, **overrides)
     return env
+
+
+def _world(args: argparse.Namespace) -> str:
+    """``--world``, or ``generated:<split>`` for ``--world generated --split NAME``."""
+    from envs.generated_env import GENERATED, generated_label
+
+    if args.world == GENERATED:
+        if args.split is None:
+            raise ConfigError("--world generated needs --split train or --split test")
+        return generated_label(args.split)
+    if args.split is not None:
+        raise ConfigError(f"--split is for --world generated, not --world {args.world}")
+    return args.world
+
+
+def _world_cmd(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.generated_worlds import plot_world_grid, write_world_yaml
+
+    env = _env_overrides(args)
+    if args.grid is not None:
+        if args.grid < 1:
+            raise ConfigError(f"--grid must be at least 1, got {args.grid}")
+        seeds = list(range(args.seed, args.seed + args.grid))
+        path = plot_world_grid(seeds, args.out, env)
+    else:
+        path = write_world_yaml(args.seed, args.out, env)
+    if not args.json:
+        print(f"Wrote {path}")
+    return {"path": str(path), "seed": args.seed, "grid": args.grid}
 
 
 def _evaluate(args: argparse.Namespace) -> dict:
@@ -98,6 +130,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
     for name in estimators:
         if name not in POSE_SOURCES:
             raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    args.world = _world(args)
     agents = [a.strip() for a in args.agent.split(",") if a.strip()]
     models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
     if models:
@@ -157,6 +190,7 @@ def _reproduce(args: argparse.Namespace) -> dict:
 def _train(args: argparse.Namespace) -> dict:
     from agents.train import train
 
+    args.world = _world(args)
     try:
         summary = train(
             args.algo,
@@ -284,7 +318,12 @@ def build_parser() -> argparse.ArgumentParser:
         default="odometry,conventional,stsf,ekf",
         help="comma-separated estimator names",
     )
-    evaluate.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    evaluate.add_argument(
+        "--world", default="irl_corridor", help="world name, YAML path, or generated"
+    )
+    evaluate.add_argument(
+        "--split", help="with --world generated: the world-seed split, train or test"
+    )
     evaluate.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")
     evaluate.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
     evaluate.add_argument(
@@ -301,7 +340,12 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
     train.add_argument("--timesteps", type=int, help="total env steps (hyper-parameter file)")
     train.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
-    train.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    train.add_argument(
+        "--world", default="irl_corridor", help="world name, YAML path, or generated"
+    )
+    train.add_argument(
+        "--split", help="with --world generated: the world-seed split, train or test"
+    )
     train.set_defaults(run=_train)
     sweep = commands.add_parser("sweep", help="a grid of evaluation or training cells")
     sweep.add_argument("file", type=Path, help="sweep YAML, e.g. configs/sweeps/noise.yaml")
@@ -345,6 +389,14 @@ def build_parser() -> argparse.ArgumentParser:
     curve.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
     curve.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
     curve.set_defaults(run=_accuracy_curve)
+    world = commands.add_parser(
+        "world", help="a generated world as world YAML (--seed N), or a grid of them (--grid)"
+    )
+    _common(world, "world.yaml")
+    world.add_argument(
+        "--grid", type=int, help="draw this many worlds from --seed on as one PNG (--out)"
+    )
+    world.set_defaults(run=_world_cmd, out_is_file=True)
     bench = commands.add_parser("bench", help="the speed figures beside their targets")
     _common(bench, "out/bench")
     bench.add_argument(
@@ -388,8 +440,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     error = f"stsf-gym {args.command}: error:"
     try:
-        if hasattr(args, "out"):
-            _check_writable(args.out.absolute())
+        if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
+            folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
+            _check_writable(folder.absolute())
         _silence_c_stdout()
         result = args.run(args)
     except (ConfigError, ValueError, FileNotFoundError, NotADirectoryError, PermissionError) as err:

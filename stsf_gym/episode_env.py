@@ -18,13 +18,15 @@ def make_episode_env(
     estimator_options: Mapping[str, Any] | None = None,
     **overrides: Any,
 ) -> gym.Env:
-    """``world`` with the pan camera (pointed by the wrapper, so the action stays ``[v, w]``),
-    the env settings ``env`` and ``overrides`` (``config``, ``render_mode``, ``camera__width``,
-    ...; see :class:`envs.corridor_env.CorridorEnv`), wrapped in :class:`PoseEstimateWrapper`
-    for the pose source ``estimator`` with ``estimator_options`` over its YAML settings."""
-    from envs.corridor_env import CorridorEnv
+    """``world`` (a name, YAML path or mapping; ``"generated"`` with a ``split`` override, or
+    ``"generated:<split>"``: a generated world per episode) with the pan camera (pointed by the
+    wrapper, so the action stays ``[v, w]``), the env settings ``env`` and ``overrides``
+    (``config``, ``render_mode``, ``camera__width``, ...; see
+    :class:`envs.corridor_env.CorridorEnv`), wrapped in :class:`PoseEstimateWrapper` for the
+    pose source ``estimator`` with ``estimator_options`` over its YAML settings."""
+    from envs.generated_env import make_world_env
 
-    corridor = CorridorEnv(world=world, **{"camera__control": "pan", **(env or {}), **overrides})
+    corridor = make_world_env(world, **{"camera__control": "pan", **(env or {}), **overrides})
     try:
         return PoseEstimateWrapper(corridor, estimator, **(estimator_options or {}))
     except Exception:

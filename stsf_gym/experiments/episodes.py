@@ -145,8 +145,8 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
     """Drive one episode to its end; record the estimate and the true pose at every step."""
     env = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
     try:
+        obs, info = env.reset(seed=spec.seed)  # first: a generated world is drawn here
         act = make_agent(spec.agent, env, spec.agent_options)
-        obs, info = env.reset(seed=spec.seed)
         path = np.asarray(env.unwrapped.config.world.path, dtype=float)
         record: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
         frames, in_view, terminated, truncated = 0, 0, False, False

@@ -44,15 +44,14 @@ def draw_world_config(ax, world) -> None:
 
 def plot_trajectories(world: str, by_estimator: dict[str, list[EpisodeResult]], path: Path):
     """True and estimated paths of the first episode per estimator, over the map."""
-    from envs.config import load_config
+    from envs.generated_env import episode_world
 
     plt = pyplot()
-    cfg = load_config(world=world)
     n = len(by_estimator)
     fig, axes = plt.subplots(1, n, figsize=(5 * n, 4.5), squeeze=False)
     for ax, (name, episodes) in zip(axes[0], by_estimator.items(), strict=True):
-        draw_world_config(ax, cfg.world)
         episode = episodes[0]
+        draw_world_config(ax, episode_world(world, episode.spec["seed"]))
         true_xy, est_xy = np.array(episode.true_xy), np.array(episode.estimate_xy)
         ax.plot(*true_xy.T, color="tab:green", label="true")
         ax.plot(*est_xy.T, color="tab:red", ls="--", label="estimate")

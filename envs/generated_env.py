@@ -1,0 +1,126 @@
+"""``stsf_gym/Generated-v0``: the corridor env on a new generated world every episode.
+
+World seeds come in two disjoint splits (``configs/generator/default.yaml``, ``splits``):
+``train`` is world seeds 0 to 999,999 and ``test`` 1,000,000 to 1,009,999. An agent trained on
+``split="train"`` never sees a test world.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+
+from envs.config import EnvConfig, WorldConfig, load_config
+from envs.corridor_env import CorridorEnv
+from envs.generator_config import GeneratorConfig, load_generator_config
+from envs.world_generator import generate_world, world_tree
+
+GENERATED = "generated"  # the world name of generated worlds; ``generated:<split>`` labels
+
+
+def parse_world(world) -> str | None:
+    """The split of a generated-world label ``generated:<split>``, ``None`` for any other
+    world (a name, a YAML path or a mapping)."""
+    if not isinstance(world, str):
+        return None
+    name, _, split = world.partition(":")
+    if name != GENERATED:
+        return None
+    if not split:
+        raise ValueError("world 'generated' needs a split: generated:train or generated:test")
+    return split
+
+
+def generated_label(split: str) -> str:
+    """The world label of a split of generated worlds, e.g. ``generated:test``."""
+    load_generator_config().split_range(split)  # a bad split name fails here
+    return f"{GENERATED}:{split}"
+
+
+def make_world_env(world, **kwargs: Any) -> CorridorEnv:
+    """The env of ``world``: :class:`GeneratedCorridorEnv` for ``"generated"`` (``split`` in
+    ``kwargs``, default train) or ``"generated:<split>"``, else :class:`CorridorEnv`."""
+    if world == GENERATED:
+        return GeneratedCorridorEnv(**kwargs)
+    split = parse_world(world)
+    if split is not None:
+        return GeneratedCorridorEnv(split=split, **kwargs)
+    return CorridorEnv(world=world, **kwargs)
+
+
+def episode_world(world, seed: int, env: dict | None = None) -> WorldConfig:
+    """The world an episode of ``world`` (a label, name, path or mapping) reset with ``seed``
+    drives in."""
+    split = parse_world(world)
+    if split is None:
+        return load_config(world=world, **(env or {})).world
+    return world_for_seed(split, seed, load_config(**(env or {})))
+
+
+def world_seed_for(world_seeds: range, seed: int) -> int:
+    """The world seed that ``reset(seed=seed)`` uses: the split's world ``seed`` (modulo its
+    size), so episode seeds 0..N-1 give N different worlds."""
+    return world_seeds[seed % len(world_seeds)]
+
+
+def world_for_seed(split: str, seed: int, env_cfg: EnvConfig) -> WorldConfig:
+    """The world an episode of ``split`` reset with ``seed`` drives in (default generator)."""
+    gen = load_generator_config()
+    return generate_world(world_seed_for(gen.split_range(split), seed), gen, env_cfg)
+
+
+class GeneratedCorridorEnv(CorridorEnv):
+    """:class:`~envs.corridor_env.CorridorEnv` whose world is drawn at each reset.
+
+    - ``reset(seed=s)``: world seed ``first + s % count`` of the split (``world_seed_for``);
+    - ``reset()`` without a seed: a world seed of the split drawn with ``self.np_random``;
+    - ``reset(options={"world_seed": k})``: world ``k`` (it must lie in the split).
+
+    ``env.unwrapped.world_seed`` is the current world's seed. The world is rebuilt in the
+    simulator only when it changes (:meth:`CorridorEnv._build_world`).
+
+    Args:
+        split: ``"train"`` or ``"test"``: which world seeds are drawn.
+        generator: generator YAML path or mapping over ``configs/generator/default.yaml``.
+        config, render_mode, **overrides: as for :class:`CorridorEnv` (no ``world``).
+    """
+
+    def __init__(
+        self,
+        split: str = "train",
+        generator: str | dict | None = None,
+        config: str | dict | None = None,
+        render_mode: str | None = None,
+        **overrides: Any,
+    ) -> None:
+        if "world" in overrides:
+            raise ValueError("Generated-v0 draws its worlds; use Corridor-v0 to give a world")
+        self.generator: GeneratorConfig = load_generator_config(generator)
+        self.split = split
+        self.world_seeds = self.generator.split_range(split)
+        self.world_seed = self.world_seeds.start
+        first = world_tree(self.world_seed, self.generator, load_config(config, **overrides))
+        super().__init__(world=first, config=config, render_mode=render_mode, **overrides)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        options = dict(options or {})
+        world_seed = options.pop("world_seed", None)
+        if seed is not None:
+            gym.Env.reset(self, seed=seed)
+        if world_seed is None:
+            world_seed = (
+                world_seed_for(self.world_seeds, seed)
+                if seed is not None
+                else int(self.world_seeds[int(self.np_random.integers(len(self.world_seeds)))])
+            )
+        elif isinstance(world_seed, bool) or world_seed not in self.world_seeds:
+            first, last = self.world_seeds.start, self.world_seeds.stop - 1
+            raise ValueError(
+                f"options['world_seed'] must be an integer in the {self.split} split "
+                f"[{first}, {last}], got {world_seed!r}"
+            )
+        if world_seed != self.world_seed:
+            self._build_world(generate_world(int(world_seed), self.generator, self.config))
+            self.world_seed = int(world_seed)
+        return super().reset(options=options)

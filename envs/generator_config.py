@@ -1,0 +1,126 @@
+"""Settings of the world generator: ranges read from ``configs/generator/*.yaml``, validated.
+
+Every ``[low, high]`` pair must have ``low <= high``; the splits must be disjoint. Errors
+name the file and the key, as for env configs (:mod:`stsf_gym.validation`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated
+
+from stsf_gym.validation import ConfigError, Count, NonNegative, Positive, Range, build, require
+from stsf_gym.vision.landmarks import LandmarkPattern
+from stsf_gym.yaml_layers import CONFIG_DIR, deep_merge, read_yaml, shown
+
+DEFAULT_GENERATOR = CONFIG_DIR / "generator" / "default.yaml"
+SPLITS = ("train", "test")
+
+
+def _ordered(pair: tuple, field: str) -> None:
+    require(pair[0] <= pair[1], field, f"must be [low, high] with low <= high, got {list(pair)}")
+
+
+@dataclass(frozen=True)
+class VisibilityConfig:
+    min_range: Positive
+    max_range: Positive
+    max_view_deg: Annotated[float, Range(gt=0, lt=90)]
+    min_board_px: Positive
+    sample_step: Positive
+    landmarks_in_view: Count
+    candidate_step: Positive
+
+    def __post_init__(self) -> None:
+        _ordered((self.min_range, self.max_range), "max_range")
+
+
+@dataclass(frozen=True)
+class ClutterConfig:
+    count: tuple[Annotated[int, Range(ge=0)], Annotated[int, Range(ge=0)]]
+    size: tuple[Positive, Positive]
+    height: tuple[Positive, Positive]
+    path_clearance: NonNegative
+    corner_distance: NonNegative
+
+    def __post_init__(self) -> None:
+        for name in ("count", "size", "height"):
+            _ordered(getattr(self, name), name)
+
+
+@dataclass(frozen=True)
+class FixedWorldConfig:
+    wall_height: Positive
+    wall_thickness: Positive
+    goal_radius: Positive
+    landmark_height: NonNegative
+    landmark_pattern: LandmarkPattern
+
+
+@dataclass(frozen=True)
+class GeneratorConfig:
+    segments: tuple[Count, Count]
+    segment_length: tuple[Positive, Positive]
+    width: tuple[Positive, Positive]
+    min_path_length: Positive
+    branches: tuple[Annotated[int, Range(ge=0)], Annotated[int, Range(ge=0)]]
+    branch_length: tuple[Positive, Positive]
+    end_margin: Positive
+    min_gap: Positive
+    grid: Positive
+    attempts: Count
+    visibility: VisibilityConfig
+    clutter: ClutterConfig
+    world: FixedWorldConfig
+    splits: dict
+
+    def __post_init__(self) -> None:
+        for name in ("segments", "segment_length", "width", "branches", "branch_length"):
+            _ordered(getattr(self, name), name)
+        require(
+            isinstance(self.splits, Mapping) and sorted(self.splits) == sorted(SPLITS),
+            "splits",
+            f"must name exactly {list(SPLITS)}, got {self.splits!r}",
+        )
+        for name, value in self.splits.items():
+            ok = isinstance(value, list | tuple) and len(value) == 2
+            ok = ok and all(isinstance(v, int) and not isinstance(v, bool) for v in value)
+            require(
+                ok and value[0] >= 0 and value[1] >= 1,
+                f"splits.{name}",
+                f"must be [first world seed >= 0, count >= 1], got {value!r}",
+            )
+        (a0, an), (b0, bn) = (self.splits[s] for s in SPLITS)
+        require(
+            a0 + an <= b0 or b0 + bn <= a0,
+            "splits",
+            f"train {[a0, a0 + an - 1]} and test {[b0, b0 + bn - 1]} world seeds must not overlap",
+        )
+
+    def split_range(self, split: str) -> range:
+        """World seeds of ``split`` (``"train"`` or ``"test"``)."""
+        if split not in SPLITS:
+            raise ValueError(f"split must be one of {list(SPLITS)}, got {split!r}")
+        first, count = self.splits[split]
+        return range(first, first + count)
+
+
+def load_generator_config(
+    generator: str | Path | Mapping | None = None, **overrides
+) -> GeneratorConfig:
+    """``configs/generator/default.yaml`` merged with ``generator`` (a YAML path, or a mapping)
+    and keyword overrides of whole keys; errors name the file and the key."""
+    base = read_yaml(DEFAULT_GENERATOR)
+    source = shown(DEFAULT_GENERATOR)
+    if isinstance(generator, str | Path):
+        base, source = deep_merge(base, read_yaml(generator)), shown(generator)
+    elif isinstance(generator, Mapping):
+        base, source = deep_merge(base, generator), None
+    elif generator is not None:
+        raise ConfigError(f"generator must be a YAML path or a mapping, got {generator!r}")
+    try:
+        return build(GeneratorConfig, deep_merge(base, overrides), "generator")
+    except ConfigError as err:
+        raise ConfigError(err.message, err.key, source) from err

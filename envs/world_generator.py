@@ -1,0 +1,249 @@
+"""Corridor worlds drawn from a seed: the same :class:`~envs.config.WorldConfig` a YAML world
+gives, checked like one. Pure numpy, no PyBullet.
+
+:func:`generate_world` draws, with ``numpy.random.default_rng(seed)`` only:
+
+1. **the main path**: ``segments`` straight, axis-aligned legs from the start (the origin,
+   heading east) with a left or right turn between legs (L, U and zig-zag shapes), each leg
+   ``segment_length`` long and ``width`` wide (clear, wall face to wall face); legs that do not
+   meet keep ``min_gap`` of wall between them; redrawn until the path is at least
+   ``min_path_length`` long;
+2. **dead-end side branches** (T junctions): perpendicular to a leg's middle, or straight on
+   past a turn, ``branch_length`` long;
+3. **walls**: the boundary of the legs' union (:mod:`envs.corridor_layout`);
+4. **clutter**: boxes and cylinders against the walls, each leaving ``robot.body_radius +
+   path_clearance`` free around the path and ``corner_distance`` from turns, start and goal;
+5. **landmarks**: candidates on every wall every ``candidate_step``; a greedy cover keeps
+   those that make every path point see ``landmarks_in_view`` of them (at least one is a
+   must: :mod:`envs.world_visibility` defines *seen*).
+
+A layout that fails a step is drawn again (up to ``attempts`` times). The world is returned as
+the mapping a world YAML holds (:func:`world_tree`), so it can be written out and edited.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from envs.config import EnvConfig, WorldConfig, build
+from envs.corridor_layout import DIRECTIONS, Rect, boundary_walls
+from envs.generator_config import GeneratorConfig
+from envs.world_checks import obstacle_distance
+from envs.world_visibility import CameraView, choose_landmarks, path_samples, seen_matrix
+
+CAP = 3  # decimals of every coordinate in a generated world (millimetres)
+
+
+class GenerationError(RuntimeError):
+    """No valid world was found within ``attempts`` layouts."""
+
+
+def generate_world(seed: int, gen: GeneratorConfig, env: EnvConfig) -> WorldConfig:
+    """The world of ``seed`` (same seed, config and camera: the same world, bit for bit)."""
+    return build(WorldConfig, world_tree(seed, gen, env), "world")
+
+
+def world_tree(seed: int, gen: GeneratorConfig, env: EnvConfig) -> dict:
+    """The world of ``seed`` as the mapping a world YAML file holds."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"world seed must be a non-negative integer, got {seed!r}")
+    rng = np.random.default_rng(int(seed))
+    view = CameraView.from_env_config(env)
+    for _ in range(gen.attempts):
+        layout = _main_path(rng, gen)
+        if layout is None:
+            continue
+        points, widths, rects = layout
+        rects = rects + _branches(rng, gen, points, widths, rects)
+        walls = boundary_walls(rects, gen.world.wall_thickness)
+        obstacles = _clutter(rng, gen, env.robot.body_radius, points, widths)
+        landmarks = _landmarks(gen, view, points, walls, obstacles)
+        if landmarks is None:
+            continue
+        return _tree(seed, gen, points, walls, landmarks, obstacles)
+    raise GenerationError(
+        f"world seed {seed}: no layout with a landmark in view along the whole path in "
+        f"{gen.attempts} attempts; widen the generator's ranges"
+    )
+
+
+def _snap(value: float, grid: float) -> float:
+    return round(round(value / grid) * grid, CAP)
+
+
+def _main_path(rng, gen: GeneratorConfig):
+    """Vertices, widths and free-space rectangles of the main path, or None."""
+    count = int(rng.integers(gen.segments[0], gen.segments[1] + 1))
+    points, widths, rects, heading = [np.zeros(2)], [], [], 0
+    for leg in range(count):
+        for _ in range(20):
+            turn = 0 if leg == 0 else int(rng.choice([-1, 1]))
+            length = _snap(rng.uniform(*gen.segment_length), gen.grid)
+            width = _snap(rng.uniform(*gen.width), gen.grid)
+            end = np.round(points[-1] + length * DIRECTIONS[(heading + turn) % 4], CAP)
+            back = gen.end_margin if leg == 0 else width / 2
+            ahead = gen.end_margin if leg == count - 1 else width / 2
+            rect = Rect.around(points[-1], end, width / 2, back, ahead)
+            # legs that do not meet keep min_gap apart; the last leg's end cap too
+            if all(rect.gap(r) >= gen.min_gap for r in rects[:-1]):
+                break
+        else:
+            return None
+        heading = (heading + turn) % 4
+        points.append(end)
+        widths.append(width)
+        rects.append(rect)
+    points = np.array(points)
+    if np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)) < gen.min_path_length:
+        return None
+    return points, widths, rects
+
+
+def _branches(rng, gen: GeneratorConfig, points, widths, rects) -> list[Rect]:
+    """Dead-end side branches off the main path that keep ``min_gap`` from other legs."""
+    added: list[Rect] = []
+    for _ in range(int(rng.integers(gen.branches[0], gen.branches[1] + 1))):
+        leg = int(rng.integers(len(widths)))
+        a, b = points[leg], points[leg + 1]
+        along = (b - a) / np.linalg.norm(b - a)
+        width = _snap(rng.uniform(*gen.width), gen.grid)
+        length = _snap(rng.uniform(*gen.branch_length), gen.grid)
+        past_turn = leg < len(widths) - 1 and rng.random() < 0.5
+        if past_turn:  # straight on past the turn
+            root, direction = b, along
+            reach = widths[leg] / 2 + length
+        else:  # perpendicular, from the middle of the leg
+            root = np.round(a + _snap(np.linalg.norm(b - a) / 2, gen.grid) * along, CAP)
+            direction = along[::-1] * rng.choice([[1, -1], [-1, 1]])
+            reach = widths[leg] / 2 + length
+        end = np.round(root + reach * direction, CAP)
+        rect = Rect.around(root, end, width / 2, 0.0, 0.0)
+        meets = {leg, leg + 1} if past_turn else {leg}  # the legs the branch opens into
+        others = [r for i, r in enumerate(rects) if i not in meets]
+        if all(rect.gap(r) >= gen.min_gap for r in others + added):
+            added.append(rect)
+    return added
+
+
+def _clutter(rng, gen: GeneratorConfig, body_radius: float, points, widths) -> list[dict]:
+    """Boxes and cylinders against the walls of main legs, off the path and the turns."""
+    cfg = gen.clutter
+    obstacles: list[dict] = []
+    for _ in range(int(rng.integers(cfg.count[0], cfg.count[1] + 1))):
+        leg = int(rng.integers(len(widths)))
+        a, b = points[leg], points[leg + 1]
+        length = float(np.linalg.norm(b - a))
+        keep = widths[leg] / 2 + cfg.corner_distance
+        if length <= 2 * keep:
+            continue
+        along = (b - a) / length
+        size = float(rng.uniform(*cfg.size))
+        room = widths[leg] / 2 - body_radius - cfg.path_clearance - 0.02  # 2 cm off the wall
+        size = round(min(size, room), CAP)
+        if size < cfg.size[0]:
+            continue
+        side = float(rng.choice([-1.0, 1.0]))
+        offset = widths[leg] / 2 - 0.02 - size / 2
+        at = a + rng.uniform(keep, length - keep) * along + side * offset * along[::-1] * [-1, 1]
+        height = round(float(rng.uniform(*cfg.height)), CAP)
+        if rng.random() < 0.5:
+            yaw = round(math.degrees(math.atan2(along[1], along[0])), CAP)
+            spec = {"shape": "box", "size": [size, size, height], "yaw_deg": yaw}
+        else:
+            spec = {"shape": "cylinder", "size": [round(size / 2, CAP), height]}
+        spec["position"] = [round(float(v), CAP) for v in at]
+        if all(np.hypot(*np.subtract(spec["position"], o["position"])) > size for o in obstacles):
+            obstacles.append(spec)
+    return obstacles
+
+
+def _landmarks(gen, view, points, walls, obstacles) -> list[dict] | None:
+    """Landmarks chosen among wall candidates so every path point sees one, or None."""
+    pattern, vis = gen.world.landmark_pattern, gen.visibility
+    margin = pattern.size / 2 + gen.world.wall_thickness  # the board stays on its wall
+    candidates = []
+    for (x1, y1, x2, y2), inward in walls:
+        a, b = np.array([x1, y1]), np.array([x2, y2])
+        length = float(np.linalg.norm(b - a))
+        if length < 2 * margin:
+            continue
+        count = int((length - 2 * margin) // vis.candidate_step) + 1
+        spare = (length - 2 * margin - (count - 1) * vis.candidate_step) / 2
+        for k in range(count):
+            at = a + (margin + spare + k * vis.candidate_step) * (b - a) / length
+            candidates.append((np.round(at, CAP), np.array(inward)))
+    if not candidates:
+        return None
+    centres = np.array([at + (gen.world.wall_thickness / 2 + 0.02) * n for at, n in candidates])
+    normals = np.array([n for _, n in candidates])
+    samples, headings = path_samples(points, vis.sample_step)
+    circles = np.array([(*o["position"], _radius(o)) for o in obstacles], dtype=float).reshape(
+        -1, 3
+    )
+    seen = seen_matrix(
+        samples,
+        headings,
+        centres,
+        normals,
+        np.array([w for w, _ in walls], dtype=float),
+        circles,
+        gen.world.wall_thickness,
+        pattern.size,
+        gen.world.landmark_height,
+        view,
+        vis,
+    )
+    chosen = choose_landmarks(seen, vis.landmarks_in_view)
+    if chosen is None or len(chosen) > pattern.max_id:
+        return None
+    return [
+        {
+            "id": i + 1,
+            "at": [float(v) for v in candidates[c][0]],
+            "facing_deg": round(math.degrees(math.atan2(*candidates[c][1][::-1])), CAP),
+        }
+        for i, c in enumerate(chosen)
+    ]
+
+
+def _radius(obstacle: dict) -> float:
+    size = obstacle["size"]
+    return size[0] if obstacle["shape"] == "cylinder" else math.hypot(size[0], size[1]) / 2
+
+
+def _tree(seed, gen: GeneratorConfig, points, walls, landmarks, obstacles) -> dict:
+    fixed = gen.world
+    pattern = fixed.landmark_pattern
+    return {
+        "name": f"generated-{seed}",
+        "wall_height": fixed.wall_height,
+        "wall_thickness": fixed.wall_thickness,
+        "walls": [[round(v, CAP) for v in w] for w, _ in walls],
+        "path": [[round(float(v), CAP) for v in p] for p in points],
+        "start": [0.0, 0.0, 0.0],
+        "goal_radius": fixed.goal_radius,
+        "landmark_height": fixed.landmark_height,
+        "landmark_pattern": {
+            "square_size": pattern.square_size,
+            "pitch": pattern.pitch,
+            "grid": pattern.grid,
+            "border": pattern.border,
+        },
+        "landmarks": landmarks,
+        "obstacles": obstacles,
+    }
+
+
+def path_clearance(world: WorldConfig, step: float = 0.05) -> float:
+    """Smallest distance (m) from the path to a wall face or an obstacle: the robot, a disc of
+    ``body_radius``, passes along the whole path when this exceeds its radius."""
+    samples, _ = path_samples(np.asarray(world.path, float), step)
+    walls = np.asarray(world.walls, float)
+    a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
+    rel = samples[:, None] - a[None]
+    t = np.clip(np.sum(rel * d, -1) / np.sum(d * d, -1), 0, 1)
+    wall_gap = np.linalg.norm(rel - t[..., None] * d, axis=-1).min() - world.wall_thickness / 2
+    gaps = [obstacle_distance(p, o) for o in world.obstacles for p in samples]
+    return float(min([wall_gap, *gaps]))
