@@ -20,6 +20,7 @@ from envs.sensors.sonar import SonarRing
 from envs.simulator import Simulator
 from envs.task import PathTask
 from envs.world import CorridorWorld, Landmark
+from envs.world_checks import check_start_pose
 
 MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
 RENDER_VFOV_DEG = 60.0
@@ -242,9 +243,9 @@ class CorridorEnv(gym.Env):
         start = options.pop("start_pose", self.config.world.start)
         if options:
             raise ValueError(f"unknown reset option(s) {sorted(options)}; known: ['start_pose']")
-        start = np.asarray(start, dtype=float)
-        if start.shape != (3,) or not np.all(np.isfinite(start)):
-            raise ValueError(f"start_pose must be three finite numbers [x, y, yaw], got {start}")
+        start = check_start_pose(
+            self.config.world, start, self.config.robot.body_radius, "start_pose"
+        )
         self.sim.client.restoreState(self._initial_state)
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
         self.robot.reset(tuple(start), *self._mount_target)

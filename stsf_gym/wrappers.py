@@ -42,7 +42,7 @@ class TruePose(PoseEstimator):
         return self.mean, self.cov
 
 
-class PoseEstimateWrapper(gym.Wrapper):
+class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """Runs a pose estimator on every observation and adds
 
     - ``obs["pose"]``: ``Box((3,), float32)``, the estimate ``[x, y, yaw]`` (world frame);
@@ -64,10 +64,16 @@ class PoseEstimateWrapper(gym.Wrapper):
             ``"truth"`` (privileged).
         start_std: standard deviations of the start pose (m, m, rad).
         **options: estimator options, over ``configs/estimators/<name>.yaml``.
+
+    Its constructor arguments are recorded (``RecordConstructorArgs``), so ``env.spec``
+    re-creates a hand-built stack: ``gym.make(env.spec)``.
     """
 
     def __init__(self, env: gym.Env, estimator: str = "odometry", start_std=START_STD, **options):
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(
+            self, estimator=estimator, start_std=tuple(start_std), **options
+        )
+        gym.Wrapper.__init__(self, env)
         if estimator == TRUTH and options:
             raise ValueError(f"the truth pose source takes no options, got {sorted(options)}")
         self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
