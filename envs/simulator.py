@@ -1,8 +1,8 @@
 """The PyBullet simulator: one ``BulletClient`` per env, its renderer, and generated assets.
 
 Every env owns one :class:`Simulator` and never touches the global ``pybullet`` state, so
-many envs live in one process and in vector-env workers. PyBullet's C code prints banners on
-stdout; the CLI moves them to stderr when it prints JSON.
+many envs live in one process and in vector-env workers. PyBullet's C banners are captured
+(:mod:`envs.quiet`) unless ``STSF_GYM_VERBOSE`` is set.
 """
 
 from __future__ import annotations
@@ -11,11 +11,18 @@ import hashlib
 import importlib.util
 import os
 import warnings
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
-import pybullet
-from pybullet_utils.bullet_client import BulletClient
+
+from envs.quiet import quiet_c_output
+
+with quiet_c_output():  # PyBullet's banners: envs/quiet.py
+    import pybullet
+    from pybullet_utils.bullet_client import BulletClient
+
+BANNER_FRAMES = 2  # the EGL plugin prints a line on each of a client's first two frames
 
 
 def cache_file(name: str, content: bytes) -> Path:
@@ -57,11 +64,13 @@ class Simulator:
     def __init__(self, physics_hz: float, renderer: str = "auto") -> None:
         if renderer not in ("auto", "egl", "tiny", "none"):
             raise ValueError(f"camera.renderer must be auto, egl or tiny, got {renderer!r}")
-        self.client = BulletClient(connection_mode=pybullet.DIRECT)
+        with quiet_c_output():
+            self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.client.setTimeStep(1.0 / physics_hz)
         self.client.setGravity(0, 0, -9.81)
         self.time_step = 1.0 / physics_hz
         self._closed = False
+        self._frames = 0  # rendered so far: the first ones print EGL banners
         self.renderer = self._load_renderer(renderer) if renderer in ("auto", "egl") else renderer
 
     def _load_renderer(self, renderer: str) -> str:
@@ -79,7 +88,8 @@ class Simulator:
         spec = importlib.util.find_spec("eglRenderer")
         plugin = -1
         if spec is not None and spec.origin:
-            plugin = self.client.loadPlugin(spec.origin, "_eglRendererPlugin")
+            with quiet_c_output():
+                plugin = self.client.loadPlugin(spec.origin, "_eglRendererPlugin")
         if plugin >= 0:
             _egl_loaded_pid = os.getpid()
             return "egl"
@@ -105,19 +115,22 @@ class Simulator:
             if self.renderer == "egl"
             else (pybullet.ER_TINY_RENDERER)
         )
-        _, _, rgba, _, _ = self.client.getCameraImage(
-            width,
-            height,
-            viewMatrix=view.T.ravel().tolist(),
-            projectionMatrix=projection.T.ravel().tolist(),
-            renderer=flag,
-            shadow=0,
-            flags=pybullet.ER_NO_SEGMENTATION_MASK,
-        )
+        with quiet_c_output() if self._frames < BANNER_FRAMES else nullcontext():
+            _, _, rgba, _, _ = self.client.getCameraImage(
+                width,
+                height,
+                viewMatrix=view.T.ravel().tolist(),
+                projectionMatrix=projection.T.ravel().tolist(),
+                renderer=flag,
+                shadow=0,
+                flags=pybullet.ER_NO_SEGMENTATION_MASK,
+            )
+        self._frames += 1
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
 
     def close(self) -> None:
         """Disconnect; calling it again is harmless."""
         if not self._closed:
             self._closed = True
-            self.client.disconnect()
+            with quiet_c_output():
+                self.client.disconnect()

@@ -1,5 +1,6 @@
 """The ``stsf-gym`` command line. Every command takes ``--seed``, ``--out``, ``--config``,
-``--set key=value`` and ``--json`` (a machine-readable result on stdout)."""
+``--set key=value``, ``--json`` (a machine-readable result on stdout) and ``--verbose``
+(PyBullet's C banners, quiet by default)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import os
 import sys
 from pathlib import Path
 
+from envs.quiet import VERBOSE_ENV
 from stsf_gym.config import ConfigError, parse_overrides
 
 
@@ -29,6 +31,9 @@ def _common(
         help="override one config value, e.g. camera.width=640",
     )
     parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    parser.add_argument(
+        "--verbose", action="store_true", help="show PyBullet's C banners (quiet by default)"
+    )
 
 
 def _demo(args: argparse.Namespace) -> dict:
@@ -43,15 +48,15 @@ def _demo(args: argparse.Namespace) -> dict:
     summary = run_demo(args.out, seed=args.seed, workers=args.workers, env=env)
     if not args.json:
         from rich.console import Console
-        from rich.table import Table
 
-        table = Table(title=f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})")
-        for column in summary["table"][0]:
-            table.add_column(column)
-        for row in summary["table"]:
-            table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row.values()))
+        from stsf_gym.terminal_table import fit_table
+
         console = Console()
-        console.print(table)
+        title = f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})"
+        rows = [list(row.values()) for row in summary["table"]]
+        console.print(
+            fit_table(list(summary["table"][0]), rows, console.width, title, "results.md")
+        )
         console.print(
             f"Wrote {args.out}/results.md, results.json and {', '.join(summary['figures'])}"
         )
@@ -69,8 +74,11 @@ def _print_markdown(args: argparse.Namespace, path: Path) -> None:
     if not args.json:
         from rich.console import Console
 
-        Console().print(path.read_text())
-        Console().print(f"Wrote {path.parent}/")
+        from stsf_gym.terminal_table import print_markdown
+
+        console = Console()
+        print_markdown(path.read_text(), console, path.name)
+        console.print(f"Wrote {path.parent}/")
 
 
 def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
@@ -311,7 +319,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if hasattr(args, "out"):
             _check_writable(args.out.absolute())
-        _silence_c_stdout()
+        if args.verbose:
+            os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
+        else:
+            _silence_c_stdout()
         result = args.run(args)
     except (ConfigError, ValueError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
         print(f"{error} {err}", file=sys.stderr)
