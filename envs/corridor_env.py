@@ -11,6 +11,8 @@ from gymnasium import spaces
 
 from envs.config import EnvConfig, load_config
 from envs.faults import FaultInjector
+from envs.render_view import MapView, detections_frame
+from envs.render_window import HumanWindow
 from envs.robot import DiffDriveRobot
 from envs.sensors.camera import PinholeCamera, look_at, view_matrix
 from envs.sensors.encoders import OdometryCalibration, WheelEncoders
@@ -24,6 +26,7 @@ from envs.world_checks import check_start_pose
 
 MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
 RENDER_VFOV_DEG = 60.0
+CHASE_DISTANCE, CHASE_MIN_DISTANCE, CHASE_WALL_GAP, CHASE_HEIGHT = 1.8, 0.3, 0.15, 1.6  # m
 EGL_WARMUP_FRAMES = 2
 SETTLE_STEPS = 30
 RAY_CLEARANCE = 0.1  # m
@@ -83,13 +86,17 @@ class CorridorEnv(gym.Env):
     ## Arguments
     - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
     - ``config``: YAML path or mapping merged over ``configs/default.yaml``.
-    - ``render_mode``: ``None`` or ``"rgb_array"`` (chase or top view, ``render.view``).
+    - ``render_mode``: ``None``, ``"rgb_array"`` or ``"human"`` (a window; needs a display).
+      ``render.view`` picks the picture: ``map`` (default; :mod:`envs.render_view`: a top-down
+      map with the true pose, the estimates a wrapper hands to :attr:`view`, sensors and an
+      inset of the camera frame), ``chase`` (a rendered camera behind the robot) or ``top``
+      (a rendered view of the whole world from above).
     - ``**overrides``: single values, e.g. ``camera__width=640`` or ``camera={"rate_hz": 10}``.
 
     ``reset(seed=..., options={"start_pose": [x, y, yaw]})`` places the robot elsewhere.
     """
 
-    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    metadata: ClassVar[dict] = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
 
     def __init__(
         self,
@@ -99,7 +106,9 @@ class CorridorEnv(gym.Env):
         **overrides: Any,
     ) -> None:
         if render_mode not in (None, *self.metadata["render_modes"]):
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+            raise ValueError(
+                f"render_mode must be None, 'rgb_array' or 'human', got {render_mode!r}"
+            )
         self.config: EnvConfig = load_config(config, world=world, **overrides)
         cfg = self.config
         self.render_mode = render_mode
@@ -107,7 +116,8 @@ class CorridorEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": 1.0 / self.dt}
         self._substeps = round(cfg.sim.control_dt * cfg.sim.physics_hz)  # whole (config)
         self._rendered_camera = cfg.camera.enabled and cfg.camera.mode == "rendered"
-        renders = self._rendered_camera or render_mode is not None
+        renders = self._rendered_camera or (render_mode is not None and cfg.render.view != "map")
+        self._window = HumanWindow("stsf-gym", 1.0 / self.dt) if render_mode == "human" else None
         self.sim = Simulator(cfg.sim.physics_hz, cfg.camera.renderer if renders else "none")
         try:
             self.world = CorridorWorld(self.sim, cfg.world)
@@ -148,6 +158,9 @@ class CorridorEnv(gym.Env):
         self._detections = self.fast_detector.empty()
         self._frame_pan_tilt = np.zeros(2, np.float32)
         self._frame_pose = np.eye(4)
+        self._last_obs: dict = {}
+        #: The top-down map (``render_mode`` set): wrappers hand it their estimates.
+        self.view = None if render_mode is None else self._map_view()
 
     # --- public geometry -------------------------------------------------------------------
     @property
@@ -162,7 +175,8 @@ class CorridorEnv(gym.Env):
 
     @property
     def renderer(self) -> str:
-        """``"egl"``, ``"tiny"``, or ``"none"`` (camera off, no render mode): the renderer."""
+        """``"egl"``, ``"tiny"``, or ``"none"`` (no PyBullet rendering: camera off or fast,
+        and no render mode or the map view): the renderer."""
         return self.sim.renderer
 
     @property
@@ -260,6 +274,11 @@ class CorridorEnv(gym.Env):
         self._progress = self.task.progress(self._pose)
         self._next_frame = 0.0
         obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, self.np_random)
+        self._last_obs = obs
+        if self.view is not None:
+            self.view.clear()
+        if self._window is not None:
+            self.render()
         return obs, self._info(collision=False)
 
     def step(self, action):
@@ -297,6 +316,9 @@ class CorridorEnv(gym.Env):
         terminated = reached or collision
         truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9
         obs = self.faults.observe(self._observe(ticks), self._time, self.np_random)
+        self._last_obs = obs
+        if self._window is not None:
+            self.render()
         return obs, float(reward), terminated, truncated, self._info(collision)
 
     def _observe(self, ticks: np.ndarray) -> dict:
@@ -341,11 +363,52 @@ class CorridorEnv(gym.Env):
         }
 
     def render(self):
-        if self.render_mode != "rgb_array":
+        """The frame of ``render.view`` (RGB uint8); in ``human`` mode shown, ``None`` returned."""
+        if self.render_mode is None:
             return None
+        view = self.config.render.view
+        frame = self._map_frame() if view == "map" else self._rendered_view(view)
+        if self._window is None:
+            return frame
+        self._window.show(frame)
+        return None
+
+    def _map_view(self) -> MapView:
+        cfg = self.config
+        return MapView(
+            cfg.world,
+            self.world.landmarks,
+            cfg.robot.body_radius,
+            self.sonar.axes,
+            math.radians(cfg.sonar.beam_width_deg) / 2,
+            self.camera.hfov,
+            cfg.render.width,
+            cfg.render.height,
+        )
+
+    def _map_frame(self) -> np.ndarray:
+        obs, camera = self._last_obs, self.config.camera
+        inset = None
+        if camera.enabled and "image" in obs:
+            inset = obs["image"]
+        elif camera.enabled and "landmark_ids" in obs:
+            inset = detections_frame(
+                obs["landmark_ids"], obs["landmark_points"], camera.width, camera.height
+            )
+        in_view = self.landmarks_in_view() if camera.enabled else []
+        return self.view.draw(
+            self._pose,
+            self._frame_pose if camera.enabled else np.zeros((4, 4)),
+            obs.get("sonar"),
+            in_view,
+            inset,
+            f"t = {self._time:.1f} s",
+        )
+
+    def _rendered_view(self, view: str) -> np.ndarray:
         cfg = self.config.render
         x, y, yaw = self._pose
-        if cfg.view == "top":
+        if view == "top":
             centre = self.world.bounds.mean(axis=0)
             extent = np.ptp(self.world.bounds, axis=0) / 2
             half_fov = math.radians(RENDER_VFOV_DEG) / 2
@@ -353,12 +416,24 @@ class CorridorEnv(gym.Env):
             pose = look_at([*centre, height], [*centre, 0.0], np.array([0.0, 1.0, 0.0]))
         else:
             heading = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-            eye = np.array([x, y, 1.6]) - 1.8 * heading
+            eye = np.array([x, y, CHASE_HEIGHT]) - self._chase_distance() * heading
             pose = look_at(eye, np.array([x, y, 0.5]) + 1.0 * heading, np.array([0.0, 0.0, 1.0]))
         view_camera = PinholeCamera(cfg.width, cfg.height, RENDER_VFOV_DEG, 0.05, 100.0)
         return self.sim.render(
             cfg.width, cfg.height, view_matrix(pose), view_camera.projection_matrix()
         )
 
+    def _chase_distance(self) -> float:
+        """How far behind the robot the chase camera sits: ``CHASE_DISTANCE``, or closer when
+        a wall is nearer, so it always films from inside the corridor."""
+        x, y, yaw = self._pose
+        back = np.array([x - CHASE_DISTANCE * math.cos(yaw), y - CHASE_DISTANCE * math.sin(yaw)])
+        hit = self.sim.client.rayTest([x, y, CHASE_HEIGHT], [*back, CHASE_HEIGHT])[0]
+        if hit[0] < 0:
+            return CHASE_DISTANCE
+        return max(CHASE_MIN_DISTANCE, hit[2] * CHASE_DISTANCE - CHASE_WALL_GAP)
+
     def close(self) -> None:
+        if self._window is not None:
+            self._window.close()
         self.sim.close()

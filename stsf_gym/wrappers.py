@@ -120,6 +120,10 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 
     def _with_pose(self, obs: dict, mean: np.ndarray, cov: np.ndarray) -> dict:
+        view = self.env.unwrapped.view  # the env's map (render_mode set) draws the estimate
+        if view is not None:
+            target = None if self.pointer is None else self.pointer.target
+            view.show_estimate(self.estimator.name, mean, cov, target)
         pose = np.array([mean[0], mean[1], np.arctan2(np.sin(mean[2]), np.cos(mean[2]))])
         low, high = self.observation_space["pose"].low, self.observation_space["pose"].high
         return {
