@@ -45,7 +45,9 @@ def _demo(args: argparse.Namespace) -> dict:
         if args.seconds <= 0:
             raise ConfigError(f"--seconds must be positive, got {args.seconds}")
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
-    summary = run_demo(args.out, seed=args.seed, workers=args.workers, env=env)
+    if args.video_seconds is not None and args.video_seconds < 0:
+        raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")
+    summary = run_demo(args.out, args.seed, args.workers, env, args.video_seconds)
     if not args.json:
         from rich.console import Console
 
@@ -57,8 +59,10 @@ def _demo(args: argparse.Namespace) -> dict:
         console.print(
             fit_table(list(summary["table"][0]), rows, console.width, title, "results.md")
         )
+        videos = [str(args.out / v) for v in summary.get("videos", {}).values()]
         console.print(
-            f"Wrote {args.out}/results.md, results.json and {', '.join(summary['figures'])}"
+            f"Wrote {args.out}/results.md, results.json, {', '.join(summary['figures'])}"
+            + (f" and {', '.join(videos)}" if videos else "")
         )
     return summary
 
@@ -223,6 +227,11 @@ def build_parser() -> argparse.ArgumentParser:
     _common(demo, "out/demo")
     demo.add_argument("--seconds", type=float, help="simulated time limit per episode")
     demo.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
+    demo.add_argument(
+        "--video-seconds",
+        type=float,
+        help="simulated seconds of each estimator's episode in its video (40; 0: no videos)",
+    )
     demo.set_defaults(run=_demo)
     reproduce = commands.add_parser("reproduce", help="the paper's experiments")
     reproduce.add_argument("experiment", choices=["table1", "fig10", "fig11"])

@@ -1,17 +1,20 @@
 """``stsf-gym demo``: the main job. The path follower drives the IRL corridor once with each
 estimator (odometry, conventional fusion, STSF, EKF) on its own pose estimate, without sonar
-avoidance as in the paper's Fig. 11; a short table and the trajectories over the map, in about
-a minute on two cores.
+avoidance as in the paper's Fig. 11; a short table, the trajectories over the map and a video
+of the start of each episode (``videos/<estimator>.mp4``), in about a minute on two cores.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from stsf_gym.experiments.evaluate import evaluate
+from stsf_gym.experiments.episode_video import record_videos
+from stsf_gym.experiments.episodes import EpisodeSpec
+from stsf_gym.experiments.evaluate import estimator_options, evaluate
 from stsf_gym.experiments.figures import PATH_ONLY
 
 DEMO_ESTIMATORS = ["odometry", "conventional", "stsf", "ekf"]
+VIDEO_SECONDS = 40.0  # simulated seconds recorded per estimator
 COLUMNS = [
     "estimator",
     "success rate",
@@ -24,8 +27,17 @@ COLUMNS = [
 ]
 
 
-def run_demo(out: str | Path, seed: int = 0, workers: int = 2, env: dict | None = None) -> dict:
-    """One episode per estimator on the IRL corridor; results.md, trajectories.png, errors.png."""
+def run_demo(
+    out: str | Path,
+    seed: int = 0,
+    workers: int = 2,
+    env: dict | None = None,
+    video_seconds: float | None = None,
+) -> dict:
+    """One episode per estimator on the IRL corridor; results.md, trajectories.png, errors.png
+    and, unless ``video_seconds`` is 0, a video of each episode's first ``video_seconds``
+    (default :data:`VIDEO_SECONDS`) in ``videos/``."""
+    video_seconds = VIDEO_SECONDS if video_seconds is None else video_seconds
     summary, _ = evaluate(
         out,
         DEMO_ESTIMATORS,
@@ -37,4 +49,13 @@ def run_demo(out: str | Path, seed: int = 0, workers: int = 2, env: dict | None 
         agent_options=PATH_ONLY,
     )
     summary["table"] = [{k: row[k] for k in COLUMNS} for row in summary["rows"]]
+    if video_seconds > 0:
+        specs = [
+            EpisodeSpec(
+                "irl_corridor", e, seed, "follower", env or {}, estimator_options(e), PATH_ONLY
+            )
+            for e in DEMO_ESTIMATORS
+        ]
+        videos = record_videos(specs, Path(out) / "videos", video_seconds, workers)
+        summary["videos"] = {e: f"videos/{name}" for e, name in videos.items()}
     return summary
