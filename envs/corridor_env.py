@@ -12,7 +12,7 @@ from gymnasium import spaces
 from envs.config import EnvConfig, load_config
 from envs.faults import FaultInjector
 from envs.render_view import MapView, detections_frame
-from envs.render_window import HumanWindow
+from envs.render_window import HumanWindow, display_available
 from envs.robot import DiffDriveRobot
 from envs.sensors.camera import PinholeCamera, look_at, view_matrix
 from envs.sensors.encoders import OdometryCalibration, WheelEncoders
@@ -113,7 +113,9 @@ class CorridorEnv(gym.Env):
         cfg = self.config
         self.render_mode = render_mode
         self.dt = cfg.sim.control_dt
-        self.metadata = {**self.metadata, "render_fps": 1.0 / self.dt}
+        # "human" only where a window can open (the env checkers try every declared mode)
+        modes = self.metadata["render_modes"] if display_available() else ["rgb_array"]
+        self.metadata = {**self.metadata, "render_modes": modes, "render_fps": 1.0 / self.dt}
         self._substeps = round(cfg.sim.control_dt * cfg.sim.physics_hz)  # whole (config)
         self._rendered_camera = cfg.camera.enabled and cfg.camera.mode == "rendered"
         renders = self._rendered_camera or (render_mode is not None and cfg.render.view != "map")

@@ -12,11 +12,16 @@ import time
 import numpy as np
 
 
+def display_available() -> bool:
+    """True when a window can be shown (an X or Wayland display is set)."""
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 class HumanWindow:
     """A window that shows RGB frames at most ``fps`` times a second of wall time."""
 
     def __init__(self, title: str, fps: float) -> None:
-        if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        if not display_available():
             raise RuntimeError(
                 "render_mode='human' needs a display (DISPLAY is not set); use "
                 "render_mode='rgb_array' and save the frames, e.g. with "

@@ -81,6 +81,8 @@ def test_human_mode_without_a_display_says_so(make_env, monkeypatch):
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(RuntimeError, match="needs a display"):
         make_env(render_mode="human", camera__enabled=False)
+    # not declared then, so the env checkers do not try it
+    assert make_env(camera__enabled=False).metadata["render_modes"] == ["rgb_array"]
 
 
 def test_unknown_view_is_named(make_env):

@@ -6,8 +6,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 from agents.zoo import hyperparams, zoo_section
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,7 +21,6 @@ def test_sections_follow_the_training_config():
 
 
 def test_rl_zoo3_trains_ppo_through_gym_packages(tmp_path):
-    pytest.importorskip("rl_zoo3")
     command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo"]
     command += ["--env", "stsf_gym/Straight10m-Truth-v0", "--gym-packages", "stsf_gym"]
     command += ["--conf-file", "agents.zoo", "-n", "128", "--seed", "0", "--eval-freq", "-1"]
