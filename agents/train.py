@@ -38,7 +38,7 @@ from agents.training_log import (
     plot_learning_curve,
 )
 from envs.config import ConfigError
-from stsf_gym.experiments.episodes import make_episode_env
+from stsf_gym.episode_env import make_episode_env
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.wrappers import POSE_SOURCES
 

@@ -16,7 +16,7 @@ oblique views up to 60 degrees fit), plus many frames with no landmark in view, 
 Usage::
 
     python benchmarks/detector_accuracy.py [--seed 0] [--out out/detector] [--json]
-        [--width 320 --height 240 --vfov 45] [--near M] [--noise GREY]
+        [--width 320 --height 240 --vfov 45] [--near M] [--profile paper|ideal] [--noise GREY]
 
 Writes ``results.json`` and ``results.md`` to ``--out`` and prints the Markdown (or the JSON
 with ``--json``).
@@ -56,7 +56,10 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--height", type=int, default=240)
     p.add_argument("--vfov", type=float, default=45.0, help="vertical field of view (deg)")
     p.add_argument("--near", type=float, default=None, help="camera near plane (m)")
-    p.add_argument("--noise", type=float, default=None, help="image noise (grey levels)")
+    p.add_argument(
+        "--profile", default=None, help="camera profile (configs/cameras; default paper)"
+    )
+    p.add_argument("--noise", type=float, default=None, help="sensor read noise (grey levels)")
     p.add_argument(
         "--min-board-px",
         type=float,
@@ -82,8 +85,10 @@ def make_env(args, world=None, env_id="stsf_gym/Straight10m-v0"):
     }
     if args.near is not None:
         kwargs["camera__near"] = args.near
+    if args.profile is not None:
+        kwargs["camera__profile"] = args.profile
     if args.noise is not None:
-        kwargs["camera__noise_std"] = args.noise
+        kwargs["camera__sensor__read_noise"] = args.noise
     if world is not None:
         kwargs["world"] = world
     return gym.make(env_id, **kwargs)
@@ -178,7 +183,8 @@ def run(args) -> dict:
             "height": args.height,
             "vfov_deg": args.vfov,
             "near": args.near,
-            "noise_std": args.noise,
+            "profile": args.profile,
+            "read_noise": args.noise,
             "min_board_px": detector.min_board_px,
             "repeats": args.repeats,
             "renderer": "see env",
@@ -286,7 +292,7 @@ def to_markdown(res: dict) -> str:
         "",
         f"Seed {c['seed']}; {res['frames_with_landmark']} frames with the landmark wholly in "
         f"view, {res['detected']} detected, {res['wrong_id_detections']} wrong-id detections; "
-        f"near plane {c['near'] or 'default'}, image noise {c['noise_std'] or 'default'}, "
+        f"near plane {c['near'] or 'default'}, camera profile {c['profile'] or 'default'}, "
         f"detector min_board_px {c['min_board_px']:g}.",
         "",
         "## Detection rate vs distance (all angles)",

@@ -10,11 +10,13 @@ Renders the landmark from a grid of distances and viewing angles
 - false detections: wrong-id detections per frame (``false_detection_rate``).
 
 Then it measures the fast mode with the fitted numbers on fresh views and prints both side by
-side. ``--write`` puts the fitted numbers into ``configs/default.yaml`` (``camera.fast``).
+side. ``--write`` puts the fitted numbers into the camera profile's file,
+``configs/cameras/<profile>.yaml`` (its ``fast`` section).
 
 Usage::
 
-    python benchmarks/fast_sensor_fit.py [--seed 0] [--repeats 3] [--write] [--json]
+    python benchmarks/fast_sensor_fit.py [--profile paper] [--seed 0] [--repeats 3] [--write]
+        [--json]
 """
 
 from __future__ import annotations
@@ -59,14 +61,14 @@ def fit(records: list[dict]) -> dict:
     }
 
 
-def write_default_yaml(values: dict) -> None:
-    """Replace the ``camera.fast`` numbers in configs/default.yaml, keeping its comments."""
-    path = CONFIG_DIR / "default.yaml"
+def write_profile_yaml(profile: str, values: dict) -> None:
+    """Replace the ``fast`` numbers in the profile's YAML file, keeping its comments."""
+    path = CONFIG_DIR / "cameras" / f"{profile}.yaml"
     text = path.read_text()
     for key, value in values.items():
-        text, n = re.subn(rf"(\n    {key}: )[^\s#]+", rf"\g<1>{value}", text)
+        text, n = re.subn(rf"(\n  {key}: )[^\s#]+", rf"\g<1>{value}", text)
         if n != 1:
-            raise RuntimeError(f"camera.fast.{key} not found once in {path}")
+            raise RuntimeError(f"fast.{key} not found once in {path}")
     path.write_text(text)
 
 
@@ -74,13 +76,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--repeats", type=int, default=3, help="views per distance and angle")
-    parser.add_argument("--write", action="store_true", help="update configs/default.yaml")
+    parser.add_argument("--profile", default="paper", help="camera profile (configs/cameras)")
+    parser.add_argument("--write", action="store_true", help="update the profile's YAML file")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     results = {}
     for mode in ("rendered", "fast"):
-        camera = {"mode": mode, "fast": results.get("fitted", {})}
+        camera = {"mode": mode, "profile": args.profile, "fast": results.get("fitted", {})}
         env = gym.make("stsf_gym/Straight10m-v0", world=room_world(), camera=camera)
         try:
             records = detection_records(env, rng, repeats=args.repeats)
@@ -90,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
             results["fitted"] = fit(records)
         results[mode] = summarise_records(records)
     if args.write:
-        write_default_yaml(results["fitted"])
+        write_profile_yaml(args.profile, results["fitted"])
     if args.json:
         print(json.dumps(results, indent=2))
     else:

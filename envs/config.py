@@ -3,7 +3,7 @@
 Every number lives in ``configs/``: ``configs/default.yaml`` holds the robot, sensors and task,
 ``configs/worlds/<name>.yaml`` the worlds. :func:`load_config` merges, in order, the defaults,
 a user config (YAML path or dict), then keyword overrides, and builds an :class:`EnvConfig`.
-Every number has an allowed range (``Annotated[..., Range(...)]``, :mod:`envs.validation`) and
+Every number has an allowed range (``Annotated[..., Range(...)]``, :mod:`stsf_gym.validation`) and
 the world's geometry is checked (:mod:`envs.world_checks`). A misspelt or unknown key, a value of
 the wrong type or out of range raises :class:`ConfigError` naming the YAML file that set it, the
 full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius must be > 0, got -0.1``.
@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from envs.fault_spec import FaultSpec
-from envs.validation import (
+from envs.world_checks import check_clearance, check_world
+from stsf_gym.validation import (
     ConfigError,
     Count,
     Degrees,
@@ -30,8 +31,8 @@ from envs.validation import (
     build,
     require,
 )
-from envs.world_checks import check_clearance, check_world
-from envs.yaml_layers import (
+from stsf_gym.vision.landmarks import LandmarkPattern
+from stsf_gym.yaml_layers import (
     CONFIG_DIR,
     deep_merge,
     overrides_to_tree,
@@ -39,7 +40,6 @@ from envs.yaml_layers import (
     shown,
     world_files,
 )
-from stsf_gym.vision.landmarks import LandmarkPattern
 
 __all__ = [  # re-exported: the config API lives here
     "CONFIG_DIR",
@@ -149,6 +149,37 @@ class FastCameraConfig:
     max_detections: Count  # detection slots in the observation
 
 
+Relative = Annotated[float, Range(ge=0, lt=0.5)]
+
+
+@dataclass(frozen=True)
+class LensConfig:
+    """The lens (:mod:`envs.sensors.lens`): distortion, vignetting and defocus."""
+
+    distortion: tuple[float, float, float, float, float]  # OpenCV k1 k2 p1 p2 k3
+    vignetting: Annotated[float, Range(ge=0, lt=1)]  # share of light lost at the image corner
+    defocus_px: NonNegative  # std (px) of the lens's Gaussian point spread; 0 in focus
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """The image sensor (:mod:`envs.sensors.image_sensor`): exposure and noise."""
+
+    exposure_s: NonNegative  # exposure time: the camera's motion during it blurs the frame
+    gain_std: Relative  # per-frame exposure/gain variation, relative
+    read_noise: Annotated[float, Range(ge=0, le=255)]  # std, grey levels
+    shot_noise: NonNegative  # photon noise: variance (grey levels^2) per grey level of signal
+
+
+@dataclass(frozen=True)
+class CalibrationErrorConfig:
+    """How far the robot's believed camera calibration is from the truth, drawn per episode."""
+
+    focal_std: Relative  # relative error of the focal length
+    principal_point_std_px: NonNegative
+    distortion_std: tuple[NonNegative, NonNegative, NonNegative, NonNegative, NonNegative]
+
+
 @dataclass(frozen=True)
 class CameraConfig:
     enabled: bool
@@ -158,11 +189,15 @@ class CameraConfig:
     rate_hz: Positive
     near: Positive
     far: Positive
-    renderer: Literal["auto", "egl", "tiny"]
+    renderer: Literal["auto", "gl", "egl", "tiny"]
     pan_deg: Degrees
     tilt_deg: Degrees
     control: Literal["none", "pan", "pan_tilt"]
-    noise_std: Annotated[float, Range(ge=0, le=255)]
+    profile: str  # configs/cameras/<profile>.yaml: lens, sensor, calibration_error
+    lens: LensConfig
+    sensor: SensorConfig
+    calibration_error: CalibrationErrorConfig
+    feature_rms_px: Positive  # the detector's feature error the profile is made to give
     mode: Literal["rendered", "fast"]
     fast: FastCameraConfig
 
@@ -285,7 +320,25 @@ def load_config(
                 "world",
                 source,
             )
+    _add_camera_profile(tree, sources)
     try:
         return build(EnvConfig, tree, "")
     except ConfigError as err:
         raise sources.attribute(err) from err
+
+
+def _add_camera_profile(tree: dict, sources: KeySources) -> None:
+    """Fill the camera section from its profile file; keys a layer set stay as set."""
+    camera = tree.setdefault("camera", {})
+    name = camera.get("profile")
+    known = sorted(p.stem for p in (CONFIG_DIR / "cameras").glob("*.yaml"))
+    file = CONFIG_DIR / "cameras" / f"{name}.yaml"
+    if not isinstance(name, str) or not file.is_file():
+        raise ConfigError(
+            f"camera.profile must be one of {known}, got {name!r}",
+            "camera.profile",
+            sources.file_of("camera.profile") or None,
+        )
+    profile = read_yaml(file)
+    tree["camera"] = deep_merge(profile, camera)
+    sources.record(profile, shown(file), "camera", keep=True)

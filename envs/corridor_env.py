@@ -14,26 +14,23 @@ from envs.faults import FaultInjector
 from envs.render_view import MapView, detections_frame
 from envs.render_window import HumanWindow, display_available
 from envs.robot import DiffDriveRobot
-from envs.sensors.camera import PinholeCamera, look_at, view_matrix
-from envs.sensors.encoders import OdometryCalibration, WheelEncoders
+from envs.sensors.camera import PinholeCamera, believed_calibration, look_at, view_matrix
+from envs.sensors.encoders import WheelEncoders
 from envs.sensors.fast_camera import SimulatedDetector
-from envs.sensors.image_noise import ImageNoise
+from envs.sensors.rendered_camera import RenderedCamera
 from envs.sensors.sonar import SonarRing
 from envs.simulator import Simulator
 from envs.task import PathTask
 from envs.world import CorridorWorld, Landmark
 from envs.world_checks import check_start_pose
+from stsf_gym.camera_model import CameraCalibration
+from stsf_gym.geometry import OdometryCalibration
 
 MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
 RENDER_VFOV_DEG = 60.0
 CHASE_DISTANCE, CHASE_MIN_DISTANCE, CHASE_WALL_GAP, CHASE_HEIGHT = 1.8, 0.3, 0.15, 1.6  # m
 EGL_WARMUP_FRAMES = 2
 SETTLE_STEPS = 30
-RAY_CLEARANCE = 0.1  # m
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v)
 
 
 class CorridorEnv(gym.Env):
@@ -51,7 +48,10 @@ class CorridorEnv(gym.Env):
 
     - ``image``: ``Box(0, 255, (H, W, 3), uint8)``, the latest camera frame (default 320x240);
       frames are taken at ``camera.rate_hz`` of simulated time, independent of the control
-      period, so between frames the previous one is repeated.
+      period, so between frames the previous one is repeated. The frame is rendered
+      (``camera.renderer``) through the lens and sensor of ``camera.profile``
+      (:mod:`envs.sensors.rendered_camera`: distortion, vignetting, defocus, motion blur over
+      the exposure, gain and noise).
     - ``image_new``: ``Discrete(2)``, 1 when a camera frame was taken during this step (or reset).
     - With ``camera.mode: fast`` (no rendering; :mod:`envs.sensors.fast_camera`) ``image`` is
       replaced by the frame's simulated detections: ``landmark_ids`` ``Box((L,), int64)``
@@ -80,8 +80,15 @@ class CorridorEnv(gym.Env):
 
     ## Info
     ``true_pose`` ([x, y, yaw], privileged: for evaluation only), ``camera_pose`` (4x4
-    world-from-camera, OpenCV axes, of the frame in ``image``), ``collision``,
-    ``distance_travelled`` (m, true), ``progress`` (m along the path), ``sim_time`` (s).
+    world-from-camera, OpenCV axes, of the frame in ``image``, at the middle of its exposure),
+    ``collision``, ``distance_travelled`` (m, true), ``progress`` (m along the path),
+    ``sim_time`` (s).
+
+    ## Camera
+    ``camera_matrix`` (K) and ``dist_coeffs`` (OpenCV ``k1 k2 p1 p2 k3``) are the TRUE camera of
+    ``image``, for evaluation; ``camera_calibration`` is what the robot believes (K and
+    distortion with this episode's calibration error, drawn at reset from ``np_random``), the
+    only calibration an estimator may use. ``renderer`` names the renderer in use.
 
     ## Arguments
     - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
@@ -133,14 +140,17 @@ class CorridorEnv(gym.Env):
             cfg.camera.vfov_deg,
             cfg.camera.near,
             cfg.camera.far,
+            cfg.camera.lens.distortion,
         )
-        self.fast_detector = SimulatedDetector(
-            cfg.camera.fast, self.camera, cfg.world.landmark_pattern, self.world.landmarks
+        self.camera_calibration: CameraCalibration = self.camera.calibration
+        self.camera_sensor = (
+            SimulatedDetector(cfg.camera.fast, self.camera, self.world)
+            if cfg.camera.mode == "fast"
+            else RenderedCamera(cfg.camera, self.camera, self.sim, self.robot)
         )
         self.sonar = SonarRing(cfg.sonar, cfg.robot.body_radius)
         self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
         self.task = PathTask(cfg.world, cfg.reward)
-        self._projection = self.camera.projection_matrix()
         self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
         self.observation_space = self._observation_space()
         self.faults = FaultInjector(cfg.faults, self.world, self.robot, self.observation_space)
@@ -154,10 +164,7 @@ class CorridorEnv(gym.Env):
             # The first two EGL frames of a client are shaded differently from all later ones
             # (its shadow state settles); discard them so every episode renders alike.
             for _ in range(EGL_WARMUP_FRAMES):
-                self._render_camera()
-        self._image = np.zeros((cfg.camera.height, cfg.camera.width, 3), np.uint8)
-        self.image_noise = ImageNoise(cfg.camera.noise_std, self._image.shape)
-        self._detections = self.fast_detector.empty()
+                self.camera_sensor.radiance(self.robot.camera_pose())
         self._frame_pan_tilt = np.zeros(2, np.float32)
         self._frame_pose = np.eye(4)
         self._last_obs: dict = {}
@@ -167,8 +174,15 @@ class CorridorEnv(gym.Env):
     # --- public geometry -------------------------------------------------------------------
     @property
     def camera_matrix(self) -> np.ndarray:
-        """3x3 intrinsic matrix K of ``obs["image"]`` (pixel centres at integer coordinates)."""
+        """The TRUE 3x3 intrinsic matrix K of ``obs["image"]`` (pixel centres at integer
+        coordinates): for evaluation only; the robot knows :attr:`camera_calibration`."""
         return self.camera.K
+
+    @property
+    def dist_coeffs(self) -> np.ndarray:
+        """The TRUE lens distortion of ``obs["image"]``, OpenCV ``k1 k2 p1 p2 k3``:
+        for evaluation only."""
+        return self.camera.dist
 
     @property
     def landmarks(self) -> list[Landmark]:
@@ -177,8 +191,8 @@ class CorridorEnv(gym.Env):
 
     @property
     def renderer(self) -> str:
-        """``"egl"``, ``"tiny"``, or ``"none"`` (no PyBullet rendering: camera off or fast,
-        and no render mode or the map view): the renderer."""
+        """``"gl"``, ``"egl"``, ``"tiny"``, or ``"none"`` (nothing rendered in 3-D: camera off
+        or fast, and no render mode or the map view)."""
         return self.sim.renderer
 
     @property
@@ -197,26 +211,7 @@ class CorridorEnv(gym.Env):
         Uses the true camera pose (``info["camera_pose"]`` by default): for evaluation only.
         """
         pose = self._frame_pose if camera_pose is None else camera_pose
-        eye = pose[:3, 3]
-        candidates = []
-        for landmark in self.world.landmarks:
-            facing = np.dot(landmark.normal, eye - landmark.centre) > 0
-            if not (facing and self.world.board_visible(self.world.boards[landmark.id])):
-                continue
-            uv = self.camera.project(pose, landmark.board_corners)
-            inside = np.all(
-                (uv >= -0.5) & (uv <= (self.camera.width - 0.5, self.camera.height - 0.5))
-            )
-            if inside and np.linalg.norm(landmark.centre - eye) < self.camera.far:
-                candidates.append(landmark)
-        if not candidates:
-            return []
-        # rays start a little ahead of the optical centre, which sits on the robot's own mast
-        starts = [eye + RAY_CLEARANCE * _unit(lm.centre - eye) for lm in candidates]
-        hits = self.sim.client.rayTestBatch(
-            [p.tolist() for p in starts], [lm.centre.tolist() for lm in candidates]
-        )
-        return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
+        return self.world.landmarks_in_view(self.camera, pose)
 
     # --- gymnasium API ----------------------------------------------------------------------
     def _observation_space(self) -> spaces.Dict:
@@ -228,22 +223,9 @@ class CorridorEnv(gym.Env):
             4 * wheel_rate * self.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
         )
         limits = np.radians([cfg.robot.pan_limit_deg, cfg.robot.tilt_limit_deg]).astype(np.float32)
-        if cfg.camera.mode == "fast":
-            slots, values = self.fast_detector.slots, self.fast_detector.values_per_slot
-            span = 2 * max(cfg.camera.width, cfg.camera.height)
-            camera = {
-                "landmark_ids": spaces.Box(
-                    -1, cfg.world.landmark_pattern.max_id, (slots,), np.int64
-                ),
-                "landmark_points": spaces.Box(-span, span, (slots * values,), np.float32),
-            }
-        else:
-            camera = {
-                "image": spaces.Box(0, 255, (cfg.camera.height, cfg.camera.width, 3), np.uint8)
-            }
         return spaces.Dict(
             {
-                **camera,
+                **self.camera_sensor.observation_space(),
                 "image_new": spaces.Discrete(2),
                 "camera_pan_tilt": spaces.Box(-limits - 0.05, limits + 0.05, (2,), np.float32),
                 "sonar": spaces.Box(
@@ -267,8 +249,11 @@ class CorridorEnv(gym.Env):
         self.robot.reset(tuple(start), *self._mount_target)
         self.faults.reset()
         self.encoders.reset(self.robot.wheel_angles(), self.np_random)
-        if self._rendered_camera:
-            self.image_noise.reset(self.np_random)
+        self.camera_calibration = believed_calibration(
+            self.camera.calibration, self.config.camera.calibration_error, self.np_random
+        )
+        if self.config.camera.enabled:
+            self.camera_sensor.reset(self.np_random)
         self._time = 0.0
         self._yaw_command = 0.0
         self._distance = 0.0
@@ -329,30 +314,15 @@ class CorridorEnv(gym.Env):
             self._next_frame += 1.0 / self.config.camera.rate_hz
             self._frame_pose = self.robot.camera_pose()
             self._frame_pan_tilt = self.robot.mount_angles().astype(np.float32)
-            if self._rendered_camera:
-                self._image = self.image_noise(self._render_camera(), self.np_random)
-            elif self.config.camera.enabled:
-                self._detections = self.fast_detector.detect(
-                    self._frame_pose, self.landmarks_in_view(), self.np_random
-                )
-        if self.config.camera.mode == "fast":
-            ids, points = self._detections
-            camera = {"landmark_ids": ids.copy(), "landmark_points": points.copy()}
-        else:
-            camera = {"image": self._image.copy()}
+            if self.config.camera.enabled:
+                self.camera_sensor.capture(self._frame_pose, self.np_random)
         return {
-            **camera,
+            **self.camera_sensor.observe(),
             "image_new": int(new_frame and self.config.camera.enabled),
             "camera_pan_tilt": self._frame_pan_tilt.copy(),
             "sonar": self.sonar.read(self.sim, self._pose, self.np_random),
             "encoders": np.clip(ticks, -self._max_ticks, self._max_ticks).astype(np.int64),
         }
-
-    def _render_camera(self) -> np.ndarray:
-        pose = self.robot.camera_pose()
-        return self.sim.render(
-            self.camera.width, self.camera.height, view_matrix(pose), self._projection
-        )
 
     def _info(self, collision: bool) -> dict:
         return {
@@ -421,7 +391,7 @@ class CorridorEnv(gym.Env):
             eye = np.array([x, y, CHASE_HEIGHT]) - self._chase_distance() * heading
             pose = look_at(eye, np.array([x, y, 0.5]) + 1.0 * heading, np.array([0.0, 0.0, 1.0]))
         view_camera = PinholeCamera(cfg.width, cfg.height, RENDER_VFOV_DEG, 0.05, 100.0)
-        return self.sim.render(
+        return self.sim.render_bodies(
             cfg.width, cfg.height, view_matrix(pose), view_camera.projection_matrix()
         )
 

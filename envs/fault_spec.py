@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Annotated, Literal
 
-from envs.validation import Degrees, NonNegative, Positive, Probability, Range, require
+from stsf_gym.validation import Degrees, NonNegative, Positive, Probability, Range, require
 
 FaultKind = Literal[
     "camera_blackout",

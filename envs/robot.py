@@ -270,6 +270,13 @@ class DiffDriveRobot:
         rotation = np.array(c.getMatrixFromQuaternion(state[5])).reshape(3, 3)
         return pose_matrix(*state[4], rotation @ LINK_FROM_OPTICAL)
 
+    def camera_velocity(self) -> tuple[np.ndarray, np.ndarray]:
+        """World linear (m/s) and angular (rad/s) velocity of the camera now."""
+        state = self.sim.client.getLinkState(
+            self.body, self.camera_link, computeLinkVelocity=1, computeForwardKinematics=True
+        )
+        return np.array(state[6]), np.array(state[7])
+
     def robot_from_camera(self, pan: float, tilt: float) -> np.ndarray:
         """Nominal robot-from-camera 4x4 (OpenCV axes) for mount angles: kinematics only.
 

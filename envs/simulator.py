@@ -1,4 +1,4 @@
-"""The PyBullet simulator: one ``BulletClient`` per env, its renderer, and generated assets.
+"""The PyBullet simulator: one ``BulletClient`` per env, the scene, its renderer, and assets.
 
 Every env owns one :class:`Simulator` and never touches the global ``pybullet`` state, so
 many envs live in one process and in vector-env workers. PyBullet's C banners are captured
@@ -9,19 +9,37 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import math
 import os
 import warnings
 from contextlib import nullcontext
 from pathlib import Path
 
+import cv2
 import numpy as np
 
+from envs.gl_renderer import GLRenderer, gl_inherited
 from envs.quiet import quiet_c_output
+from envs.scene import Board, Box, Scene, Shape
 
 with quiet_c_output():  # PyBullet's banners: envs/quiet.py
     import pybullet
     from pybullet_utils.bullet_client import BulletClient
 
+# A unit square in the x-y plane facing +z, texture coordinates spanning the whole image.
+QUAD_OBJ = """v -0.5 -0.5 0
+v 0.5 -0.5 0
+v 0.5 0.5 0
+v -0.5 0.5 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vn 0 0 1
+f 1/1/1 2/2/1 3/3/1
+f 1/1/1 3/3/1 4/4/1
+"""
+HIDDEN_DEPTH = -50.0  # m: where a body taken out of the world waits, below the floor
 BANNER_FRAMES = 2  # the EGL plugin prints a line on each of a client's first two frames
 
 
@@ -43,62 +61,147 @@ def cache_file(name: str, content: bytes) -> Path:
 
 _egl_loaded_pid: int | None = None  # the process that loaded PyBullet's EGL plugin
 
+RENDERERS = ("auto", "gl", "egl", "tiny", "none")
+
 
 def egl_inherited() -> bool:
     """True in a process forked after its parent loaded EGL: EGL then deadlocks here."""
     return _egl_loaded_pid is not None and _egl_loaded_pid != os.getpid()
 
 
+FORK_MESSAGE = (
+    "an EGL context was made before this process was forked and would deadlock here; start "
+    "workers with 'forkserver' or 'spawn' (e.g. AsyncVectorEnv(..., context='forkserver'))"
+)
+
+
 class Simulator:
-    """A PyBullet physics client with a fixed time step and a camera renderer.
+    """A PyBullet physics client with a fixed time step, the world's scene and its renderer.
 
     Args:
         physics_hz: physics steps per simulated second.
-        renderer: ``"auto"`` (EGL when its plugin loads, else TinyRenderer), ``"egl"``,
-            ``"tiny"``, or ``"none"`` when nothing is rendered. The choice is in
-            :attr:`renderer`. EGL cannot be used in a process forked after its parent loaded
-            it (Mesa deadlocks): ``"auto"`` then falls back to TinyRenderer with a warning;
-            vector envs should use the ``"forkserver"`` or ``"spawn"`` start method.
+        renderer: ``"gl"`` (the project's OpenGL renderer of :attr:`scene`,
+            :mod:`envs.gl_renderer`), ``"egl"`` (PyBullet's EGL plugin), ``"tiny"`` (PyBullet's
+            TinyRenderer), ``"auto"`` (the first of gl, egl, tiny that works here) or ``"none"``
+            when nothing is rendered. The choice is in :attr:`renderer`. EGL cannot be used in
+            a process forked after its parent made an EGL context (Mesa deadlocks): ``"auto"``
+            then falls back to TinyRenderer with a warning, ``"gl"``/``"egl"`` raise; vector
+            envs should use the ``"forkserver"`` or ``"spawn"`` start method.
     """
 
     def __init__(self, physics_hz: float, renderer: str = "auto") -> None:
-        if renderer not in ("auto", "egl", "tiny", "none"):
-            raise ValueError(f"camera.renderer must be auto, egl or tiny, got {renderer!r}")
+        if renderer not in RENDERERS:
+            raise ValueError(f"camera.renderer must be one of {RENDERERS[:-1]}, got {renderer!r}")
         with quiet_c_output():
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.client.setTimeStep(1.0 / physics_hz)
         self.client.setGravity(0, 0, -9.81)
         self.time_step = 1.0 / physics_hz
+        self.scene = Scene()
+        self._hidden_from: dict[int, tuple] = {}  # hidden body -> its pose in the world
+        self._gl: GLRenderer | None = None
         self._closed = False
         self._frames = 0  # rendered so far: the first ones print EGL banners
-        self.renderer = self._load_renderer(renderer) if renderer in ("auto", "egl") else renderer
+        self.renderer = self._choose_renderer(renderer)
 
-    def _load_renderer(self, renderer: str) -> str:
-        global _egl_loaded_pid
-        if egl_inherited():
-            message = (
-                "PyBullet's EGL renderer was loaded before this process was forked and would "
-                "deadlock here; start workers with 'forkserver' or 'spawn' (e.g. "
-                "AsyncVectorEnv(..., context='forkserver'))"
-            )
-            if renderer == "egl":
-                raise RuntimeError(message)
-            warnings.warn(message + "; using TinyRenderer", RuntimeWarning, stacklevel=3)
+    def _choose_renderer(self, renderer: str) -> str:
+        if renderer in ("tiny", "none"):
+            return renderer
+        if egl_inherited() or gl_inherited():
+            if renderer != "auto":
+                raise RuntimeError(FORK_MESSAGE)
+            warnings.warn(FORK_MESSAGE + "; using TinyRenderer", RuntimeWarning, stacklevel=3)
             return "tiny"
-        spec = importlib.util.find_spec("eglRenderer")
-        plugin = -1
-        if spec is not None and spec.origin:
-            with quiet_c_output():
-                plugin = self.client.loadPlugin(spec.origin, "_eglRendererPlugin")
-        if plugin >= 0:
-            _egl_loaded_pid = os.getpid()
-            return "egl"
-        if renderer == "egl":
+        errors = []
+        for name, load in (("gl", self._load_gl), ("egl", self._load_egl)):
+            if renderer in (name, "auto"):
+                try:
+                    load()
+                    return name
+                except Exception as err:  # no context here: report it, or try the next
+                    errors.append(f"{name}: {err}")
+        if renderer != "auto":
             raise RuntimeError(
-                "camera.renderer is 'egl' but PyBullet's EGL plugin did not load "
-                "(install libegl1 libegl-mesa0 libgl1-mesa-dri, or use renderer: auto)"
+                f"camera.renderer is {renderer!r} but it cannot start here ({errors[0]}); install "
+                "libegl1 libegl-mesa0 libgl1-mesa-dri, or use renderer: auto"
             )
         return "tiny"
+
+    def _load_gl(self) -> None:
+        self._gl = GLRenderer(self.scene)
+
+    def _load_egl(self) -> None:
+        global _egl_loaded_pid
+        spec = importlib.util.find_spec("eglRenderer")
+        if spec is None or not spec.origin:
+            raise RuntimeError("PyBullet's eglRenderer plugin is not installed")
+        with quiet_c_output():
+            plugin = self.client.loadPlugin(spec.origin, "_eglRendererPlugin")
+        if plugin < 0:
+            raise RuntimeError("PyBullet's EGL plugin did not load")
+        _egl_loaded_pid = os.getpid()
+
+    def add(self, shape: Shape) -> int:
+        """A static PyBullet body for ``shape`` (collision and visual), kept in :attr:`scene`."""
+        c = self.client
+        if isinstance(shape, Board):
+            body = self._add_board(shape)
+        else:
+            rgba = list(shape.rgba)
+            if isinstance(shape, Box):
+                collision = c.createCollisionShape(c.GEOM_BOX, halfExtents=list(shape.half))
+                visual = c.createVisualShape(
+                    c.GEOM_BOX, halfExtents=list(shape.half), rgbaColor=rgba
+                )
+                position, yaw = list(shape.centre), shape.yaw
+            else:
+                r, h = shape.radius, shape.height
+                collision = c.createCollisionShape(c.GEOM_CYLINDER, radius=r, height=h)
+                visual = c.createVisualShape(c.GEOM_CYLINDER, radius=r, length=h, rgbaColor=rgba)
+                position, yaw = [*shape.xy, h / 2], 0.0
+            body = c.createMultiBody(
+                baseMass=0,
+                baseCollisionShapeIndex=collision,
+                baseVisualShapeIndex=visual,
+                basePosition=position,
+                baseOrientation=c.getQuaternionFromEuler([0, 0, yaw]),
+            )
+        self.scene.add(body, shape)
+        return body
+
+    def _add_board(self, board: Board) -> int:
+        """A textured quad without collision (PyBullet's renderers need an OBJ with UVs)."""
+        c = self.client
+        image = cv2.cvtColor(board.texture, cv2.COLOR_GRAY2BGR)
+        _, png = cv2.imencode(".png", image)
+        texture_file = cache_file("board.png", png.tobytes())
+        # One OBJ file per texture: PyBullet's EGL renderer shares a texture between all
+        # instances of a mesh file, so boards built from one file would all show the same one.
+        quad = cache_file("board.obj", f"# {texture_file.name}\n{QUAD_OBJ}".encode())
+        visual = c.createVisualShape(
+            c.GEOM_MESH, fileName=str(quad), meshScale=[board.size, board.size, 1.0]
+        )
+        body = c.createMultiBody(
+            baseMass=0,
+            baseVisualShapeIndex=visual,
+            basePosition=board.centre.tolist(),
+            baseOrientation=quaternion(board.rotation()),
+        )
+        texture = c.loadTexture(str(texture_file))
+        c.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
+        return body
+
+    def set_visible(self, body: int, visible: bool) -> None:
+        """Show a scene body or take it out of the world (moved far below the floor)."""
+        if visible == (body not in self.scene.hidden):
+            return
+        c = self.client
+        if visible:
+            c.resetBasePositionAndOrientation(body, *self._hidden_from.pop(body))
+        else:
+            self._hidden_from[body] = c.getBasePositionAndOrientation(body)
+            c.resetBasePositionAndOrientation(body, [0.0, 0.0, HIDDEN_DEPTH], [0, 0, 0, 1])
+        self.scene.set_visible(body, visible)
 
     def step(self, substeps: int) -> None:
         for _ in range(substeps):
@@ -107,13 +210,27 @@ class Simulator:
     def render(
         self, width: int, height: int, view: np.ndarray, projection: np.ndarray
     ) -> np.ndarray:
-        """RGB uint8 image (height, width, 3) for OpenGL 4x4 view and projection matrices."""
+        """The robot camera's RGB uint8 image (height, width, 3) for OpenGL 4x4 view and
+        projection matrices, drawn by :attr:`renderer` (``gl`` draws the scene, not the robot)."""
         if self.renderer == "none":
             raise RuntimeError("this simulator was built without a renderer (camera disabled)")
+        if self._gl is not None:
+            return self._gl.render(width, height, view, projection)
+        return self.render_bodies(width, height, view, projection)
+
+    def render_bodies(
+        self, width: int, height: int, view: np.ndarray, projection: np.ndarray
+    ) -> np.ndarray:
+        """Every PyBullet body, the robot's included (a view for people), with PyBullet's own
+        renderer: its EGL plugin when loaded, TinyRenderer otherwise."""
+        if self.renderer != "egl":  # TinyRenderer draws half a pixel right and up
+            shift = np.eye(4)
+            shift[:2, 3] = -1.0 / width, -1.0 / height
+            projection = shift @ projection
         flag = (
             pybullet.ER_BULLET_HARDWARE_OPENGL
             if self.renderer == "egl"
-            else (pybullet.ER_TINY_RENDERER)
+            else pybullet.ER_TINY_RENDERER
         )
         with quiet_c_output() if self._frames < BANNER_FRAMES else nullcontext():
             _, _, rgba, _, _ = self.client.getCameraImage(
@@ -132,5 +249,17 @@ class Simulator:
         """Disconnect; calling it again is harmless."""
         if not self._closed:
             self._closed = True
+            if self._gl is not None:
+                self._gl.release()
             with quiet_c_output():
                 self.client.disconnect()
+
+
+def quaternion(rotation: np.ndarray) -> list[float]:
+    """Quaternion [x, y, z, w] of a proper rotation matrix."""
+    m = rotation
+    w = math.sqrt(max(0.0, 1 + m[0, 0] + m[1, 1] + m[2, 2])) / 2
+    x = math.copysign(math.sqrt(max(0.0, 1 + m[0, 0] - m[1, 1] - m[2, 2])) / 2, m[2, 1] - m[1, 2])
+    y = math.copysign(math.sqrt(max(0.0, 1 - m[0, 0] + m[1, 1] - m[2, 2])) / 2, m[0, 2] - m[2, 0])
+    z = math.copysign(math.sqrt(max(0.0, 1 - m[0, 0] - m[1, 1] + m[2, 2])) / 2, m[1, 0] - m[0, 1])
+    return [x, y, z, w]

@@ -1,6 +1,6 @@
 """The corridor world built from a :class:`~envs.config.WorldConfig`: floor, walls, clutter and
-textured landmark boards (the paper's Fig. 3 pattern as UV-mapped quads, drawn by both
-TinyRenderer and the EGL renderer).
+textured landmark boards (the paper's Fig. 3 pattern), described once as scene shapes
+(:mod:`envs.scene`) that the simulator turns into PyBullet bodies and the camera draws.
 """
 
 from __future__ import annotations
@@ -8,11 +8,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from envs.config import LandmarkSpec, WorldConfig
-from envs.simulator import Simulator, cache_file
+from envs.scene import Board, Box, Cylinder
+from envs.sensors.camera import PinholeCamera
+from envs.simulator import Simulator
 from stsf_gym.vision.landmarks import (
     board_corners,
     landmark_image,
@@ -20,24 +21,11 @@ from stsf_gym.vision.landmarks import (
     square_corners,
 )
 
-# A unit square in the x-y plane facing +z, texture coordinates spanning the whole image.
-QUAD_OBJ = """v -0.5 -0.5 0
-v 0.5 -0.5 0
-v 0.5 0.5 0
-v -0.5 0.5 0
-vt 0 0
-vt 1 0
-vt 1 1
-vt 0 1
-vn 0 0 1
-f 1/1/1 2/2/1 3/3/1
-f 1/1/1 3/3/1 4/4/1
-"""
 WALL_RGBA = (0.78, 0.76, 0.72, 1.0)
 FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
 OBSTACLE_RGBA = (0.55, 0.35, 0.2, 1.0)
+RAY_CLEARANCE = 0.1  # m
 BOARD_OFFSET = 0.02  # landmark board in front of the wall face (m), clear of depth fighting
-HIDDEN_DEPTH = -50.0  # m: where a board taken out of the world waits, below the floor
 
 
 @dataclass(frozen=True)
@@ -61,6 +49,10 @@ class Landmark:
     def to_world(self, plane_xy: np.ndarray) -> np.ndarray:
         """World points of landmark-plane coordinates (..., 2)."""
         return plane_to_world(self.centre, self.right, self.up, plane_xy)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
 
 
 def plane_to_world(centre, right, up, plane_xy: np.ndarray) -> np.ndarray:
@@ -95,54 +87,47 @@ class CorridorWorld:
         self.walls = [self._wall(seg) for seg in cfg.walls]
         self.obstacles = [self._obstacle(o) for o in cfg.obstacles]
         self.boards: dict[int, int] = {}  # landmark id -> its board's body
-        self._hidden: dict[int, tuple] = {}  # body -> its pose while moved out of the world
         self.landmarks = [self._landmark(spec) for spec in cfg.landmarks]
 
     def add_board(self, spec: LandmarkSpec) -> int:
         """The body of a new board showing landmark ``spec.id``'s pattern where ``spec`` says
         (a map landmark's, or a decoy's that is not in :attr:`landmarks`)."""
         centre, normal, right, up = _landmark_frame(self.cfg, spec)
-        c = self.sim.client
         pattern = self.cfg.landmark_pattern
-        # One OBJ file per landmark: the EGL renderer shares a texture between all instances
-        # of a mesh file, so boards built from one file would all show the same id.
-        quad = cache_file(f"landmark{spec.id}.obj", f"# landmark {spec.id}\n{QUAD_OBJ}".encode())
-        size = pattern.size
-        visual = c.createVisualShape(c.GEOM_MESH, fileName=str(quad), meshScale=[size, size, 1.0])
-        body = c.createMultiBody(
-            baseMass=0,
-            baseVisualShapeIndex=visual,
-            basePosition=centre.tolist(),
-            baseOrientation=_quaternion(np.column_stack([right, up, normal])),
+        texture = landmark_image(spec.id, pattern)
+        return self.sim.add(Board(centre, right, up, normal, pattern.size, texture))
+
+    def landmarks_in_view(self, camera: PinholeCamera, pose: np.ndarray) -> list[int]:
+        """Ids of landmarks wholly inside the frame of ``camera`` at world-from-camera
+        ``pose``, facing it, present (a fault may remove one) and not occluded."""
+        eye = pose[:3, 3]
+        candidates = []
+        for landmark in self.landmarks:
+            facing = np.dot(landmark.normal, eye - landmark.centre) > 0
+            if not (facing and self.board_visible(self.boards[landmark.id])):
+                continue
+            uv = camera.project(pose, landmark.board_corners)
+            inside = np.all((uv >= -0.5) & (uv <= (camera.width - 0.5, camera.height - 0.5)))
+            if inside and np.linalg.norm(landmark.centre - eye) < camera.far:
+                candidates.append(landmark)
+        if not candidates:
+            return []
+        # rays start a little ahead of the optical centre, which sits on the robot's own mast
+        starts = [eye + RAY_CLEARANCE * _unit(lm.centre - eye) for lm in candidates]
+        hits = self.sim.client.rayTestBatch(
+            [p.tolist() for p in starts], [lm.centre.tolist() for lm in candidates]
         )
-        grey = landmark_image(spec.id, pattern)
-        _, png = cv2.imencode(".png", cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
-        texture = c.loadTexture(str(cache_file(f"landmark{spec.id}.png", png.tobytes())))
-        c.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
-        return body
+        return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
 
     def board_visible(self, body: int) -> bool:
-        return body not in self._hidden
+        return body not in self.sim.scene.hidden
 
     def set_board_visible(self, body: int, visible: bool) -> None:
-        """Take a board out of the world (far below the floor) or put it back where it was."""
-        c = self.sim.client
-        if not visible and body not in self._hidden:
-            self._hidden[body] = c.getBasePositionAndOrientation(body)
-            c.resetBasePositionAndOrientation(body, [0.0, 0.0, HIDDEN_DEPTH], [0, 0, 0, 1])
-        elif visible and body in self._hidden:
-            c.resetBasePositionAndOrientation(body, *self._hidden.pop(body))
+        """Take a board out of the world or put it back where it was."""
+        self.sim.set_visible(body, visible)
 
     def _box(self, xy, half_xy, half_z: float, z: float, yaw: float, rgba) -> int:
-        c = self.sim.client
-        half = [half_xy[0], half_xy[1], half_z]
-        return c.createMultiBody(
-            baseMass=0,
-            baseCollisionShapeIndex=c.createCollisionShape(c.GEOM_BOX, halfExtents=half),
-            baseVisualShapeIndex=c.createVisualShape(c.GEOM_BOX, halfExtents=half, rgbaColor=rgba),
-            basePosition=[xy[0], xy[1], z],
-            baseOrientation=c.getQuaternionFromEuler([0, 0, yaw]),
-        )
+        return self.sim.add(Box((xy[0], xy[1], z), (half_xy[0], half_xy[1], half_z), yaw, rgba))
 
     def _wall(self, segment) -> int:
         start, end = np.array(segment[:2]), np.array(segment[2:])
@@ -157,7 +142,6 @@ class CorridorWorld:
         )
 
     def _obstacle(self, spec) -> int:
-        c = self.sim.client
         if spec.shape == "box":
             length, width, height = spec.size
             return self._box(
@@ -169,16 +153,7 @@ class CorridorWorld:
                 OBSTACLE_RGBA,
             )
         radius, height = spec.size
-        return c.createMultiBody(
-            baseMass=0,
-            baseCollisionShapeIndex=c.createCollisionShape(
-                c.GEOM_CYLINDER, radius=radius, height=height
-            ),
-            baseVisualShapeIndex=c.createVisualShape(
-                c.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=OBSTACLE_RGBA
-            ),
-            basePosition=[*spec.position, height / 2],
-        )
+        return self.sim.add(Cylinder(tuple(spec.position), radius, height, OBSTACLE_RGBA))
 
     def _landmark(self, spec: LandmarkSpec) -> Landmark:
         pattern = self.cfg.landmark_pattern
@@ -195,13 +170,3 @@ class CorridorWorld:
             plane_to_world(*frame, square_corners(spec.id, pattern)),
             plane_to_world(*frame, board_corners(pattern)),
         )
-
-
-def _quaternion(rotation: np.ndarray) -> list[float]:
-    """Quaternion [x, y, z, w] of a proper rotation matrix."""
-    m = rotation
-    w = math.sqrt(max(0.0, 1 + m[0, 0] + m[1, 1] + m[2, 2])) / 2
-    x = math.copysign(math.sqrt(max(0.0, 1 + m[0, 0] - m[1, 1] - m[2, 2])) / 2, m[2, 1] - m[1, 2])
-    y = math.copysign(math.sqrt(max(0.0, 1 - m[0, 0] + m[1, 1] - m[2, 2])) / 2, m[0, 2] - m[2, 0])
-    z = math.copysign(math.sqrt(max(0.0, 1 - m[0, 0] - m[1, 1] + m[2, 2])) / 2, m[1, 0] - m[0, 1])
-    return [x, y, z, w]

@@ -2,9 +2,9 @@
 
 :func:`check_start_pose` also checks ``reset(options={"start_pose": ...})``.
 
-They raise :class:`~envs.validation.FieldError` naming the key relative to the config being
+They raise :class:`~stsf_gym.validation.FieldError` naming the key relative to the config being
 checked (``landmarks[2].at`` in a world, ``world.start`` in the whole env config), so
-:func:`~envs.validation.build` reports the full key path.
+:func:`~stsf_gym.validation.build` reports the full key path.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from envs.validation import FieldError, require
+from stsf_gym.validation import FieldError, require
 
 if TYPE_CHECKING:
     from envs.config import ObstacleSpec, WorldConfig

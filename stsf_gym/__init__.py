@@ -19,8 +19,9 @@ ENV_WORLDS: dict[str, str] = {
 }
 
 
-#: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-STSF-v0``: the env
-#: wrapped in :class:`stsf_gym.wrappers.PoseEstimateWrapper`, which points the camera.
+#: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-STSF-v0``: the env of
+#: an episode (:func:`stsf_gym.episode_env.make_episode_env`: the env wrapped in
+#: :class:`stsf_gym.wrappers.PoseEstimateWrapper`, which points the camera).
 ESTIMATOR_IDS: dict[str, str] = {
     "Odometry": "odometry",
     "Conventional": "conventional",
@@ -42,9 +43,8 @@ def register_envs() -> None:
             if estimating_id not in registry:
                 register(
                     id=estimating_id,
-                    entry_point="stsf_gym.wrappers:make_estimating_env",
-                    # the wrapper keeps the pan camera on a landmark
-                    kwargs={"world": world, "estimator": estimator, "camera__control": "pan"},
+                    entry_point="stsf_gym.episode_env:make_episode_env",
+                    kwargs={"world": world, "estimator": estimator},
                 )
 
 

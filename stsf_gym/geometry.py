@@ -7,9 +7,15 @@ from ``a``. These are the homogeneous transforms ``T`` of the paper's eq. 3.
 
 Every function accepts a single pose of shape ``(3,)`` or a stack ``(..., 3)``
 and broadcasts like numpy; Jacobians then have shape ``(..., 3, 3)``.
+
+:class:`OdometryCalibration` is the wheel geometry a differential-drive robot believes in:
+what turns encoder ticks into wheel travel (the env draws it per episode, the estimators use it).
 """
 
 from __future__ import annotations
+
+import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -106,3 +112,18 @@ def compose_gaussian(a: ArrayLike, cov_a: ArrayLike, b: ArrayLike, cov_b: ArrayL
     (independent ``a`` and ``b``): e.g. an odometry increment added to a motion."""
     j_a, j_b = compose_jacobians(a, b)
     return compose(a, b), j_a @ np.asarray(cov_a) @ j_a.T + j_b @ np.asarray(cov_b) @ j_b.T
+
+
+@dataclass(frozen=True)
+class OdometryCalibration:
+    """The robot's believed odometry parameters (not the truth when calibration errors are on)."""
+
+    ticks_per_rev: int
+    wheel_radius_left: float
+    wheel_radius_right: float
+    wheelbase: float
+
+    def wheel_travel(self, ticks: np.ndarray) -> np.ndarray:
+        """Distance (m) each wheel rolled for tick counts [left, right]."""
+        radii = np.array([self.wheel_radius_left, self.wheel_radius_right])
+        return np.asarray(ticks, dtype=float) * 2 * math.pi / self.ticks_per_rev * radii

@@ -1,4 +1,8 @@
-"""``PoseEstimateWrapper``: adds a pose estimate and its covariance to the observation."""
+"""``PoseEstimateWrapper``: adds a pose estimate and its covariance to the observation.
+
+The wrapper is the one seam between the simulator and the estimators: :func:`sensor_model`
+turns an env into the :class:`SensorModel` an estimator runs on.
+"""
 
 from __future__ import annotations
 
@@ -8,8 +12,9 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from stsf_gym.estimators import ESTIMATORS, PoseEstimator, SensorModel, make_estimator
+from stsf_gym.estimators import ESTIMATORS, MapLandmark, PoseEstimator, SensorModel, make_estimator
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
+from stsf_gym.estimators.odometry import OdometryNoise
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
@@ -20,6 +25,37 @@ TRUTH = "truth"
 TRUTH_STD = (0.001, 0.001, 0.001)
 #: Every pose source a wrapper accepts: the estimators and the privileged ``truth``.
 POSE_SOURCES = (*ESTIMATORS, TRUTH)
+
+
+def sensor_model(env: gym.Env) -> SensorModel:
+    """The model of ``env``'s robot for the current episode (call after each reset): its
+    believed odometry calibration, the encoder noise, believed camera calibration, mount and
+    landmark map (never the true camera: ``camera_matrix`` and ``dist_coeffs`` are for
+    evaluation)."""
+    u = env.unwrapped
+    cfg = u.config
+    return SensorModel(
+        calibration=u.odometry_calibration,
+        odometry_noise=OdometryNoise.from_encoders(
+            cfg.encoders.slip_std,
+            cfg.encoders.radius_error_std,
+            cfg.encoders.wheelbase_error_std,
+            cfg.robot.wheel_radius,
+        ),
+        camera_calibration=u.camera_calibration,
+        camera_calibration_std=(
+            cfg.camera.calibration_error.principal_point_std_px / u.camera_calibration.K[0, 0],
+            cfg.camera.calibration_error.focal_std,
+        ),
+        camera_matrix=u.camera_calibration.K,
+        image_size=(cfg.camera.width, cfg.camera.height),
+        robot_from_camera=u.robot_from_camera,
+        landmarks={
+            lm.id: MapLandmark(lm.id, lm.centre, lm.normal, lm.square_centres) for lm in u.landmarks
+        },
+        pattern=cfg.world.landmark_pattern,
+        walls=np.array(cfg.world.walls, dtype=float).reshape(-1, 4),
+    )
 
 
 class TruePose(PoseEstimator):
@@ -100,7 +136,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def reset(self, *, seed=None, options=None):
         obs, info = self.env.reset(seed=seed, options=options)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
-        model = SensorModel.from_env(self.env)
+        model = sensor_model(self.env)
         self.estimator.reset(model, start, self.start_cov)
         if isinstance(self.estimator, TruePose):
             self.estimator.see(info["true_pose"])
@@ -131,11 +167,3 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             "pose": np.clip(pose, low, high).astype(np.float32),
             "pose_cov": np.clip(cov, -COV_LIMIT, COV_LIMIT).astype(np.float32).ravel(),
         }
-
-
-def make_estimating_env(estimator: str, **env_kwargs) -> gym.Env:
-    """Entry point of the registered ``stsf_gym/<World>-<Estimator>-v0`` ids."""
-    from envs.corridor_env import CorridorEnv
-
-    estimator_options = env_kwargs.pop("estimator_options", {})
-    return PoseEstimateWrapper(CorridorEnv(**env_kwargs), estimator, **estimator_options)

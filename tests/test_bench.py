@@ -8,7 +8,7 @@ from stsf_gym.bench.speed import run_case
 
 @pytest.fixture(scope="module")
 def fast_row():
-    return run_case("e: fast sensor mode + STSF", sim_seconds=3.0)
+    return run_case("g: fast sensor mode + STSF", sim_seconds=3.0)
 
 
 def test_a_case_reports_speed_memory_and_stage_latency(fast_row):
@@ -16,21 +16,20 @@ def test_a_case_reports_speed_memory_and_stage_latency(fast_row):
     assert fast_row["steps"] == 30
     assert fast_row["x_real_time"] > 0 and fast_row["peak_rss_mb"] > 10
     assert fast_row["camera_frames"] == 15  # 5 Hz over 3 s
-    assert set(fast_row["ms_per_frame"]) == {"detect", "stsf update"}
+    assert set(fast_row["ms_per_frame"]) == {"camera frame", "detect", "stsf update"}
     assert "detector_vs_aruco" not in fast_row  # no images in the fast mode
 
 
 def _summary(row: dict, **changes) -> dict:
-    rows = [
-        {**row, "case": name, **changes}
-        for name in ("a: x", "d: x", "e: x", "camera + detector + EKF")
-    ]
-    rows[1]["ms_per_frame"] = {"detect": 1.5, "stsf update": 0.4, "render": 9.0}
+    rows = [{**row, "case": name, **changes} for name in ("a: x", "e: x", "f: x", "g: x")]
+    rows[1]["ms_per_frame"] = {"detect": 1.5, "stsf update": 0.4, "camera frame": 3.0}
     rows[1]["detector_vs_aruco"] = {"frames": 3, "detector_ms": 1.5, "aruco_ms": 1.0, "ratio": 1.5}
-    rows[3]["ms_per_frame"] = {"detect": 1.5, "ekf update": 0.1}
+    rows[1]["renderer"] = "gl"
+    rows[2]["ms_per_frame"] = {"detect": 1.5, "ekf update": 0.1}
     return {
         "machine": {"cpu": "test", "cores": 2, "python": "3"},
         "speed": rows,
+        "render": [{"renderer": "gl", "ms_320x240": 1.5, "ms_640x480": 4.5, "peak_rss_mb": 99}],
         "vector": {"steps_per_s_1_worker": 100.0, "steps_per_s_2_workers": 160.0, "speed_up": 1.6},
     }
 
@@ -38,10 +37,12 @@ def _summary(row: dict, **changes) -> dict:
 def test_targets_are_judged_against_their_bounds(fast_row):
     summary = _summary(fast_row, x_real_time=120.0, peak_rss_mb=350.0)
     met = {t["target"]: t["met"] for t in targets(summary)}
-    assert met["a: camera off, x real time"] and met["d: full pipeline, x real time"]
+    assert met["a: camera off, x real time"] and met["e: camera + detector + STSF, x real time"]
     assert met["detection, ms per frame"] and met["detector / ArUco time"]
-    assert not met["2 workers / 1 worker"]  # 1.6 < 1.7
-    assert not met["peak memory per env process, MB"]  # 350 > 300
+    assert met["GL render 320x240, ms per frame"]  # 1.5 <= 2
+    assert not met["GL render 640x480, ms per frame"]  # 4.5 > 4
+    assert not met["2 workers / 1 worker (rendered pipeline)"]  # 1.6 < 1.7
+    assert not met["peak memory per GL-camera env process, MB"]  # 350 > 250
     summary["targets"] = targets(summary)
     text = to_markdown(summary)
-    assert "ratio 1.50" in text and "| 2 workers / 1 worker |" in text
+    assert "ratio 1.50" in text and "| 2 workers / 1 worker (rendered pipeline) |" in text

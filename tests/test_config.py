@@ -80,7 +80,10 @@ IRL_LANDMARK_1 = {"id": 1, "at": [3.0, 0.8], "facing_deg": -90}
         ({"render__height": 10_000}, "render.height must be in [1, 8192], got 10000"),
         ({"sonar__dropout_prob": 1.5}, "sonar.dropout_prob must be in [0, 1], got 1.5"),
         ({"camera__vfov_deg": 180}, "camera.vfov_deg must be in (0, 180), got 180.0"),
-        ({"camera__noise_std": float("nan")}, "camera.noise_std must be a finite number"),
+        (
+            {"camera__sensor__read_noise": float("nan")},
+            "camera.sensor.read_noise must be a finite number",
+        ),
         ({"encoders__radius_error_std": 1.0}, "encoders.radius_error_std must be in [0, 1)"),
         ({"camera__fast__max_detections": 0}, "camera.fast.max_detections must be >= 1"),
         ({"camera__near": 5.0, "camera__far": 4.0}, "camera.far must be > near (5.0), got 4.0"),
@@ -201,4 +204,4 @@ def _unranged_numbers(cls: type, seen: set) -> list[str]:
 
 def test_every_number_in_the_env_config_has_a_range():
     unranged = set(_unranged_numbers(EnvConfig, set())) - ANY_FINITE - CHECKED_BY_OWNER
-    assert not unranged, f"give these fields a Range (envs/validation.py): {sorted(unranged)}"
+    assert not unranged, f"give these fields a Range (stsf_gym/validation.py): {sorted(unranged)}"

@@ -10,8 +10,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from envs.sensors.fast_camera import apparent_size_px, detection_probability
 from stsf_gym.experiments.detector_views import detection_records, room_world, summarise_records
-from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
-from stsf_gym.experiments.evaluate import estimator_options
+from stsf_gym.experiments.episodes import EpisodeSpec, estimator_options, run_episode
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +34,7 @@ def test_detection_rate_within_20_percent_of_the_rendered_detector(statistics):
     assert rendered["views"] == fast["views"] > 50
     assert 0.5 < rendered["detection_rate"] < 1.0  # the grid reaches the detector's limits
     assert fast["detection_rate"] == pytest.approx(rendered["detection_rate"], rel=0.2)
-    far = [d for d in rendered["rate_vs_distance"] if float(d) >= 6]
+    far = [d for d in rendered["rate_vs_distance"] if float(d) >= 4]  # where the rate falls
     far_rendered = np.mean([rendered["rate_vs_distance"][d] for d in far])
     far_fast = np.mean([fast["rate_vs_distance"][d] for d in far])
     assert far_fast == pytest.approx(far_rendered, rel=0.2)
@@ -59,13 +58,21 @@ def test_fast_mode_renders_nothing_and_passes_both_checkers(make_env):
 
 
 def test_fast_detections_are_the_true_projection_plus_noise(make_env):
-    env = make_env("stsf_gym/Corridor-v0", camera__mode="fast", camera__fast__feature_noise_px=0)
+    """Noise-free simulated detections lie where the TRUE camera (K and the lens's distortion)
+    projects the squares; every board in view is detected when the size threshold is low."""
+    env = make_env(
+        "stsf_gym/Corridor-v0",
+        camera__mode="fast",
+        camera__fast__feature_noise_px=0,
+        camera__fast__detect_size_px=1.0,
+    )
     obs, info = env.reset(seed=0)
     u = env.unwrapped
     in_view = u.landmarks_in_view(info["camera_pose"])
     assert in_view, "the corridor start sees a landmark"
     found = [i for i in obs["landmark_ids"].tolist() if i >= 0]
-    assert set(found) <= set(in_view) and found
+    assert set(found) <= set(in_view) and len(found) == min(len(in_view), len(obs["landmark_ids"]))
+    assert np.any(u.dist_coeffs != 0)
     slots = obs["landmark_points"].reshape(len(obs["landmark_ids"]), -1, 2)
     for points, landmark_id in zip(slots, obs["landmark_ids"], strict=True):
         if landmark_id < 0:
@@ -90,7 +97,7 @@ def test_same_seed_same_fast_detections(make_env):
 
 
 def test_detection_probability_follows_apparent_size(make_env):
-    env = make_env("stsf_gym/Straight10m-v0", camera__mode="fast")
+    env = make_env("stsf_gym/Straight10m-v0", camera__mode="fast", camera__profile="ideal")
     u = env.unwrapped
     cfg = u.config.camera.fast
     probabilities = detection_probability(

@@ -63,7 +63,8 @@ def test_world_faults_on_rendered_frames(make_env):
         {"kind": "encoder_spike", "start": 5.0, "wheel": "right", "ticks": 300},
         {"kind": "kidnap", "start": 5.5, "shift": [0.3, -0.1], "turn_deg": 10.0},
     ]
-    env = make_env(STRAIGHT, faults=faults, camera__pan_deg=40.0)
+    # the ideal camera: the decoy 2-3 m off to the side is detected in every frame it shows
+    env = make_env(STRAIGHT, faults=faults, camera__pan_deg=40.0, camera__profile="ideal")
     history = run(env, 60)
     frames = [(o, i) for o, i in history if o["image_new"]]
     assert all(o["image"].max() > 0 for o, _ in during(history, 0.0, 1.0))

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from agents.follower import PathFollower
+from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
-from stsf_gym.estimators.landmark_fusion import ConventionalEstimator
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.pose_errors import PoseErrors
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
-from stsf_gym.experiments.evaluate import nees_consistency
 from stsf_gym.experiments.figures import PATH_ONLY
+from stsf_gym.experiments.statistics import nees_consistency
 from stsf_gym.wrappers import PoseEstimateWrapper
 
 STEPS = 450  # about 5 m at 12.2 cm/s
@@ -71,7 +71,7 @@ def test_average_nees_is_inside_its_chi_square_bounds(estimator):
 
 
 def test_wrong_landmark_is_gated_out():
-    estimator = ConventionalEstimator()
+    estimator = make_estimator("conventional")
     estimator.mean, estimator.cov = np.array([2.0, 0.0, 0.0]), np.diag([1e-4, 1e-4, 1e-5])
     estimator.counters.clear()
 
@@ -126,8 +126,6 @@ def recorded():
 
 @pytest.mark.parametrize("estimator", ["conventional", "stsf", "ekf"])
 def test_recovers_after_a_long_gap_and_ignores_bad_frames(recorded, estimator):
-    from stsf_gym.estimators import make_estimator
-
     model, history = recorded
     est = make_estimator(estimator)
     est.reset(model, history[0][1], np.diag([1e-4, 1e-4, 1e-5]))

@@ -51,7 +51,7 @@ def test_grid_and_one_at_a_time_cells(tmp_path):
         "grid": {"estimator": ["odometry", "ekf"], "seeds": 2},
         "one_at_a_time": {
             "env.encoders.slip_std": [0.001, 0.01],
-            "env.camera.noise_std": [1.0, 4.0, 8.0],
+            "env.camera.sensor.read_noise": [1.0, 4.0, 8.0],
         },
     }
     cells = load_sweep(write_sweep(tmp_path, doc), seed=100).cells
@@ -60,8 +60,10 @@ def test_grid_and_one_at_a_time_cells(tmp_path):
     slip = [c for c in cells if "env.encoders.slip_std" in c["values"]]
     assert len(slip) == 8 and all("camera" not in c["env"] for c in slip)
     assert all(c["env"]["sim"]["max_episode_seconds"] == 9 for c in cells)  # base env kept
-    assert {c["env"]["camera"]["noise_std"] for c in cells if c not in slip} == {1.0, 4.0, 8.0}
-    assert cells[0]["options"] == {} and cells[-1]["options"]["sigma_px"] > 0  # ekf's file
+    noise = {c["env"]["camera"]["sensor"]["read_noise"] for c in cells if c not in slip}
+    assert noise == {1.0, 4.0, 8.0}
+    assert cells[0]["options"] == {"mount_std": 0.0}  # odometry.yaml
+    assert cells[-1]["options"]["sigma_px"] > 0  # ekf.yaml
 
 
 def test_fault_sets_by_name(tmp_path):

@@ -11,26 +11,11 @@ odometry estimator must use, drawn anew at each reset. All draws come from the e
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from envs.config import EncoderConfig
-
-
-@dataclass(frozen=True)
-class OdometryCalibration:
-    """The robot's believed odometry parameters (not the truth when calibration errors are on)."""
-
-    ticks_per_rev: int
-    wheel_radius_left: float
-    wheel_radius_right: float
-    wheelbase: float
-
-    def wheel_travel(self, ticks: np.ndarray) -> np.ndarray:
-        """Distance (m) each wheel rolled for tick counts [left, right]."""
-        radii = np.array([self.wheel_radius_left, self.wheel_radius_right])
-        return np.asarray(ticks, dtype=float) * 2 * math.pi / self.ticks_per_rev * radii
+from stsf_gym.geometry import OdometryCalibration
 
 
 class WheelEncoders:

@@ -11,7 +11,8 @@ would have found, with the detector's statistics fitted on rendered frames
   apparent size in pixels: the shorter of its mean projected width and height. That one number
   carries both distance and viewing angle (foreshortening), as it does for the detector,
   whose smallest searched board is ``min_board_px`` wide;
-- **where its squares are**: the true projection through K of every lit square's centre plus
+- **where its squares are**: the true projection (K and the lens's distortion, as
+  ``cv2.projectPoints``) of every lit square's centre plus
   independent Gaussian errors of ``feature_noise_px`` per axis;
 - **false detections**: a Poisson number per frame (mean ``false_detection_rate``) of phantom
   boards with a random map id, fronto-parallel 2-6 m ahead at a random place in the frame.
@@ -25,11 +26,12 @@ y1, ...`` in :func:`stsf_gym.vision.landmarks.square_centres` order, zero past t
 from __future__ import annotations
 
 import numpy as np
+from gymnasium import spaces
 
 from envs.config import FastCameraConfig
 from envs.sensors.camera import PinholeCamera
-from envs.world import Landmark
-from stsf_gym.vision.landmarks import LandmarkPattern, square_centres
+from envs.world import CorridorWorld
+from stsf_gym.vision.landmarks import square_centres
 
 PHANTOM_DEPTH = (2.0, 6.0)  # m, range of a false detection's depth
 
@@ -48,19 +50,39 @@ def detection_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) ->
 
 
 class SimulatedDetector:
-    """The detector's output for a camera pose, drawn from its fitted statistics."""
+    """The detector's output for a camera pose, drawn from its fitted statistics.
 
-    def __init__(
-        self,
-        cfg: FastCameraConfig,
-        camera: PinholeCamera,
-        pattern: LandmarkPattern,
-        landmarks: list[Landmark],
-    ) -> None:
-        self.cfg, self.camera, self.pattern = cfg, camera, pattern
-        self.landmarks = {lm.id: lm for lm in landmarks}
+    Observation: ``landmark_ids`` ``Box((L,), int64)`` and ``landmark_points``
+    ``Box((L * 2 grid^2,), float32)`` (see the module's docstring).
+    """
+
+    def __init__(self, cfg: FastCameraConfig, camera: PinholeCamera, world: CorridorWorld) -> None:
+        self.cfg, self.camera, self.world = cfg, camera, world
+        self.pattern = world.cfg.landmark_pattern
+        self.landmarks = {lm.id: lm for lm in world.landmarks}
         self.slots = cfg.max_detections
-        self.values_per_slot = 2 * pattern.grid**2
+        self.values_per_slot = 2 * self.pattern.grid**2
+        self.frame = self.empty()
+
+    def observation_space(self) -> dict[str, spaces.Space]:
+        span = 2 * max(self.camera.width, self.camera.height)
+        return {
+            "landmark_ids": spaces.Box(-1, self.pattern.max_id, (self.slots,), np.int64),
+            "landmark_points": spaces.Box(
+                -span, span, (self.slots * self.values_per_slot,), np.float32
+            ),
+        }
+
+    def reset(self, rng: np.random.Generator) -> None:
+        self.frame = self.empty()
+
+    def capture(self, pose: np.ndarray, rng: np.random.Generator) -> None:
+        visible = self.world.landmarks_in_view(self.camera, pose)
+        self.frame = self.detect(pose, visible, rng)
+
+    def observe(self) -> dict[str, np.ndarray]:
+        ids, points = self.frame
+        return {"landmark_ids": ids.copy(), "landmark_points": points.copy()}
 
     def empty(self) -> tuple[np.ndarray, np.ndarray]:
         """Slots with nothing detected."""

@@ -4,7 +4,8 @@ The follower drives the IRL corridor (on the true pose, or on the estimate where
 runs) for a fixed span of simulated time; the figure is simulated seconds per wall second.
 Each case runs in a fresh ``spawn`` process so that its peak memory (``ru_maxrss``) is that of
 one env process and no renderer state leaks between cases. The pipeline cases also report the
-per-frame latency of each stage: render, detection, motion stereo + STSF update, EKF update.
+per-frame latency of each stage: camera frame (render, lens, sensor), detection, motion stereo
++ STSF update, EKF update. :func:`render_latency` times each renderer alone at two sizes.
 """
 
 from __future__ import annotations
@@ -24,12 +25,15 @@ import numpy as np
 #: case -> (env overrides, pose source); "truth" drives on info["true_pose"].
 CASES: dict[str, tuple[dict, str]] = {
     "a: camera off": ({"camera": {"enabled": False}}, "truth"),
-    "b: camera on, EGL": ({"camera": {"renderer": "egl"}}, "truth"),
-    "c: camera on, TinyRenderer": ({"camera": {"renderer": "tiny"}}, "truth"),
-    "d: camera + detector + STSF": ({"camera": {"control": "pan"}}, "stsf"),
-    "e: fast sensor mode + STSF": ({"camera": {"control": "pan", "mode": "fast"}}, "stsf"),
-    "camera + detector + EKF": ({"camera": {"control": "pan"}}, "ekf"),
+    "b: camera on, GL": ({"camera": {"renderer": "gl"}}, "truth"),
+    "c: camera on, PyBullet EGL": ({"camera": {"renderer": "egl"}}, "truth"),
+    "d: camera on, TinyRenderer": ({"camera": {"renderer": "tiny"}}, "truth"),
+    "e: camera + detector + STSF": ({"camera": {"control": "pan"}}, "stsf"),
+    "f: camera + detector + EKF": ({"camera": {"control": "pan"}}, "ekf"),
+    "g: fast sensor mode + STSF": ({"camera": {"control": "pan", "mode": "fast"}}, "stsf"),
 }
+RENDERERS = ("gl", "egl", "tiny")
+RENDER_SIZES = ((320, 240), (640, 480))
 PER_STEP_STAGES = ("odometry",)  # estimator stages that run every step, not per frame
 ARUCO_FRAMES = 60  # frames kept to time the detector against ArUco
 
@@ -50,14 +54,14 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
 
     import stsf_gym  # noqa: F401 - registers the ids
     from agents.follower import PathFollower
-    from stsf_gym.experiments.evaluate import estimator_options
+    from stsf_gym.experiments.episodes import estimator_options
     from stsf_gym.wrappers import PoseEstimateWrapper
 
     overrides, source = CASES[name]
     env = gym.make("stsf_gym/Corridor-v0", **overrides)
     if source != "truth":
         env = PoseEstimateWrapper(env, source, **estimator_options(source))
-    render_time = _time_renders(env.unwrapped)
+    frame_time = _time_frames(env.unwrapped)
     follower = PathFollower.for_env(env)
     steps = round(sim_seconds / env.unwrapped.dt)
     obs, info = env.reset(seed=seed)
@@ -77,7 +81,7 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
     wall = time.perf_counter() - start
     if profiler is not None:
         profiler.disable()
-    stages = {"render": render_time["total"]} if render_time["count"] else {}
+    stages = {"camera frame": frame_time["total"]} if frame_time["count"] else {}
     if source != "truth":
         timings = env.estimator.timings
         stages["detect"] = timings["detect"]
@@ -145,34 +149,70 @@ def detector_vs_aruco(images: list[np.ndarray], world, rounds: int = 3) -> dict:
     return {"frames": len(images), "detector_ms": ours, "aruco_ms": theirs, "ratio": ours / theirs}
 
 
-def _time_renders(env) -> dict:
-    """Wrap the env's camera render so its wall time is summed (benchmark instrumentation)."""
+def _time_frames(env) -> dict:
+    """Wrap the env's camera capture so its wall time is summed (benchmark instrumentation)."""
     totals = defaultdict(float)
-    render = env._render_camera
+    capture = env.camera_sensor.capture
 
-    def timed_render():
+    def timed_capture(*args):
         t0 = time.perf_counter()
-        image = render()
+        capture(*args)
         totals["total"] += time.perf_counter() - t0
         totals["count"] += 1
-        return image
 
-    env._render_camera = timed_render
+    env.camera_sensor.capture = timed_capture
     return totals
 
 
+def render_latency(frames: int = 200, cpu: int | None = 0) -> list[dict]:
+    """ms per frame of each renderer alone (``Simulator.render``, the IRL corridor as the
+    robot starts, 320x240 and 640x480), each in a fresh process on one core."""
+    rows = []
+    for renderer in RENDERERS:
+        with ProcessPoolExecutor(1, mp_context=get_context("spawn")) as pool:
+            rows.append(pool.submit(_render_latency, renderer, frames, cpu).result())
+    return rows
+
+
+def _render_latency(renderer: str, frames: int, cpu: int | None) -> dict:
+    if cpu is not None and hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {cpu % os.cpu_count()})
+    import gymnasium as gym
+
+    import stsf_gym  # noqa: F401 - registers the ids
+    from envs.sensors.camera import PinholeCamera, view_matrix
+
+    try:
+        env = gym.make("stsf_gym/Corridor-v0", camera__renderer=renderer)
+    except RuntimeError as err:  # this renderer cannot start here
+        return {"renderer": renderer, "error": str(err)}
+    u = env.unwrapped
+    env.reset(seed=0)
+    view = view_matrix(u.robot.camera_pose())
+    row = {"renderer": renderer}
+    for width, height in RENDER_SIZES:
+        cfg = u.config.camera
+        camera = PinholeCamera(width, height, cfg.vfov_deg, cfg.near, cfg.far)
+        projection = camera.projection_matrix()
+        u.sim.render(width, height, view, projection)  # warm-up: buffers made on first use
+        start = time.perf_counter()
+        for _ in range(frames):
+            u.sim.render(width, height, view, projection)
+        row[f"ms_{width}x{height}"] = (time.perf_counter() - start) / frames * 1e3
+    row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    env.close()
+    return row
+
+
 def vector_scaling(steps: int, seed: int = 0) -> dict:
-    """Throughput of ``AsyncVectorEnv`` with 1 and 2 workers (fast-mode STSF pipeline)."""
+    """Throughput of ``AsyncVectorEnv`` with 1 and 2 workers (rendered STSF pipeline)."""
     import gymnasium as gym
 
     import stsf_gym  # noqa: F401
 
     rows = {}
     for workers in (1, 2):
-        fns = [
-            lambda: gym.make("stsf_gym/Corridor-STSF-v0", camera__mode="fast")
-            for _ in range(workers)
-        ]
+        fns = [lambda: gym.make("stsf_gym/Corridor-STSF-v0") for _ in range(workers)]
         envs = gym.vector.AsyncVectorEnv(fns, context="spawn")
         envs.reset(seed=seed)
         actions = np.tile(np.array([0.5, 0.05], np.float32), (workers, 1))

@@ -1,15 +1,18 @@
 """Pose estimators behind one interface (:class:`PoseEstimator`), chosen by name.
 
-Options come from ``configs/estimators/<name>.yaml`` (when present) and keyword arguments.
+Settings are frozen dataclasses (:mod:`stsf_gym.estimators.settings`) whose defaults live in
+``configs/estimators/<name>.yaml`` only; keyword options go over them. This package never
+imports the simulator (``envs``) or PyBullet: a :class:`SensorModel` is all it knows of a
+robot, so it runs on logged data as well (:mod:`stsf_gym.wrappers` builds the model from an
+env).
 """
 
 from __future__ import annotations
 
 import importlib
-import inspect
 
-from envs.config import CONFIG_DIR, ConfigError, read_yaml
 from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
+from stsf_gym.estimators.settings import load_settings
 
 #: Estimators by name: "module:class", imported when first made.
 ESTIMATORS: dict[str, str] = {
@@ -19,34 +22,29 @@ ESTIMATORS: dict[str, str] = {
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
 }
 
-__all__ = ["ESTIMATORS", "MapLandmark", "PoseEstimator", "SensorModel", "make_estimator"]
+__all__ = [
+    "ESTIMATORS",
+    "MapLandmark",
+    "PoseEstimator",
+    "SensorModel",
+    "estimator_settings",
+    "make_estimator",
+]
 
 
-def make_estimator(name: str, **options) -> PoseEstimator:
-    """A fresh estimator ``name`` with options from its YAML file overridden by ``options``."""
+def estimator_class(name: str) -> type[PoseEstimator]:
+    """The class of estimator ``name``; an unknown name lists the known ones."""
     if name not in ESTIMATORS:
         raise ValueError(f"unknown estimator {name!r}; known: {', '.join(sorted(ESTIMATORS))}")
     module, _, class_name = ESTIMATORS[name].partition(":")
-    cls = getattr(importlib.import_module(module), class_name)
-    path = CONFIG_DIR / "estimators" / f"{name}.yaml"
-    merged = {**(read_yaml(path) if path.is_file() else {}), **options}
-    known = _options(cls)
-    unknown = sorted(set(merged) - known)
-    if unknown:
-        raise ConfigError(
-            f"unknown option {name}.{unknown[0]}; known: {', '.join(sorted(known)) or 'none'}"
-        )
-    return cls(**merged)
+    return getattr(importlib.import_module(module), class_name)
 
 
-def _options(cls: type) -> set[str]:
-    """Keyword options of ``cls.__init__``, following ``**options`` up to the base classes."""
-    known: set[str] = set()
-    for klass in cls.__mro__:
-        if "__init__" not in vars(klass):
-            continue
-        parameters = inspect.signature(klass.__init__).parameters.values()
-        known |= {p.name for p in parameters if p.kind == p.POSITIONAL_OR_KEYWORD} - {"self"}
-        if not any(p.kind == p.VAR_KEYWORD for p in parameters):
-            break
-    return known
+def estimator_settings(name: str, **options):
+    """The settings of estimator ``name``: its YAML file(s) with ``options`` over them."""
+    return load_settings(name, estimator_class(name).settings_type, options)
+
+
+def make_estimator(name: str, **options) -> PoseEstimator:
+    """A fresh estimator ``name`` with :func:`estimator_settings` ``(name, **options)``."""
+    return estimator_class(name)(estimator_settings(name, **options))

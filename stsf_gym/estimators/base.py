@@ -16,8 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import gammaincinv
 
-from envs.sensors.encoders import OdometryCalibration
+from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.geometry import OdometryCalibration
+from stsf_gym.vision.landmarks import LandmarkPattern
 
 
 @dataclass(frozen=True)
@@ -32,40 +34,27 @@ class MapLandmark:
 
 @dataclass(frozen=True)
 class SensorModel:
-    """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map."""
+    """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map.
+
+    ``camera_calibration`` is the camera as the robot believes it is (K and distortion, with
+    this episode's calibration error); detections are undistorted with it, so the estimators
+    use ``camera_matrix`` (its K) as an ideal pinhole camera. ``camera_calibration_std`` is
+    how far the robot knows that calibration may be off: its principal point as a heading
+    (std of the horizontal principal point error over the focal length, rad) and its focal
+    length (relative std); every estimator with a camera considers both. Built from an env by
+    :func:`stsf_gym.wrappers.sensor_model` (the one place that reads an env), or from logged
+    data by hand."""
 
     calibration: OdometryCalibration
     odometry_noise: OdometryNoise
+    camera_calibration: CameraCalibration
+    camera_calibration_std: tuple[float, float]  # rad, relative: see below
     camera_matrix: np.ndarray
     image_size: tuple[int, int]  # width, height
     robot_from_camera: Callable[[float, float], np.ndarray]
     landmarks: dict[int, MapLandmark]
-    pattern: object  # stsf_gym.vision.landmarks.LandmarkPattern
+    pattern: LandmarkPattern
     walls: np.ndarray  # (K, 4) wall centre-line segments x1, y1, x2, y2 of the map
-
-    @classmethod
-    def from_env(cls, env) -> SensorModel:
-        """The model of ``env``'s robot for the current episode (call after each reset)."""
-        u = env.unwrapped
-        cfg = u.config
-        return cls(
-            calibration=u.odometry_calibration,
-            odometry_noise=OdometryNoise.from_encoders(
-                cfg.encoders.slip_std,
-                cfg.encoders.radius_error_std,
-                cfg.encoders.wheelbase_error_std,
-                cfg.robot.wheel_radius,
-            ),
-            camera_matrix=u.camera_matrix,
-            image_size=(cfg.camera.width, cfg.camera.height),
-            robot_from_camera=u.robot_from_camera,
-            landmarks={
-                lm.id: MapLandmark(lm.id, lm.centre, lm.normal, lm.square_centres)
-                for lm in u.landmarks
-            },
-            pattern=cfg.world.landmark_pattern,
-            walls=np.array(cfg.world.walls, dtype=float).reshape(-1, 4),
-        )
 
 
 def chi_square_gate(probability: float, dof: int) -> float:

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from scipy.linalg import block_diag
 
 from stsf_gym.estimators.base import PoseEstimator, SensorModel
 from stsf_gym.estimators.odometry import odometry_step
 from stsf_gym.estimators.pose_errors import PoseErrors
+from stsf_gym.estimators.settings import OdometrySettings
 
 
 class OdometryEstimator(PoseEstimator):
@@ -16,17 +19,22 @@ class OdometryEstimator(PoseEstimator):
     """
 
     name = "odometry"
+    settings_type: ClassVar[type] = OdometrySettings
 
-    def __init__(self, *, mount_std: float = 0.0) -> None:
-        """``mount_std`` (m): estimators with a camera consider its mount's position error."""
+    def __init__(self, settings: OdometrySettings) -> None:
+        """``settings.mount_std`` (m): estimators with a camera consider its mount's position
+        error."""
         super().__init__()
-        if not mount_std >= 0:
-            raise ValueError(f"mount_std must be non-negative, got {mount_std}")
-        self.mount_std = float(mount_std)
+        self.settings = settings
+        self.mount_std = settings.mount_std
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        considered = block_diag(model.odometry_noise.calibration_cov, self.mount_std**2 * np.eye(2))
+        considered = block_diag(
+            model.odometry_noise.calibration_cov,
+            self.mount_std**2 * np.eye(2),
+            np.diag(np.square(model.camera_calibration_std)),
+        )
         self.errors = PoseErrors(self.cov, considered)
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:

@@ -74,6 +74,7 @@ the true pose (``tests/test_ekf.py``) checks the whole.
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -86,13 +87,14 @@ from stsf_gym.estimators.landmark_observation import (
     robot_pose_from_landmark,
 )
 from stsf_gym.estimators.relocalise import Relocaliser
+from stsf_gym.estimators.settings import EKFSettings
 from stsf_gym.geometry import wrap_angle
 
 
 class EKFEstimator(OdometryEstimator):
     """Odometry prediction, then one range/bearing EKF update per map landmark seen.
 
-    Args (``configs/estimators/ekf.yaml``):
+    Settings (:class:`EKFSettings`, ``configs/estimators/ekf.yaml``):
         sigma_px: pixel noise of the square centres assumed for the observation covariance.
         gate_probability: Mahalanobis gate, the chi-square (2 dof) probability kept.
         min_range, max_range: boards outside this range (m) from the robot are not used.
@@ -107,42 +109,24 @@ class EKFEstimator(OdometryEstimator):
     """
 
     name = "ekf"
+    settings_type: ClassVar[type] = EKFSettings
 
-    def __init__(
-        self,
-        sigma_px: float = 0.15,
-        gate_probability: float = 0.99,
-        min_range: float = 0.3,
-        max_range: float = 15.0,
-        range_std_floor: float = 0.003,
-        range_std_fraction: float = 0.005,
-        bearing_std_floor: float = 0.002,
-        mount_std: float = 0.003,
-        relocalise_after: int = 15,
-        relocalise_inflation: float = 4.0,
-    ) -> None:
-        super().__init__(mount_std=mount_std)
-        if not 0.0 <= min_range < max_range:
-            raise ValueError(f"ekf needs 0 <= min_range < max_range, got {min_range}, {max_range}")
-        if sigma_px <= 0 or min(range_std_floor, range_std_fraction, bearing_std_floor) < 0:
-            raise ValueError("ekf.sigma_px must be positive and the std floors non-negative")
-        self.sigma_px = float(sigma_px)
-        self.gate_probability = float(gate_probability)
-        self.gate = chi_square_gate(self.gate_probability, dof=2)
-        self.min_range, self.max_range = float(min_range), float(max_range)
-        self.range_std_floor, self.range_std_fraction = (
-            float(range_std_floor),
-            float(range_std_fraction),
-        )
-        self.bearing_std_floor = float(bearing_std_floor)
+    def __init__(self, settings: EKFSettings) -> None:
+        super().__init__(settings)
+        s = settings
+        self.sigma_px, self.gate_probability = s.sigma_px, s.gate_probability
+        self.gate = chi_square_gate(s.gate_probability, dof=2)
+        self.min_range, self.max_range = s.min_range, s.max_range
+        self.range_std_floor, self.range_std_fraction = s.range_std_floor, s.range_std_fraction
+        self.bearing_std_floor = s.bearing_std_floor
         self.relocaliser = Relocaliser(
-            relocalise_after, relocalise_inflation, chi_square_gate(self.gate_probability, dof=3)
+            s.relocalise_after, s.relocalise_inflation, chi_square_gate(s.gate_probability, dof=3)
         )
         self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = FrameDetector(model.pattern, set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
         self.relocaliser.clear()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -170,7 +154,8 @@ class EKFEstimator(OdometryEstimator):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``z = [range, bearing]`` of the board centre, its covariance ``R`` (with floors) and
         its Jacobian by the considered parameters: a camera mounted ``m`` off puts the centre
-        ``-m`` off in the robot frame."""
+        ``-m`` off in the robot frame; the camera's calibration errors move it as
+        :meth:`LandmarkObservation.by_camera` says."""
         u, v = observation.z[:2]
         q = u * u + v * v
         r = math.sqrt(q)
@@ -182,7 +167,8 @@ class EKFEstimator(OdometryEstimator):
             ]
         )
         R = J @ observation.cov[:2, :2] @ J.T + floor
-        by_considered = np.hstack([np.zeros((2, 3)), -J])  # odometry calibration, mount
+        # odometry calibration, mount, camera calibration
+        by_considered = np.hstack([np.zeros((2, 3)), -J, J @ observation.by_camera()[:2]])
         return observation.range_bearing, (R + R.T) / 2, by_considered
 
     def predict_measurement(self, landmark: MapLandmark) -> tuple[np.ndarray, np.ndarray]:

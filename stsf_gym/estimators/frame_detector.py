@@ -1,32 +1,53 @@
-"""A camera frame's landmark detections, whatever the camera mode.
+"""A camera frame's landmark detections, whatever the camera mode, free of lens distortion.
 
 With a rendered camera the detector runs on ``obs["image"]``; in the fast sensor mode the env
 has already simulated its output (``obs["landmark_ids"]``, ``obs["landmark_points"]``, see
 :mod:`envs.sensors.fast_camera`), which is unpacked into the same :class:`Detection` records,
-so every estimator runs one code path in both modes.
+so every estimator runs one code path in both modes. Either way the image points are then
+undistorted with the calibration the robot believes it has
+(:attr:`~stsf_gym.estimators.base.SensorModel.camera_calibration`): the estimators work with
+an ideal pinhole camera of that calibration's K.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import lru_cache
 
 import cv2
 import numpy as np
 
+from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.vision.detector import Detection, LandmarkDetector
 from stsf_gym.vision.landmarks import LandmarkPattern, square_centres
 
 
 class FrameDetector:
-    """``detector(obs) -> list[Detection]`` for boards whose id is in ``valid_ids``."""
+    """``detector(obs) -> list[Detection]`` for boards whose id is in ``valid_ids``, their
+    points undistorted with ``calibration`` (none: taken as they are)."""
 
-    def __init__(self, pattern: LandmarkPattern, valid_ids: set[int]) -> None:
+    def __init__(
+        self,
+        pattern: LandmarkPattern,
+        valid_ids: set[int],
+        calibration: CameraCalibration | None = None,
+    ) -> None:
         self.pattern, self.valid_ids = pattern, frozenset(valid_ids)
+        self.calibration = calibration
 
     def __call__(self, obs: dict) -> list[Detection]:
         if "landmark_ids" in obs:
-            return self._unpack(obs["landmark_ids"], obs["landmark_points"])
-        return _image_detector(self.pattern, self.valid_ids).detect(obs["image"])
+            found = self._unpack(obs["landmark_ids"], obs["landmark_points"])
+        else:
+            found = _image_detector(self.pattern, self.valid_ids).detect(obs["image"])
+        if self.calibration is None or not self.calibration.distorted:
+            return found
+        return [self._undistorted(d) for d in found]
+
+    def _undistorted(self, detection: Detection) -> Detection:
+        points = self.calibration.undistort_pixels(detection.image_points)
+        homography, _ = cv2.findHomography(detection.plane_points, points)
+        return replace(detection, image_points=points, homography=homography)
 
     def _unpack(self, ids: np.ndarray, points: np.ndarray) -> list[Detection]:
         detections = []

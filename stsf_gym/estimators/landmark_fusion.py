@@ -33,6 +33,8 @@ no longer describes its error.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
@@ -47,6 +49,7 @@ from stsf_gym.estimators.landmark_observation import (
 from stsf_gym.estimators.odometry import odometry_step
 from stsf_gym.estimators.pair_range import pair_range
 from stsf_gym.estimators.relocalise import Relocaliser
+from stsf_gym.estimators.settings import ConventionalSettings, STSFSettings
 from stsf_gym.fusion import STSFTrack
 from stsf_gym.geometry import compose, compose_jacobians, to_se3, wrap_angle
 
@@ -77,40 +80,26 @@ class _Seen:
 
 class LandmarkFusionEstimator(OdometryEstimator):
     """Shared machinery of :class:`ConventionalEstimator` and :class:`STSFEstimator`: landmark
-    tracks of at most ``max_track_frames`` frames, fused with ``weights`` (eq. 2-5)."""
+    tracks of at most ``max_track_frames`` frames, fused with ``weights`` (eq. 2-5); the rest of
+    the settings in ``configs/estimators/conventional.yaml``."""
 
-    def __init__(
-        self,
-        max_track_frames: int,
-        weights: str = "significance",
-        sigma_px: float = 0.15,
-        gate_probability: float = 0.99,
-        max_gap_frames: int = 5,
-        max_range: float = 9.0,
-        min_baseline: float = 0.1,
-        max_relative_range_std: float = 0.25,
-        orientation_std_floor: float = 0.006,
-        position_std_floor: float = 0.003,
-        position_std_per_m: float = 0.002,
-        relocalise_after: int = 3,
-        relocalise_inflation: float = 4.0,
-        mount_std: float = 0.003,
-    ) -> None:
-        super().__init__(mount_std=mount_std)
-        if weights not in ("significance", "gls"):
-            raise ValueError(f"stsf weights must be 'significance' or 'gls', got {weights!r}")
+    def __init__(self, settings: ConventionalSettings, max_track_frames: int, weights: str) -> None:
+        super().__init__(settings)
         self.max_track_frames, self.weights = max_track_frames, weights
-        self.sigma_px, self.max_gap_frames, self.max_range = sigma_px, max_gap_frames, max_range
-        self.min_baseline, self.max_relative_range_std = min_baseline, max_relative_range_std
-        self.orientation_var_floor = orientation_std_floor**2
-        self.position_std_floor, self.position_std_per_m = position_std_floor, position_std_per_m
-        self.gate = chi_square_gate(gate_probability, dof=3)
-        self.relocaliser = Relocaliser(relocalise_after, relocalise_inflation, self.gate)
+        s = settings
+        self.sigma_px, self.max_gap_frames = s.sigma_px, s.max_gap_frames
+        self.max_range = s.max_range
+        self.min_baseline, self.max_relative_range_std = s.min_baseline, s.max_relative_range_std
+        self.orientation_var_floor = s.orientation_std_floor**2
+        self.position_std_floor = s.position_std_floor
+        self.position_std_per_m = s.position_std_per_m
+        self.gate = chi_square_gate(s.gate_probability, dof=3)
+        self.relocaliser = Relocaliser(s.relocalise_after, s.relocalise_inflation, self.gate)
         self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = FrameDetector(model.pattern, set(model.landmarks))
+        self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
         self.frame_count = 0
@@ -250,7 +239,8 @@ class LandmarkFusionEstimator(OdometryEstimator):
         jac = robot_pose_jacobian(landmark, z)
         self.frame_count += 1
         # a camera mounted m off puts the landmark -m off in the robot frame
-        by_considered = np.hstack([jac @ by_calibration, -jac[:, :2]])
+        by_camera = jac @ current.by_camera()
+        by_considered = np.hstack([jac @ by_calibration, -jac[:, :2], by_camera])
         self.errors.add((landmark.id, self.frame_count), jac @ cov @ jac.T, by_considered)
         keys = [key for key in self.errors.keys if key[0] == landmark.id]
         self.errors.remove(keys[: len(keys) - len(track)])  # the frames the track let go
@@ -290,15 +280,17 @@ class ConventionalEstimator(LandmarkFusionEstimator):
     """Conventional sensor fusion: the landmark measured from the current two frames."""
 
     name = "conventional"
+    settings_type: ClassVar[type] = ConventionalSettings
 
-    def __init__(self, **options) -> None:
-        super().__init__(max_track_frames=1, **options)
+    def __init__(self, settings: ConventionalSettings) -> None:
+        super().__init__(settings, max_track_frames=1, weights="significance")
 
 
 class STSFEstimator(LandmarkFusionEstimator):
     """STSF: every frame of the landmark's track carried into the current one and fused."""
 
     name = "stsf"
+    settings_type: ClassVar[type] = STSFSettings
 
-    def __init__(self, max_track_frames: int = 10, **options) -> None:
-        super().__init__(max_track_frames=max_track_frames, **options)
+    def __init__(self, settings: STSFSettings) -> None:
+        super().__init__(settings, settings.max_track_frames, settings.weights)

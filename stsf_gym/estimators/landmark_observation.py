@@ -31,6 +31,19 @@ class LandmarkObservation:
     z: np.ndarray  # [x, y, phi]: landmark pose in the robot frame
     cov: np.ndarray  # 3x3 covariance of z
 
+    def by_camera(self) -> np.ndarray:
+        """Jacobian (3, 2) of ``z`` by the considered camera errors ``[theta, s]``.
+
+        The believed principal point off by ``theta f`` pixels (horizontally) shifts every
+        undistorted point by ``-theta`` in normalised x: the board moves by ``-Z theta`` along
+        the camera's x axis (``Z`` its depth) and its orientation turns by ``theta``. The
+        believed focal length off by a factor ``1 + s`` scales the depth by it (from the
+        board's size or a motion-stereo disparity alike) and leaves the lateral offset."""
+        rotation, origin = self.robot_from_camera[:2, :3], self.robot_from_camera[:2, 3]
+        axis, right = rotation[:, 2], rotation[:, 0]
+        depth = float((self.z[:2] - origin) @ axis)
+        return np.array([[*(-depth * right), 1.0], [*(depth * axis), 0.0]]).T
+
     @property
     def range_bearing(self) -> np.ndarray:
         """[range, bearing] of the board centre from the robot origin."""

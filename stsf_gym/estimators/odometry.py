@@ -18,15 +18,11 @@ class OdometryNoise:
     make the drift grow *linearly* with distance. The estimators carry them as the
     considered parameters ``c`` of :class:`~stsf_gym.estimators.pose_errors.PoseErrors`
     (``calibration_cov``, with the Jacobian of :func:`odometry_step`).
-    :meth:`random_walk_variances` instead folds the radius error into a random walk that has
-    the same variance after ``calibration_length`` metres (right at that distance only), for a
-    per-step model (:func:`propagate`).
     """
 
     slip_var_per_m: float
     radius_var: float = 0.0
     wheelbase_var: float = 0.0
-    calibration_length: float = 5.0
 
     @classmethod
     def from_encoders(
@@ -48,10 +44,6 @@ class OdometryNoise:
 
     def slip_variances(self, d_left: float, d_right: float) -> np.ndarray:
         return self.slip_var_per_m * np.abs(np.array([d_left, d_right]))
-
-    def random_walk_variances(self, d_left: float, d_right: float) -> np.ndarray:
-        var_per_m = self.slip_var_per_m + self.radius_var * self.calibration_length
-        return var_per_m * np.abs(np.array([d_left, d_right]))
 
 
 def integrate_wheel_travel(
@@ -92,18 +84,3 @@ def odometry_step(
     by_turn = np.array([-distance * s / 2, distance * c / 2, 1.0])
     G_c = np.column_stack([G[:, 0] * d_left, G[:, 1] * d_right, -turn * by_turn])
     return integrate_wheel_travel(pose, d_left, d_right, wheelbase), F, G, G_c
-
-
-def propagate(
-    pose: np.ndarray,
-    cov: np.ndarray,
-    d_left: float,
-    d_right: float,
-    wheelbase: float,
-    noise: OdometryNoise,
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`integrate_wheel_travel` with the per-step covariance ``F C F^T + G N G^T``, ``N``
-    from :meth:`OdometryNoise.random_walk_variances`."""
-    new_pose, F, G, _ = odometry_step(pose, d_left, d_right, wheelbase)
-    new_cov = F @ cov @ F.T + G @ np.diag(noise.random_walk_variances(d_left, d_right)) @ G.T
-    return new_pose, (new_cov + new_cov.T) / 2

@@ -5,12 +5,14 @@ Three kinds of error, to first order, stacked as ``y = [e; c; eps_1; ...; eps_n]
 - ``e``: the estimate's error (3: x, y, yaw); its covariance is the estimator's ``P``;
 - ``c``: the odometry calibration errors (3: relative left and right wheel radius, relative
   wheelbase), one draw per episode that the robot cannot know, and for a camera the error of
-  its mount's position on the robot (2: x, y), the same in every frame. They are
+  its mount's position on the robot (2: x, y) and of its believed calibration (2: the
+  principal point as a heading, the focal length as a depth scale), the same in every
+  frame. They are
   *considered*, not estimated (a Schmidt filter): ``Cov(c)`` never changes, but every error
   they drive stays correlated with them. Dead reckoning's error then grows linearly with
   distance, as a fixed scale error makes it, instead of a random walk's square root; the
   drift between two landmark sightings is neither overstated on a short gap nor understated
-  on a long one, and a mount error is not averaged away over many frames;
+  on a long one, and a mount or calibration error is not averaged away over many frames;
 - ``eps_j``: *carried poses*, the robot pose an earlier landmark frame ``j`` gives, carried to
   now by the odometry since (eq. 3: ``map (+) (-) TS(j)``), which STSF fuses (eq. 2) and
   merges with the estimate (eq. 23-24). They share the odometry since frame ``j`` with ``e``,

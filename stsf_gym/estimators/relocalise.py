@@ -36,13 +36,10 @@ CANDIDATE_FLOOR_STD = (0.02, 0.02, 0.02)  # m, m, rad: added to every candidate'
 
 
 class Relocaliser:
-    """Collects the candidates of rejected measurements; ``after = 0`` never re-localises."""
+    """Collects the candidates of rejected measurements; ``after = 0`` never re-localises
+    (``after`` and ``inflation`` are checked by the estimators' settings)."""
 
     def __init__(self, after: int, inflation: float, gate: float) -> None:
-        if after != int(after) or after < 0 or after == 1:
-            raise ValueError(f"relocalise_after must be 0 (off) or an integer >= 2, got {after}")
-        if inflation < 1:
-            raise ValueError(f"relocalise_inflation must be >= 1, got {inflation}")
         self.after, self.inflation, self.gate = int(after), float(inflation), gate
         self.candidates: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 

@@ -15,9 +15,16 @@ from pathlib import Path
 
 import numpy as np
 
-from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
-from stsf_gym.experiments.evaluate import _pyplot, estimator_options, summarise
-from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.experiments.episodes import (
+    EpisodeResult,
+    EpisodeSpec,
+    estimator_options,
+    run_episodes,
+)
+from stsf_gym.experiments.plots import pyplot
+from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.statistics import rms, summarise
+from stsf_gym.io import markdown_table, save_figure
 
 SUMMARY_COLUMNS = (
     "agent",
@@ -79,16 +86,17 @@ def compare(
         "seeds": [seed, seed + seeds - 1],
         "rows": rows,
     }
-    write_json(out / "comparison.json", summary)
     table = markdown_table([{k: row[k] for k in SUMMARY_COLUMNS} for row in rows])
-    write_atomic(out / "comparison.md", f"# Agents x pose sources on {world}\n\n{table}")
+    write_report(
+        out, summary, f"Agents x pose sources on {world}", table, "comparison.json", "comparison.md"
+    )
     summary["figures"] = [str(plot_comparison(by_pair, out / "comparison.png"))]
     return summary
 
 
 def plot_comparison(by_pair: dict[tuple[str, str], list[EpisodeResult]], path: Path) -> Path:
     """Grouped bars per pose source: success rate and RMS position error, one bar per agent."""
-    plt = _pyplot()
+    plt = pyplot()
     agents = list(dict.fromkeys(a for a, _ in by_pair))
     estimators = list(dict.fromkeys(e for _, e in by_pair))
     width = 0.8 / len(agents)
@@ -97,9 +105,9 @@ def plot_comparison(by_pair: dict[tuple[str, str], list[EpisodeResult]], path: P
     for i, agent in enumerate(agents):
         runs = [by_pair[agent, e] for e in estimators]
         success = [np.mean([r.outcome == "goal" for r in episodes]) for episodes in runs]
-        rms = [np.mean([np.sqrt(np.mean(np.square(r.errors))) for r in eps]) for eps in runs]
+        errors = [np.mean([rms(r.errors) for r in episodes]) for episodes in runs]
         ax_s.bar(x + i * width, success, width, label=agent)
-        ax_e.bar(x + i * width, np.maximum(rms, 1e-4), width, label=agent)  # truth: 0 on log
+        ax_e.bar(x + i * width, np.maximum(errors, 1e-4), width, label=agent)  # truth: 0 on log
     for ax, label in ((ax_s, "success rate"), (ax_e, "RMS position error (m)")):
         ax.set_xticks(x + width * (len(agents) - 1) / 2, estimators)
         ax.set_ylabel(label)

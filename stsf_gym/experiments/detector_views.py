@@ -13,6 +13,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from stsf_gym.camera_model import CameraCalibration
+
 LANDMARK_ID = 77
 DISTANCES = (1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0)
 ANGLES = (0.0, 15.0, 30.0, 45.0, 60.0)
@@ -80,8 +82,11 @@ def detection_records(
     Works in both camera modes (the rendered image through the detector, or the fast mode's
     simulated detections), so the two can be compared. Each record: ``distance``, ``angle``,
     ``size_px`` (the board's apparent size, see :func:`envs.sensors.fast_camera.apparent_size_px`),
-    ``detected``, ``wrong_ids`` (detections of other ids) and ``residuals`` ((N, 2) pixels,
-    detected minus true square centres; empty when not detected).
+    ``detected``, ``wrong_ids`` (detections of other ids), ``residuals`` ((N, 2) pixels,
+    detected minus true square centres through the true K and distortion: the sensor's error;
+    empty when not detected) and ``calibrated_residuals`` (the same points as the estimators
+    see them: undistorted with the episode's believed calibration, minus the true square
+    centres projected through the believed K: the sensor's and the calibration's error).
     """
     from envs.sensors.fast_camera import apparent_size_px
     from stsf_gym.estimators.frame_detector import FrameDetector
@@ -94,10 +99,14 @@ def detection_records(
         pose = info["camera_pose"]
         detections = detector(obs)
         good = [d for d in detections if d.landmark_id == LANDMARK_ID]
-        residuals = np.zeros((0, 2))
+        residuals = calibrated = np.zeros((0, 2))
         if good:
-            truth = u.camera.project(pose, landmark.square_centres)
-            residuals = good[0].image_points - truth[good[0].indices]
+            points, rows = good[0].image_points, good[0].indices
+            residuals = points - u.camera.project(pose, landmark.square_centres)[rows]
+            believed = u.camera_calibration
+            pinhole = CameraCalibration(believed.K, np.zeros(5))
+            camera_points = world_to_camera(pose, landmark.square_centres)
+            calibrated = believed.undistort_pixels(points) - pinhole.project(camera_points)[rows]
         records.append(
             {
                 "distance": distance,
@@ -106,18 +115,31 @@ def detection_records(
                 "detected": bool(good),
                 "wrong_ids": len(detections) - len(good),
                 "residuals": residuals,
+                "calibrated_residuals": calibrated,
             }
         )
     return records
 
 
+def world_to_camera(world_from_camera: np.ndarray, points: np.ndarray) -> np.ndarray:
+    camera_from_world = np.linalg.inv(world_from_camera)
+    return points @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
+
+
+def _rms(records: list[dict], key: str) -> float | None:
+    residuals = np.concatenate([r[key] for r in records]) if records else np.zeros((0, 2))
+    return float(np.sqrt(np.mean(residuals**2))) if len(residuals) else None
+
+
 def summarise_records(records: list[dict]) -> dict:
-    """Detection rate, feature error (RMS per axis and median of the norm), wrong ids."""
+    """Detection rate, feature error (RMS per axis: the sensor's, and with the calibration's
+    error as the estimators see it; median of the norm), wrong ids."""
     residuals = np.concatenate([r["residuals"] for r in records]) if records else np.zeros((0, 2))
     return {
         "views": len(records),
         "detection_rate": float(np.mean([r["detected"] for r in records])),
-        "feature_rms_px": float(np.sqrt(np.mean(residuals**2))) if len(residuals) else None,
+        "feature_rms_px": _rms(records, "residuals"),
+        "calibrated_feature_rms_px": _rms(records, "calibrated_residuals"),
         "feature_median_px": float(np.median(np.linalg.norm(residuals, axis=1)))
         if len(residuals)
         else None,

@@ -11,12 +11,12 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
-import stsf_gym  # noqa: F401 - registers the env ids
+from stsf_gym.episode_env import make_episode_env
+from stsf_gym.estimators import estimator_settings
 from stsf_gym.experiments.cache import run_cached
-from stsf_gym.wrappers import PoseEstimateWrapper
+from stsf_gym.wrappers import TRUTH
 
 TRACE_EVERY = 10  # steps between stored trajectory samples
 RESULT_VERSION = 4  # bumped when EpisodeResult changes, so older episode files are rerun
@@ -67,6 +67,12 @@ class EpisodeResult:
     stage_ms_per_step: dict[str, float]
 
 
+def estimator_options(source: str) -> dict:
+    """The settings of pose source ``source`` (``configs/estimators/<name>.yaml``) as plain
+    values, recorded with every episode (part of its cache key); ``truth`` has none."""
+    return {} if source == TRUTH else asdict(estimator_settings(source))
+
+
 def agent_label(agent: str) -> str:
     """``follower``, or a saved model's file stem and content digest (a file-name part)."""
     if agent == "follower":
@@ -89,16 +95,6 @@ def make_agent(name: str, env, options: dict | None = None):
 
         return load_agent(name, env)
     raise ValueError(f"unknown agent {name!r}; known: follower or a saved model (.zip)")
-
-
-def make_episode_env(world: str, estimator: str, env: dict, options: dict) -> gym.Env:
-    """The env every agent is run in: the world with the pan camera (pointed by the wrapper)
-    and ``env`` overrides, wrapped in :class:`PoseEstimateWrapper` for ``estimator``."""
-    return PoseEstimateWrapper(
-        gym.make("stsf_gym/Corridor-v0", world=world, **{"camera__control": "pan", **env}),
-        estimator,
-        **options,
-    )
 
 
 def run_episode(spec: EpisodeSpec) -> EpisodeResult:

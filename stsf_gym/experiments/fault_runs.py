@@ -27,9 +27,16 @@ import numpy as np
 
 from envs.config import ConfigError, load_config, read_yaml
 from envs.fault_spec import fault_span
-from stsf_gym.experiments.episodes import EpisodeResult, EpisodeSpec, run_episodes
-from stsf_gym.experiments.evaluate import _mean_std, estimator_options, plot_errors
-from stsf_gym.io import markdown_table, write_atomic, write_json
+from stsf_gym.experiments.episodes import (
+    EpisodeResult,
+    EpisodeSpec,
+    estimator_options,
+    run_episodes,
+)
+from stsf_gym.experiments.plots import plot_errors
+from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.statistics import mean_std
+from stsf_gym.io import markdown_table
 
 RECOVERY_FLOOR = 0.10  # m: an error under this counts as recovered whatever it was before
 PRE_FAULT_SECONDS = 10.0  # s of simulated time before the first fault: the pre-fault level
@@ -88,9 +95,7 @@ def evaluate_faults(
         "recovery_floor_m": RECOVERY_FLOOR,
         "rows": rows,
     }
-    write_json(out / "results.json", summary)
-    title = f"# Fault runs: {agent} on {world}\n\n"
-    write_atomic(out / "results.md", title + markdown_table(rows))
+    write_report(out, summary, f"Fault runs: {agent} on {world}", markdown_table(rows))
     summary["figures"] = figures
     return summary, runs
 
@@ -130,12 +135,12 @@ def summarise_faults(
         "collisions": sum(e.outcome == "collision" for e in episodes),
         "valid (finite, PD)": f"{sum(e.finite and e.min_cov_eigenvalue > 0 for e in episodes)}"
         f"/{len(episodes)}",
-        "final error (m)": _mean_std([e.errors[-1] for e in episodes]),
-        "max error (m)": _mean_std([max(e.errors) for e in episodes]),
+        "final error (m)": mean_std([e.errors[-1] for e in episodes]),
+        "max error (m)": mean_std([max(e.errors) for e in episodes]),
         "pre-fault error (m)": float(np.mean([r["pre_fault"] for r in recoveries])),
         "recovered": "-" if end is None else f"{len(back)}/{len(episodes)}",
-        "recovery distance (m)": _mean_std([r["distance"] for r in back]) if back else "-",
+        "recovery distance (m)": mean_std([r["distance"] for r in back]) if back else "-",
         "max recovery distance (m)": max(r["distance"] for r in back) if back else "-",
-        "error after recovery (m)": _mean_std([r["error_after"] for r in back]) if back else "-",
+        "error after recovery (m)": mean_std([r["error_after"] for r in back]) if back else "-",
         "relocalised": float(np.mean([e.relocalised for e in episodes])),
     }

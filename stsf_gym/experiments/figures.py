@@ -17,7 +17,9 @@ import numpy as np
 
 from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.experiments.evaluate import evaluate
-from stsf_gym.io import markdown_table, write_atomic, write_json
+from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.statistics import mean_std
+from stsf_gym.io import markdown_table
 
 FIG10_PAPER = {
     "odometry": "about 0.40 m off after 10 m; max 0.212 m in x, 0.405 m in y",
@@ -63,11 +65,11 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
         rows.append(
             {
                 "estimator": name,
-                "final x error (m)": _ms([a[-1, 0] for a in axis]),
-                "final y error (m)": _ms([a[-1, 1] for a in axis]),
-                "max x error (m)": _ms([a[:, 0].max() for a in axis]),
-                "max y error (m)": _ms([a[:, 1].max() for a in axis]),
-                "max error after 5 m (m)": _ms(after5),
+                "final x error (m)": mean_std([a[-1, 0] for a in axis]),
+                "final y error (m)": mean_std([a[-1, 1] for a in axis]),
+                "max x error (m)": mean_std([a[:, 0].max() for a in axis]),
+                "max y error (m)": mean_std([a[:, 1].max() for a in axis]),
+                "max error after 5 m (m)": mean_std(after5),
                 "paper": FIG10_PAPER.get(name, "-"),
             }
         )
@@ -95,7 +97,7 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
                 "reached goal": f"{row['success rate']:.0%}",
                 "collisions": row["collisions"],
                 "distance before failure (m)": row["distance before failure (m)"],
-                f"mean error after {LATTER_PART_M:g} m (m)": _ms(latter),
+                f"mean error after {LATTER_PART_M:g} m (m)": mean_std(latter),
                 "RMS heading error (deg)": row["RMS heading error (deg)"],
                 "landmark in view": row["landmark in view"],
                 "landmark match rate": row["landmark match rate"],
@@ -106,16 +108,8 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
     return _write(out, "fig11", "Fig. 11: navigation along the IRL corridor", summary, rows)
 
 
-def _ms(values) -> str:
-    values = [v for v in values if not np.isnan(v)]
-    return f"{np.mean(values):.3f} ± {np.std(values):.3f}" if values else "-"
-
-
 def _write(out: Path, name: str, title: str, summary: dict, rows: list[dict]) -> dict:
     summary = {**summary, "paper_rows": rows}
-    write_json(out / f"{name}.json", summary)
-    text = (
-        f"# {title}\n\n{markdown_table(rows)}\n## All metrics\n\n{markdown_table(summary['rows'])}"
-    )
-    write_atomic(out / f"{name}.md", text)
+    body = f"{markdown_table(rows)}\n## All metrics\n\n{markdown_table(summary['rows'])}"
+    write_report(out, summary, title, body, f"{name}.json", f"{name}.md")
     return summary

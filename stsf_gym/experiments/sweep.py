@@ -35,7 +35,7 @@ from envs.config import (
     read_yaml,
 )
 from stsf_gym.experiments.cache import run_cached
-from stsf_gym.experiments.evaluate import estimator_options
+from stsf_gym.experiments.episodes import estimator_options
 from stsf_gym.experiments.sweep_backends import make_runner
 from stsf_gym.experiments.sweep_cells import cell_kind, run_cell
 from stsf_gym.experiments.sweep_report import write_report

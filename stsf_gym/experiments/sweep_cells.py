@@ -11,13 +11,10 @@ the rest.
 
 from __future__ import annotations
 
-import math
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-
-import numpy as np
 
 from envs.config import ConfigError, deep_merge
 
@@ -56,6 +53,7 @@ def failure(err: BaseException, details: str = "") -> dict:
 def evaluate_cell(cell: dict) -> dict:
     """One episode of the agent on the estimator's pose; its position errors and outcome."""
     from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
+    from stsf_gym.experiments.statistics import rms
 
     spec = EpisodeSpec(
         cell["world"], cell["estimator"], cell["seed"], cell["agent"], cell["env"], cell["options"]
@@ -66,7 +64,7 @@ def evaluate_cell(cell: dict) -> dict:
         "distance": episode.distance,
         "metrics": {
             "final error (m)": episode.errors[-1],
-            "RMS error (m)": math.sqrt(float(np.mean(np.square(episode.errors)))),
+            "RMS error (m)": rms(episode.errors),
             "max error (m)": max(episode.errors),
             "NEES": episode.nees,
             "success": episode.outcome == "goal",

@@ -4,7 +4,9 @@ The paper's sect. 4.2: one landmark seen from six places at 7.81, 7.02, 6.28, 5.
 6.32 m, ten frames per place. Here the robot sweeps sideways past the landmark at each
 distance, one frame a second at 12.2 cm/s, the camera panned onto the landmark from the
 odometry heading. For each pair of consecutive frames the detector's square centres give the
-plane distance ``D`` by motion stereo (eq. 8-20), with the camera motion from odometry.
+plane distance ``D`` by motion stereo (eq. 8-20), with the camera motion from odometry: the
+estimators' dead reckoning (:class:`~stsf_gym.estimators.dead_reckoning.OdometryEstimator`,
+its covariance with the wheel calibration errors fixed per run).
 
 - Conventional fusion: ``D`` from the current two frames only.
 - STSF: every pair measured so far, carried into the current frame by odometry (eq. 3,
@@ -27,9 +29,13 @@ import numpy as np
 
 import stsf_gym  # noqa: F401 - registers the env ids
 from envs.config import CONFIG_DIR, build, deep_merge, load_config, overrides_to_tree, read_yaml
-from stsf_gym.estimators.odometry import OdometryNoise, propagate
+from stsf_gym.estimators import SensorModel, make_estimator
+from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.pair_range import pair_range
 from stsf_gym.experiments.cache import run_cached
+from stsf_gym.experiments.plots import pyplot
+from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.statistics import rms
 from stsf_gym.fusion import (
     stereo_range_bound,
     stsf_fuse,
@@ -37,8 +43,9 @@ from stsf_gym.fusion import (
     transform_range_track,
 )
 from stsf_gym.geometry import to_se3, wrap_angle
-from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
+from stsf_gym.io import markdown_table, save_figure
 from stsf_gym.vision.detector import LandmarkDetector
+from stsf_gym.wrappers import sensor_model
 
 #: Table I of the paper: world distance, conventional estimate and error, STSF estimate and error.
 PAPER_TABLE1 = [
@@ -70,20 +77,17 @@ def load_table1_config(path: str | Path | None = None, **overrides) -> Table1Con
     return build(Table1Config, deep_merge(data, overrides_to_tree(overrides)), "table1")
 
 
-class _Odometry:
-    """Dead reckoning with covariance, in the frame where it was last :meth:`restart`-ed."""
+def dead_reckoning(model: SensorModel, pose: np.ndarray) -> OdometryEstimator:
+    """The estimators' odometry from ``pose`` with no uncertainty yet: restarted at the origin,
+    it gives the motion since then and its covariance."""
+    odometry = make_estimator("odometry")
+    odometry.reset(model, pose, np.zeros((3, 3)))
+    return odometry
 
-    def __init__(self, noise: OdometryNoise, wheelbase: float) -> None:
-        self.noise, self.wheelbase = noise, wheelbase
-        self.restart()
 
-    def restart(self) -> None:
-        self.pose, self.cov = np.zeros(3), np.zeros((3, 3))
-
-    def add(self, d_left: float, d_right: float) -> None:
-        self.pose, self.cov = propagate(
-            self.pose, self.cov, d_left, d_right, self.wheelbase, self.noise
-        )
+def restart_at_origin(odometry: OdometryEstimator) -> None:
+    """Measure the motion from here on: the origin, with no uncertainty."""
+    odometry.restart(np.zeros(3), np.zeros((3, 3)))
 
 
 @dataclass
@@ -117,10 +121,6 @@ class Table1Run:
         self.landmark = u.landmarks[0]
         self.K = u.camera_matrix
         self.detector = LandmarkDetector(u.config.world.landmark_pattern)
-        enc = u.config.encoders
-        self.noise = OdometryNoise.from_encoders(
-            enc.slip_std, enc.radius_error_std, enc.wheelbase_error_std, self.robot_cfg.wheel_radius
-        )
         self.result = SeedResult()
         self.frames: list[_Frame] = []
         self.track: list[tuple[float, float]] = []  # (D, var) per measurement
@@ -131,10 +131,10 @@ class Table1Run:
         cfg = self.cfg
         start = [cfg.distances[0], -cfg.sweep_start, math.pi / 2]
         _, self.info = self.env.reset(seed=self.seed, options={"start_pose": start})
-        self.calibration = self.env.unwrapped.odometry_calibration
-        self.pose = self.info["true_pose"].copy()  # odometry, started at the true start
-        self.since_frame = _Odometry(self.noise, self.calibration.wheelbase)
-        self.since_measurement = _Odometry(self.noise, self.calibration.wheelbase)
+        model = sensor_model(self.env)
+        self.odometry = dead_reckoning(model, self.info["true_pose"])  # from the true start
+        self.since_frame = dead_reckoning(model, np.zeros(3))
+        self.since_measurement = dead_reckoning(model, np.zeros(3))
         try:
             for i, distance in enumerate(cfg.distances):
                 direction = 1.0 if i % 2 == 0 else -1.0
@@ -149,7 +149,7 @@ class Table1Run:
 
     def _act(self, v: float, w: float, location: int | None = None) -> None:
         """One env step; the camera pans onto the landmark from the odometry pose."""
-        x, y, yaw = self.pose
+        x, y, yaw = self.odometry.mean
         camera_xy = np.array([x, y]) + self.robot_cfg.camera_forward * np.array(
             [math.cos(yaw), math.sin(yaw)]
         )
@@ -164,12 +164,8 @@ class Table1Run:
         obs, _, terminated, truncated, self.info = self.env.step(action)
         if terminated or truncated:
             raise RuntimeError(f"table1 rig stopped early (collision: {self.info['collision']})")
-        d_left, d_right = self.calibration.wheel_travel(obs["encoders"])
-        self.pose = propagate(
-            self.pose, np.zeros((3, 3)), d_left, d_right, self.calibration.wheelbase, self.noise
-        )[0]
-        self.since_frame.add(d_left, d_right)
-        self.since_measurement.add(d_left, d_right)
+        for odometry in (self.odometry, self.since_frame, self.since_measurement):
+            odometry.predict(obs)
         if location is not None and obs["image_new"]:
             self._frame(obs, location)
 
@@ -186,7 +182,7 @@ class Table1Run:
 
     def _sweep(self, location: int, direction: float) -> None:
         heading = direction * math.pi / 2
-        self.since_frame.restart()
+        restart_at_origin(self.since_frame)
         count = len(self.frames)
         while len(self.frames) - count < self.cfg.frames_per_location:
             steer = -2.0 * wrap_angle(self.info["true_pose"][2] - heading)
@@ -196,14 +192,15 @@ class Table1Run:
     def _frame(self, obs: dict, location: int) -> None:
         pan, tilt = obs["camera_pan_tilt"]
         robot_from_camera = self.env.unwrapped.robot_from_camera(pan, tilt)
+        pose = self.odometry.mean
         frame = _Frame(
             location,
             self._detect(obs["image"]),
-            to_se3(self.pose) @ robot_from_camera,
-            float(self.pose[2]),
+            to_se3(pose) @ robot_from_camera,
+            float(pose[2]),
             self.since_frame.cov.copy(),
         )
-        self.since_frame.restart()
+        restart_at_origin(self.since_frame)
         previous = self.frames[-1] if self.frames else None
         self.frames.append(frame)
         camera = self.info["camera_pose"][:3, 3]
@@ -250,7 +247,7 @@ class Table1Run:
             self.steps.append(self._range_step(self.last_heading))
         self.track.append((D, var))
         self.last_heading = frame.heading
-        self.since_measurement.restart()
+        restart_at_origin(self.since_measurement)
         ranges, variances = zip(*self.track, strict=True)
         steps, step_variances = zip(*self.steps, strict=True) if self.steps else ((), ())
         rho, cov = to_inverse_range(
@@ -264,7 +261,7 @@ class Table1Run:
     def _range_step(self, heading: float) -> tuple[float, float]:
         """Change of the plane distance since the last measurement, from odometry, and its
         variance: ``n . (camera now - camera then)`` with the motion ``u`` in that frame."""
-        u, Q = self.since_measurement.pose, self.since_measurement.cov
+        u, Q = self.since_measurement.mean, self.since_measurement.cov
         normal = to_se3(np.array([0, 0, heading]))[:2, :2].T @ self.landmark.normal[:2]
         c = self.robot_cfg.camera_forward
         moved = u[:2] + c * np.array([math.cos(u[2]), math.sin(u[2])]) - (c, 0.0)
@@ -303,8 +300,8 @@ def run_table1(
     ]
     rows = summarise(cfg, results)
     summary = {"config": cfg.__dict__, "seeds": [seed, seed + cfg.seeds - 1], "rows": rows}
-    write_json(out / "results.json", summary)
-    write_atomic(out / "table1.md", _markdown(rows, cfg))
+    title = "Table I reproduced: distance to a landmark, conventional fusion vs STSF"
+    write_report(out, summary, title, _markdown(rows, cfg), markdown_name="table1.md")
     summary["figure"] = str(_plot(cfg, results, out / "table1.png"))
     return summary
 
@@ -332,14 +329,14 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
                 "row": i + 1,
                 "world (m)": distance,
                 "conventional (m)": float(np.mean(conv_est)) if conv_est else math.nan,
-                "conventional error (m)": _rms(conv_err),
+                "conventional error (m)": rms(conv_err),
                 "conventional spread (m)": float(np.std(np.abs(conv_err)))
                 if conv_err
                 else math.nan,
                 "STSF (m)": float(np.mean(stsf_est)) if stsf_est else math.nan,
-                "STSF error (m)": _rms(stsf_err),
+                "STSF error (m)": rms(stsf_err),
                 "STSF spread (m)": float(np.std(np.abs(stsf_err))) if stsf_err else math.nan,
-                "STSF-GLS error (m)": _rms(gls_err),
+                "STSF-GLS error (m)": rms(gls_err),
                 "bound (m)": float(stereo_range_bound(distance, focal, baseline, cfg.sigma_px)),
                 "paper conventional error (m)": paper[distance][2] if distance in paper else "-",
                 "paper STSF error (m)": paper[distance][4] if distance in paper else "-",
@@ -349,13 +346,8 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
     return rows
 
 
-def _rms(errors: list[float]) -> float:
-    return float(np.sqrt(np.mean(np.square(errors)))) if errors else math.nan
-
-
 def _markdown(rows: list[dict], cfg: Table1Config) -> str:
     head = (
-        "# Table I reproduced: distance to a landmark, conventional fusion vs STSF\n\n"
         f"{cfg.seeds} seeds, {cfg.frames_per_location} frames per place, baseline "
         f"{cfg.sweep_speed * 100:.1f} cm between frames. Errors are "
         "RMS over seeds (conventional: over every pair at the place; STSF: at its last frame); "
@@ -365,11 +357,7 @@ def _markdown(rows: list[dict], cfg: Table1Config) -> str:
 
 
 def _plot(cfg: Table1Config, results: list[SeedResult], path: Path) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     n = min(len(r.truth) for r in results)
     truth = np.array([r.truth[:n] for r in results])
     fig, ax = plt.subplots(figsize=(9, 4.5))

@@ -1,7 +1,8 @@
 """YAML layers of a config: files read with clear errors, merged, and flat overrides.
 
-``configs/`` holds the defaults (``default.yaml``) and the worlds (``worlds/<name>.yaml``, each
-may ``extends:`` another). Errors name the file: missing, unreadable, malformed YAML (with its
+``configs/`` holds the defaults (``default.yaml``), the worlds (``worlds/<name>.yaml``) and the
+estimator settings (``estimators/<name>.yaml``); a world or estimator file may ``extends:``
+another of its folder. Errors name the file: missing, unreadable, malformed YAML (with its
 line) or not a mapping.
 """
 
@@ -14,7 +15,7 @@ from typing import Any
 
 import yaml
 
-from envs.validation import ConfigError
+from stsf_gym.validation import ConfigError
 
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 
@@ -75,24 +76,32 @@ def overrides_to_tree(overrides: Mapping[str, Any]) -> dict:
     return tree
 
 
-def world_files(world: str | Path, seen: tuple[Path, ...] = ()) -> list[tuple[Path, dict]]:
-    """A world by name (``configs/worlds/<name>.yaml``) or YAML path, as (file, keys) layers.
+def world_files(world: str | Path) -> list[tuple[Path, dict]]:
+    """A world by name (``configs/worlds/<name>.yaml``) or YAML path, as (file, keys) layers."""
+    return extended_files(world, CONFIG_DIR / "worlds", "world")
 
-    A world file may name another in ``extends``; its keys go over that one's (later layer).
+
+def extended_files(
+    name: str | Path, folder: Path, kind: str, seen: tuple[Path, ...] = ()
+) -> list[tuple[Path, dict]]:
+    """A config by name (``folder/<name>.yaml``) or YAML path, as (file, keys) layers.
+
+    A file may name another of its ``kind`` in ``extends``; its keys go over that one's (later
+    layer). Unknown names list the known ones; a cycle of ``extends`` is named.
     """
-    candidate = Path(world)
+    candidate = Path(name)
     if candidate.suffix not in (".yaml", ".yml"):
-        candidate = CONFIG_DIR / "worlds" / f"{world}.yaml"
+        candidate = folder / f"{name}.yaml"
         if not candidate.is_file():
-            known = sorted(p.stem for p in (CONFIG_DIR / "worlds").glob("*.yaml"))
-            raise ConfigError(f"unknown world {str(world)!r}; known worlds: {', '.join(known)}")
+            known = sorted(p.stem for p in folder.glob("*.yaml"))
+            raise ConfigError(f"unknown {kind} {str(name)!r}; known {kind}s: {', '.join(known)}")
     if candidate.resolve() in seen:
         chain = " -> ".join(shown(p) for p in (*seen, candidate))
-        raise ConfigError(f"world files extend each other in a cycle: {chain}")
+        raise ConfigError(f"{kind} files extend each other in a cycle: {chain}")
     data = read_yaml(candidate)
     base = data.pop("extends", None)
     if base is None:
         return [(candidate, data)]
     if not isinstance(base, str):
-        raise ConfigError(f"extends must name a world, got {base!r}", "extends", shown(candidate))
-    return [*world_files(base, (*seen, candidate.resolve())), (candidate, data)]
+        raise ConfigError(f"extends must name a {kind}, got {base!r}", "extends", shown(candidate))
+    return [*extended_files(base, folder, kind, (*seen, candidate.resolve())), (candidate, data)]

@@ -175,13 +175,15 @@ class KeySources:
     def __init__(self) -> None:
         self._files: dict[str, str] = {}  # key path -> file ("" when set by a mapping)
 
-    def record(self, tree: Mapping, file: str | None, prefix: str = "") -> None:
-        """Note ``file`` (``None``: not from a file) as the source of every key in ``tree``."""
+    def record(self, tree: Mapping, file: str | None, prefix: str = "", keep: bool = False) -> None:
+        """Note ``file`` (``None``: not from a file) as the source of every key in ``tree``;
+        with ``keep``, only of keys no layer has set (``tree`` holds defaults)."""
         for key, value in tree.items():
             path = _join(prefix, key)
-            self._files[path] = file or ""
+            if not (keep and path in self._files):
+                self._files[path] = file or ""
             if isinstance(value, Mapping):
-                self.record(value, file, path)
+                self.record(value, file, path, keep)
 
     def forget(self, prefix: str) -> None:
         """Drop ``prefix`` and the keys under it (a section replaced as a whole)."""

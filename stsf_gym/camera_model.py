@@ -1,0 +1,84 @@
+"""The pinhole camera with lens distortion, in OpenCV's conventions, in plain numpy.
+
+Camera axes are OpenCV's (x right, y down, z forward); pixel centres sit at integer
+coordinates. Distortion is Brown-Conrady radial-tangential with OpenCV's coefficient order
+``k1 k2 p1 p2 k3``: a normalised point ``(x, y)``, ``r^2 = x^2 + y^2``, maps to
+
+    x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2)
+    y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y
+
+and pixels are ``K @ [x_d, y_d, 1]``, so :meth:`CameraCalibration.project` agrees with
+``cv2.projectPoints``. The simulator uses it for the true camera, the estimators for the
+camera the robot believes it has (:attr:`CorridorEnv.camera_calibration`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+UNDISTORT_ITERATIONS = 20
+
+
+def distort(xy: np.ndarray, dist: np.ndarray) -> np.ndarray:
+    """Distorted normalised coordinates (..., 2) of undistorted ones."""
+    k1, k2, p1, p2, k3 = dist
+    x, y = xy[..., 0], xy[..., 1]
+    r2 = x * x + y * y
+    radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    return np.stack([xd, yd], axis=-1)
+
+
+def undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
+    """Undistorted normalised coordinates of distorted ones: the fixed-point iteration of
+    ``cv2.undistortPoints``, run to convergence for the distortions a lens has."""
+    k1, k2, p1, p2, k3 = dist
+    xy = np.array(xy_d, dtype=float)
+    for _ in range(UNDISTORT_ITERATIONS):
+        x, y = xy[..., 0], xy[..., 1]
+        r2 = x * x + y * y
+        radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+        xy = np.stack([(xy_d[..., 0] - dx) / radial, (xy_d[..., 1] - dy) / radial], axis=-1)
+    return xy
+
+
+@dataclass(frozen=True, eq=False)
+class CameraCalibration:
+    """Intrinsics ``K`` (3x3) and distortion ``dist`` (``k1 k2 p1 p2 k3``) of a camera."""
+
+    K: np.ndarray
+    dist: np.ndarray
+
+    @property
+    def distorted(self) -> bool:
+        return bool(np.any(self.dist != 0))
+
+    def to_pixels(self, xy: np.ndarray) -> np.ndarray:
+        """Pixels (..., 2) of undistorted normalised coordinates (..., 2)."""
+        d = distort(xy, self.dist) if self.distorted else xy
+        return d @ self.K[:2, :2].T + self.K[:2, 2]
+
+    def to_normalised(self, uv: np.ndarray) -> np.ndarray:
+        """Undistorted normalised coordinates of pixels (..., 2)."""
+        d = (np.asarray(uv, float) - self.K[:2, 2]) @ np.linalg.inv(self.K[:2, :2]).T
+        return undistort(d, self.dist) if self.distorted else d
+
+    def undistort_pixels(self, uv: np.ndarray) -> np.ndarray:
+        """Where pixels (..., 2) would lie through ``K`` without the lens's distortion."""
+        if not self.distorted:
+            return np.asarray(uv, float)
+        return self.to_normalised(uv) @ self.K[:2, :2].T + self.K[:2, 2]
+
+    def project(self, camera_points: np.ndarray) -> np.ndarray:
+        """Pixels (N, 2) of points (N, 3) in camera coordinates; points behind give NaN."""
+        points = np.asarray(camera_points, float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xy = points[:, :2] / points[:, 2:3]
+        uv = self.to_pixels(xy)
+        uv[points[:, 2] <= 0] = np.nan
+        return uv

@@ -1,0 +1,32 @@
+"""The env of an episode, built in one place: for the registered estimating ids
+(``stsf_gym/Corridor-STSF-v0``, ...), for training and for evaluation alike."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+
+from stsf_gym.wrappers import PoseEstimateWrapper
+
+
+def make_episode_env(
+    world: str | Mapping = "irl_corridor",
+    estimator: str = "odometry",
+    env: Mapping[str, Any] | None = None,
+    estimator_options: Mapping[str, Any] | None = None,
+    **overrides: Any,
+) -> gym.Env:
+    """``world`` with the pan camera (pointed by the wrapper, so the action stays ``[v, w]``),
+    the env settings ``env`` and ``overrides`` (``config``, ``render_mode``, ``camera__width``,
+    ...; see :class:`envs.corridor_env.CorridorEnv`), wrapped in :class:`PoseEstimateWrapper`
+    for the pose source ``estimator`` with ``estimator_options`` over its YAML settings."""
+    from envs.corridor_env import CorridorEnv
+
+    corridor = CorridorEnv(world=world, **{"camera__control": "pan", **(env or {}), **overrides})
+    try:
+        return PoseEstimateWrapper(corridor, estimator, **(estimator_options or {}))
+    except Exception:
+        corridor.close()
+        raise

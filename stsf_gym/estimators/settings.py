@@ -1,0 +1,117 @@
+"""Estimator settings: typed, range-checked frozen dataclasses, defaults only in YAML.
+
+``configs/estimators/<name>.yaml`` is the one source of every estimator's defaults (a file may
+``extends:`` another: ``stsf.yaml`` adds the track to ``conventional.yaml``). :func:`load_settings`
+merges those files and keyword overrides and builds the estimator's settings class with the
+env config's machinery (:mod:`stsf_gym.validation`), so an unknown or out-of-range option
+fails naming it, and the file that set it: ``stsf.max_track_frames must be >= 1, got -1``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal, TypeVar
+
+from stsf_gym.validation import (
+    ConfigError,
+    Count,
+    KeySources,
+    NonNegative,
+    Positive,
+    Range,
+    build,
+    require,
+)
+from stsf_gym.yaml_layers import CONFIG_DIR, deep_merge, extended_files, shown
+
+ESTIMATOR_DIR = CONFIG_DIR / "estimators"
+
+OpenProbability = Annotated[float, Range(gt=0, lt=1)]
+FrameCount = Annotated[int, Range(ge=0)]
+Inflation = Annotated[float, Range(ge=1)]
+
+
+@dataclass(frozen=True)
+class OdometrySettings:
+    """Dead reckoning (``odometry.yaml``)."""
+
+    mount_std: NonNegative  # m, the camera mount's unknown position error (a camera's estimators)
+
+
+@dataclass(frozen=True)
+class RelocalisationSettings:
+    """The re-localisation rule shared by the landmark estimators."""
+
+    relocalise_after: FrameCount  # rejected measurements in a row that agree; 0 = never
+    relocalise_inflation: Inflation  # factor on their covariance for the restarted estimate
+
+    def __post_init__(self) -> None:
+        require(
+            self.relocalise_after != 1,
+            "relocalise_after",
+            "must be 0 (off) or an integer >= 2, got 1",
+        )
+
+
+@dataclass(frozen=True)
+class ConventionalSettings(RelocalisationSettings, OdometrySettings):
+    """Conventional fusion of the current frame pair (``conventional.yaml``)."""
+
+    sigma_px: Positive
+    gate_probability: OpenProbability
+    max_gap_frames: FrameCount
+    max_range: Positive
+    min_baseline: NonNegative
+    max_relative_range_std: Positive
+    orientation_std_floor: NonNegative
+    position_std_floor: NonNegative
+    position_std_per_m: NonNegative
+
+
+@dataclass(frozen=True)
+class STSFSettings(ConventionalSettings):
+    """STSF: conventional fusion's settings and the track's (``stsf.yaml``)."""
+
+    weights: Literal["significance", "gls"]
+    max_track_frames: Count
+
+
+@dataclass(frozen=True)
+class EKFSettings(RelocalisationSettings, OdometrySettings):
+    """The range/bearing EKF (``ekf.yaml``)."""
+
+    sigma_px: Positive
+    gate_probability: OpenProbability
+    min_range: NonNegative
+    max_range: Positive
+    range_std_floor: NonNegative
+    range_std_fraction: NonNegative
+    bearing_std_floor: NonNegative
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require(
+            self.min_range < self.max_range,
+            "max_range",
+            f"must be > min_range ({self.min_range:g}), got {self.max_range:g}",
+        )
+
+
+Settings = TypeVar("Settings")
+
+
+def load_settings(name: str, settings_type: type[Settings], options: Mapping[str, Any]) -> Settings:
+    """``settings_type`` from ``configs/estimators/<name>.yaml`` (and the files it extends)
+    with ``options`` over them; errors name the key as ``<name>.<key>`` and its file."""
+    tree: dict = {}
+    sources = KeySources()
+    for file, data in extended_files(name, ESTIMATOR_DIR, "estimator"):
+        tree = deep_merge(tree, data)
+        sources.record(data, shown(file), name)
+    tree = deep_merge(tree, options)
+    sources.record(options, None, name)
+    try:
+        return build(settings_type, tree, name)
+    except ConfigError as err:
+        raise sources.attribute(err) from err

@@ -1,0 +1,182 @@
+"""The project's import layers: the graph drawn from the code, and the rules it must keep.
+
+``python -m stsf_gym.layers`` prints, for each layer, the layers its modules import (every
+``import`` statement counts, inside functions too; those under ``if TYPE_CHECKING:`` do not),
+then any violation, and exits with status 1 when there is one. The rules (:data:`ALLOWED`):
+
+    stsf_gym.cli, stsf_gym.experiments -> agents -> stsf_gym.wrappers -> stsf_gym.estimators
+        -> stsf_gym.fusion / vision / geometry;   envs -> stsf_gym.vision.landmarks / geometry
+
+plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``,
+``camera_model``: the lens model the simulator renders with and the estimators undistort with). Also
+checked: no module imports another's private (``_name``) name, and no import cycle between
+modules.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGES = ("stsf_gym", "envs", "agents")
+EXTERNAL = ("pybullet", "pybullet_utils")  # third-party layers the rules name
+LEAVES = (
+    "stsf_gym.geometry",
+    "stsf_gym.validation",
+    "stsf_gym.yaml_layers",
+    "stsf_gym.io",
+    "stsf_gym.camera_model",
+)
+CORE = (*LEAVES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
+ESTIMATION = (*CORE, "stsf_gym.estimators")
+EPISODE = (*ESTIMATION, "stsf_gym", "stsf_gym.wrappers", "stsf_gym.episode_env", "envs")
+ANY = "*"
+
+#: Each layer and the layers it may import, top to bottom.
+ALLOWED: dict[str, tuple[str, ...] | str] = {
+    "stsf_gym.cli": ANY,
+    "stsf_gym.experiments": (*EPISODE, "agents", "stsf_gym.config"),
+    "stsf_gym.bench": (*EPISODE, "agents", "stsf_gym.experiments"),
+    "agents": EPISODE,
+    "stsf_gym.config": ("envs", "stsf_gym.validation", "stsf_gym.yaml_layers"),
+    "stsf_gym.episode_env": ("stsf_gym.wrappers", "envs"),
+    "stsf_gym.wrappers": ESTIMATION,
+    "stsf_gym": (),  # the package's __init__: registration only
+    "envs": ("stsf_gym.geometry", "stsf_gym.vision.landmarks", *LEAVES[1:], *EXTERNAL),
+    "stsf_gym.estimators": CORE,
+    "stsf_gym.fusion": ("stsf_gym.geometry",),
+    "stsf_gym.vision": ("stsf_gym.vision.landmarks", "stsf_gym.geometry"),
+    "stsf_gym.vision.landmarks": (),
+    "stsf_gym.yaml_layers": ("stsf_gym.validation",),
+    "stsf_gym.geometry": (),
+    "stsf_gym.validation": (),
+    "stsf_gym.io": (),
+    "stsf_gym.camera_model": (),
+    "stsf_gym.layers": (),
+}
+
+
+def module_files(root: Path = ROOT) -> dict[str, Path]:
+    """Every module of the project's packages under ``root``, by dotted name."""
+    files = {}
+    for package in PACKAGES:
+        for path in sorted((root / package).rglob("*.py")):
+            parts = path.relative_to(root).with_suffix("").parts
+            files[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return files
+
+
+def module_imports(root: Path = ROOT) -> dict[str, list[tuple[str, str]]]:
+    """For each module, the (module, name) pairs it imports: project modules and
+    :data:`EXTERNAL` ones; ``name`` is the imported name of a ``from`` import ("" otherwise)."""
+    files = module_files(root)
+    graph = {}
+    for module, path in files.items():
+        found = []
+        for node in _runtime_imports(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                found += [(alias.name, "") for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+                for alias in node.names:
+                    submodule = f"{node.module}.{alias.name}"
+                    found.append(
+                        (submodule, "") if submodule in files else (node.module, alias.name)
+                    )
+        graph[module] = [(m, n) for m, n in found if m in files or _top(m) in EXTERNAL]
+    return graph
+
+
+def _runtime_imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
+    """The import statements of ``tree`` outside ``if TYPE_CHECKING:`` blocks."""
+    type_only = {
+        id(inner)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+        for statement in node.body
+        for inner in ast.walk(statement)
+    }
+    return [
+        node
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Import | ast.ImportFrom) and id(node) not in type_only
+    ]
+
+
+def _top(module: str) -> str:
+    return module.partition(".")[0]
+
+
+def layer_of(module: str) -> str:
+    """The layer of a module: the longest :data:`ALLOWED` key that is it or a parent of it."""
+    if _top(module) in EXTERNAL:
+        return _top(module)
+    names = [key for key in ALLOWED if module == key or module.startswith(f"{key}.")]
+    names = [key for key in names if key != "stsf_gym" or module == key]  # the __init__ only
+    return max(names, key=len) if names else module
+
+
+def layer_graph(imports: dict[str, list[tuple[str, str]]]) -> dict[str, set[str]]:
+    """Layer -> the other layers its modules import."""
+    graph: dict[str, set[str]] = {layer: set() for layer in ALLOWED}
+    for module, targets in imports.items():
+        source = layer_of(module)
+        graph.setdefault(source, set()).update(
+            layer_of(target) for target, _ in targets if layer_of(target) != source
+        )
+    return graph
+
+
+def violations(root: Path = ROOT) -> list[str]:
+    """Every broken rule, in words (empty when the layers hold)."""
+    imports = module_imports(root)
+    found = []
+    for module, targets in sorted(imports.items()):
+        source = layer_of(module)
+        allowed = ALLOWED.get(source)
+        if allowed is None:
+            found.append(f"{module}: layer {source} has no rule in stsf_gym.layers.ALLOWED")
+            continue
+        for target, name in targets:
+            layer = layer_of(target)
+            if layer != source and allowed != ANY and layer not in allowed:
+                found.append(f"{module} imports {target} ({source} -> {layer} is not allowed)")
+            if name.startswith("_") and not name.startswith("__") and target != module:
+                found.append(f"{module} imports the private name {target}.{name}")
+    found += [f"import cycle: {' -> '.join(cycle)}" for cycle in import_cycles(imports)]
+    return list(dict.fromkeys(found))
+
+
+def import_cycles(imports: dict[str, list[tuple[str, str]]]) -> list[list[str]]:
+    """Cycles of modules importing each other (one per strongly connected group)."""
+    edges = {m: sorted({t for t, _ in targets if t in imports}) for m, targets in imports.items()}
+    cycles, state = [], {}
+
+    def visit(module: str, path: list[str]) -> None:
+        state[module] = "open"
+        for target in edges[module]:
+            if state.get(target) == "open":
+                cycles.append([*path[path.index(target) :], target])
+            elif target not in state:
+                visit(target, [*path, target])
+        state[module] = "done"
+
+    for module in sorted(edges):
+        if module not in state:
+            visit(module, [module])
+    return cycles
+
+
+def main() -> int:
+    graph = layer_graph(module_imports())
+    width = max(map(len, graph))
+    for layer, targets in graph.items():
+        print(f"{layer:<{width}} -> {', '.join(sorted(targets)) or '(nothing)'}")
+    problems = violations()
+    print("\nviolations:", *(problems or ["none"]), sep="\n  ")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,96 @@
+"""The import layers hold: the estimation core runs without the simulator, and the import graph
+points one way (:mod:`stsf_gym.layers`)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from stsf_gym import layers
+
+ROOT = Path(__file__).resolve().parent.parent
+
+CORE_IMPORT = """
+import importlib, json, pkgutil, sys
+import numpy as np
+import stsf_gym.estimators, stsf_gym.fusion, stsf_gym.vision
+for package in (stsf_gym.estimators, stsf_gym.fusion, stsf_gym.vision):
+    for module in pkgutil.walk_packages(package.__path__, package.__name__ + "."):
+        importlib.import_module(module.name)
+from stsf_gym.estimators import ESTIMATORS, make_estimator
+for name in ESTIMATORS:
+    make_estimator(name)
+print(json.dumps(sorted(sys.modules)))
+"""
+
+
+def test_the_estimators_load_without_the_simulator():
+    done = subprocess.run(
+        [sys.executable, "-c", CORE_IMPORT], capture_output=True, text=True, cwd=ROOT, check=True
+    )
+    modules = json.loads(done.stdout)
+    assert "stsf_gym.estimators.landmark_fusion" in modules  # the walk imported everything
+    loaded = [m for m in modules if m.split(".")[0] in ("envs", "pybullet", "pybullet_utils")]
+    assert not loaded, f"the estimation core loaded the simulator: {loaded}"
+
+
+def test_the_import_graph_points_one_way():
+    assert layers.violations() == []
+    graph = layers.layer_graph(layers.module_imports())
+    assert "stsf_gym.experiments" not in graph["agents"]
+    for core in ("stsf_gym.estimators", "stsf_gym.fusion", "stsf_gym.vision"):
+        assert not graph[core] & {"envs", "pybullet", "agents", "stsf_gym.wrappers"}, core
+    assert graph["envs"] - {"pybullet", "pybullet_utils"} <= {
+        "stsf_gym.geometry",
+        "stsf_gym.vision.landmarks",
+        "stsf_gym.validation",
+        "stsf_gym.yaml_layers",
+        "stsf_gym.camera_model",
+    }
+    assert "envs" not in graph["stsf_gym.wrappers"]  # the episode env builder joins the two
+
+
+def _tree(tmp_path: Path, files: dict[str, str]) -> Path:
+    for name in ("stsf_gym/__init__.py", "envs/__init__.py", "agents/__init__.py", *files):
+        path = tmp_path / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(files.get(name, ""))
+    return tmp_path
+
+
+def test_violations_are_found(tmp_path):
+    root = _tree(
+        tmp_path,
+        {
+            "stsf_gym/estimators/__init__.py": "def f():\n    import pybullet\n",
+            "stsf_gym/estimators/model.py": "from envs.robot import Robot\n",
+            "envs/robot.py": "from stsf_gym.estimators import model\nRobot = 1\n",
+            "agents/train.py": "from stsf_gym.experiments.runs import _private\n",
+            "stsf_gym/experiments/__init__.py": "",
+            "stsf_gym/experiments/runs.py": (
+                "from typing import TYPE_CHECKING\n"
+                "if TYPE_CHECKING:\n    from stsf_gym.cli import main\n_private = 1\n"
+            ),
+            "stsf_gym/newlayer.py": "",
+        },
+    )
+    found = "\n".join(layers.violations(root))
+    assert "stsf_gym.estimators imports pybullet" in found
+    assert "stsf_gym.estimators.model imports envs.robot" in found
+    assert "envs.robot imports stsf_gym.estimators.model" in found
+    assert "agents.train imports stsf_gym.experiments.runs (agents ->" in found
+    assert "private name stsf_gym.experiments.runs._private" in found
+    assert "import cycle: envs.robot -> stsf_gym.estimators.model -> envs.robot" in found
+    assert "stsf_gym.newlayer: layer stsf_gym.newlayer has no rule" in found  # every layer has
+    assert "stsf_gym.cli" not in found  # imports for type checking only do not count
+
+
+def test_layers_command_prints_the_graph():
+    done = subprocess.run(
+        [sys.executable, "-m", "stsf_gym.layers"], capture_output=True, text=True, cwd=ROOT
+    )
+    assert done.returncode == 0, done.stdout
+    assert "stsf_gym.wrappers         -> stsf_gym.estimators\n" in done.stdout
+    assert done.stdout.rstrip().endswith("violations:\n  none")
