@@ -353,7 +353,7 @@ class CorridorEnv(gym.Env):
             cfg.robot.body_radius,
             self.sonar.axes,
             math.radians(cfg.sonar.beam_width_deg) / 2,
-            self.camera.hfov,
+            2 * math.atan(cfg.camera.width / (2 * self.camera.focal_px)),  # horizontal FOV
             cfg.render.width,
             cfg.render.height,
         )
