@@ -7,8 +7,9 @@ then any violation, and exits with status 1 when there is one. The rules (:data:
     stsf_gym.cli, stsf_gym.experiments -> agents -> stsf_gym.wrappers -> stsf_gym.estimators
         -> stsf_gym.fusion / vision / geometry;   envs -> stsf_gym.vision.landmarks / geometry
 
-plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``,
-``camera_model``: the lens model the simulator renders with and the estimators undistort with). Also
+plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``, ``video``,
+``terminal_table``, ``camera_model``: the lens model the simulator renders with and the
+estimators undistort with). Also
 checked: no module imports another's private (``_name``) name, and no import cycle between
 modules.
 """
@@ -28,6 +29,8 @@ LEAVES = (
     "stsf_gym.yaml_layers",
     "stsf_gym.io",
     "stsf_gym.camera_model",
+    "stsf_gym.video",
+    "stsf_gym.terminal_table",
 )
 CORE = (*LEAVES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
 ESTIMATION = (*CORE, "stsf_gym.estimators")
@@ -54,6 +57,8 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
     "stsf_gym.camera_model": (),
+    "stsf_gym.video": (),
+    "stsf_gym.terminal_table": (),
     "stsf_gym.layers": (),
 }
 
