@@ -244,7 +244,7 @@ class RewardConfig:
 
 @dataclass(frozen=True)
 class RenderConfig:
-    view: Literal["chase", "top"]
+    view: Literal["map", "chase", "top"]
     width: Pixels
     height: Pixels
 

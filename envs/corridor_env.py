@@ -12,6 +12,8 @@ from gymnasium import spaces
 
 from envs.config import EnvConfig, WorldConfig, load_config
 from envs.faults import FaultInjector
+from envs.render_view import MapView, detections_frame
+from envs.render_window import HumanWindow, display_available
 from envs.robot import DiffDriveRobot
 from envs.sensors.camera import PinholeCamera, believed_calibration, look_at, view_matrix
 from envs.sensors.encoders import WheelEncoders
@@ -21,11 +23,13 @@ from envs.sensors.sonar import SonarRing
 from envs.simulator import Simulator
 from envs.task import PathTask
 from envs.world import CorridorWorld, Landmark
+from envs.world_checks import check_start_pose
 from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.geometry import OdometryCalibration
 
 MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
 RENDER_VFOV_DEG = 60.0
+CHASE_DISTANCE, CHASE_MIN_DISTANCE, CHASE_WALL_GAP, CHASE_HEIGHT = 1.8, 0.3, 0.15, 1.6  # m
 EGL_WARMUP_FRAMES = 2
 SETTLE_STEPS = 30
 
@@ -90,13 +94,17 @@ class CorridorEnv(gym.Env):
     ## Arguments
     - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
     - ``config``: YAML path or mapping merged over ``configs/default.yaml``.
-    - ``render_mode``: ``None`` or ``"rgb_array"`` (chase or top view, ``render.view``).
+    - ``render_mode``: ``None``, ``"rgb_array"`` or ``"human"`` (a window; needs a display).
+      ``render.view`` picks the picture: ``map`` (default; :mod:`envs.render_view`: a top-down
+      map with the true pose, the estimates a wrapper hands to :attr:`view`, sensors and an
+      inset of the camera frame), ``chase`` (a rendered camera behind the robot) or ``top``
+      (a rendered view of the whole world from above).
     - ``**overrides``: single values, e.g. ``camera__width=640`` or ``camera={"rate_hz": 10}``.
 
     ``reset(seed=..., options={"start_pose": [x, y, yaw]})`` places the robot elsewhere.
     """
 
-    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    metadata: ClassVar[dict] = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
 
     def __init__(
         self,
@@ -106,15 +114,20 @@ class CorridorEnv(gym.Env):
         **overrides: Any,
     ) -> None:
         if render_mode not in (None, *self.metadata["render_modes"]):
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+            raise ValueError(
+                f"render_mode must be None, 'rgb_array' or 'human', got {render_mode!r}"
+            )
         self.config: EnvConfig = load_config(config, world=world, **overrides)
         cfg = self.config
         self.render_mode = render_mode
         self.dt = cfg.sim.control_dt
-        self.metadata = {**self.metadata, "render_fps": 1.0 / self.dt}
+        # "human" only where a window can open (the env checkers try every declared mode)
+        modes = self.metadata["render_modes"] if display_available() else ["rgb_array"]
+        self.metadata = {**self.metadata, "render_modes": modes, "render_fps": 1.0 / self.dt}
         self._substeps = round(cfg.sim.control_dt * cfg.sim.physics_hz)  # whole (config)
         self._rendered_camera = cfg.camera.enabled and cfg.camera.mode == "rendered"
-        renders = self._rendered_camera or render_mode is not None
+        renders = self._rendered_camera or (render_mode is not None and cfg.render.view != "map")
+        self._window = HumanWindow("stsf-gym", 1.0 / self.dt) if render_mode == "human" else None
         self.sim = Simulator(cfg.sim.physics_hz, cfg.camera.renderer if renders else "none")
         try:
             self.world = CorridorWorld(self.sim, cfg.world)
@@ -145,6 +158,9 @@ class CorridorEnv(gym.Env):
                 self.camera_sensor.radiance(self.robot.camera_pose())
         self._frame_pan_tilt = np.zeros(2, np.float32)
         self._frame_pose = np.eye(4)
+        self._last_obs: dict = {}
+        #: The top-down map (``render_mode`` set): wrappers hand it their estimates.
+        self.view = None if render_mode is None else self._map_view()
 
     def _build_world(self, world: WorldConfig) -> None:
         """Make ``world`` the env's world: its bodies (rebuilt with the robot's from an empty
@@ -198,7 +214,8 @@ class CorridorEnv(gym.Env):
 
     @property
     def renderer(self) -> str:
-        """``"gl"``, ``"egl"``, ``"tiny"``, or ``"none"`` (camera off, no render mode)."""
+        """``"gl"``, ``"egl"``, ``"tiny"``, or ``"none"`` (nothing rendered in 3-D: camera off
+        or fast, and no render mode or the map view)."""
         return self.sim.renderer
 
     @property
@@ -247,9 +264,9 @@ class CorridorEnv(gym.Env):
         start = options.pop("start_pose", self.config.world.start)
         if options:
             raise ValueError(f"unknown reset option(s) {sorted(options)}; known: ['start_pose']")
-        start = np.asarray(start, dtype=float)
-        if start.shape != (3,) or not np.all(np.isfinite(start)):
-            raise ValueError(f"start_pose must be three finite numbers [x, y, yaw], got {start}")
+        start = check_start_pose(
+            self.config.world, start, self.config.robot.body_radius, "start_pose"
+        )
         self.sim.client.restoreState(self._initial_state)
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
         self.robot.reset(tuple(start), *self._mount_target)
@@ -267,6 +284,11 @@ class CorridorEnv(gym.Env):
         self._progress = self.task.progress(self._pose)
         self._next_frame = 0.0
         obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, self.np_random)
+        self._last_obs = obs
+        if self.view is not None:
+            self.view.clear()
+        if self._window is not None:
+            self.render()
         return obs, self._info(collision=False)
 
     def step(self, action):
@@ -304,6 +326,9 @@ class CorridorEnv(gym.Env):
         terminated = reached or collision
         truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9
         obs = self.faults.observe(self._observe(ticks), self._time, self.np_random)
+        self._last_obs = obs
+        if self._window is not None:
+            self.render()
         return obs, float(reward), terminated, truncated, self._info(collision)
 
     def _observe(self, ticks: np.ndarray) -> dict:
@@ -333,11 +358,52 @@ class CorridorEnv(gym.Env):
         }
 
     def render(self):
-        if self.render_mode != "rgb_array":
+        """The frame of ``render.view`` (RGB uint8); in ``human`` mode shown, ``None`` returned."""
+        if self.render_mode is None:
             return None
+        view = self.config.render.view
+        frame = self._map_frame() if view == "map" else self._rendered_view(view)
+        if self._window is None:
+            return frame
+        self._window.show(frame)
+        return None
+
+    def _map_view(self) -> MapView:
+        cfg = self.config
+        return MapView(
+            cfg.world,
+            self.world.landmarks,
+            cfg.robot.body_radius,
+            self.sonar.axes,
+            math.radians(cfg.sonar.beam_width_deg) / 2,
+            2 * math.atan(cfg.camera.width / (2 * self.camera.focal_px)),  # horizontal FOV
+            cfg.render.width,
+            cfg.render.height,
+        )
+
+    def _map_frame(self) -> np.ndarray:
+        obs, camera = self._last_obs, self.config.camera
+        inset = None
+        if camera.enabled and "image" in obs:
+            inset = obs["image"]
+        elif camera.enabled and "landmark_ids" in obs:
+            inset = detections_frame(
+                obs["landmark_ids"], obs["landmark_points"], camera.width, camera.height
+            )
+        in_view = self.landmarks_in_view() if camera.enabled else []
+        return self.view.draw(
+            self._pose,
+            self._frame_pose if camera.enabled else np.zeros((4, 4)),
+            obs.get("sonar"),
+            in_view,
+            inset,
+            f"t = {self._time:.1f} s",
+        )
+
+    def _rendered_view(self, view: str) -> np.ndarray:
         cfg = self.config.render
         x, y, yaw = self._pose
-        if cfg.view == "top":
+        if view == "top":
             centre = self.world.bounds.mean(axis=0)
             extent = np.ptp(self.world.bounds, axis=0) / 2
             half_fov = math.radians(RENDER_VFOV_DEG) / 2
@@ -345,12 +411,24 @@ class CorridorEnv(gym.Env):
             pose = look_at([*centre, height], [*centre, 0.0], np.array([0.0, 1.0, 0.0]))
         else:
             heading = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-            eye = np.array([x, y, 1.6]) - 1.8 * heading
+            eye = np.array([x, y, CHASE_HEIGHT]) - self._chase_distance() * heading
             pose = look_at(eye, np.array([x, y, 0.5]) + 1.0 * heading, np.array([0.0, 0.0, 1.0]))
         view_camera = PinholeCamera(cfg.width, cfg.height, RENDER_VFOV_DEG, 0.05, 100.0)
         return self.sim.render_bodies(
             cfg.width, cfg.height, view_matrix(pose), view_camera.projection_matrix()
         )
 
+    def _chase_distance(self) -> float:
+        """How far behind the robot the chase camera sits: ``CHASE_DISTANCE``, or closer when
+        a wall is nearer, so it always films from inside the corridor."""
+        x, y, yaw = self._pose
+        back = np.array([x - CHASE_DISTANCE * math.cos(yaw), y - CHASE_DISTANCE * math.sin(yaw)])
+        hit = self.sim.client.rayTest([x, y, CHASE_HEIGHT], [*back, CHASE_HEIGHT])[0]
+        if hit[0] < 0:
+            return CHASE_DISTANCE
+        return max(CHASE_MIN_DISTANCE, hit[2] * CHASE_DISTANCE - CHASE_WALL_GAP)
+
     def close(self) -> None:
+        if self._window is not None:
+            self._window.close()
         self.sim.close()

@@ -1,8 +1,8 @@
 """The PyBullet simulator: one ``BulletClient`` per env, the scene, its renderer, and assets.
 
 Every env owns one :class:`Simulator` and never touches the global ``pybullet`` state, so
-many envs live in one process and in vector-env workers. PyBullet's C code prints banners on
-stdout; the CLI moves them to stderr when it prints JSON.
+many envs live in one process and in vector-env workers. PyBullet's C banners are captured
+(:mod:`envs.quiet`) unless ``STSF_GYM_VERBOSE`` is set.
 """
 
 from __future__ import annotations
@@ -12,15 +12,19 @@ import importlib.util
 import math
 import os
 import warnings
+from contextlib import nullcontext
 from pathlib import Path
 
 import cv2
 import numpy as np
-import pybullet
-from pybullet_utils.bullet_client import BulletClient
 
 from envs.gl_renderer import GLRenderer, gl_inherited
+from envs.quiet import quiet_c_output
 from envs.scene import Board, Box, Scene, Shape
+
+with quiet_c_output():  # PyBullet's banners: envs/quiet.py
+    import pybullet
+    from pybullet_utils.bullet_client import BulletClient
 
 # A unit square in the x-y plane facing +z, texture coordinates spanning the whole image.
 QUAD_OBJ = """v -0.5 -0.5 0
@@ -36,6 +40,7 @@ f 1/1/1 2/2/1 3/3/1
 f 1/1/1 3/3/1 4/4/1
 """
 HIDDEN_DEPTH = -50.0  # m: where a body taken out of the world waits, below the floor
+BANNER_FRAMES = 2  # the EGL plugin prints a line on each of a client's first two frames
 
 
 def cache_file(name: str, content: bytes) -> Path:
@@ -87,7 +92,8 @@ class Simulator:
     def __init__(self, physics_hz: float, renderer: str = "auto") -> None:
         if renderer not in RENDERERS:
             raise ValueError(f"camera.renderer must be one of {RENDERERS[:-1]}, got {renderer!r}")
-        self.client = BulletClient(connection_mode=pybullet.DIRECT)
+        with quiet_c_output():
+            self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.client.setTimeStep(1.0 / physics_hz)
         self.client.setGravity(0, 0, -9.81)
         self.time_step = 1.0 / physics_hz
@@ -95,6 +101,7 @@ class Simulator:
         self._hidden_from: dict[int, tuple] = {}  # hidden body -> its pose in the world
         self._gl: GLRenderer | None = None
         self._closed = False
+        self._frames = 0  # rendered so far: the first ones print EGL banners
         self.renderer = self._choose_renderer(renderer)
 
     def _choose_renderer(self, renderer: str) -> str:
@@ -128,7 +135,9 @@ class Simulator:
         spec = importlib.util.find_spec("eglRenderer")
         if spec is None or not spec.origin:
             raise RuntimeError("PyBullet's eglRenderer plugin is not installed")
-        if self.client.loadPlugin(spec.origin, "_eglRendererPlugin") < 0:
+        with quiet_c_output():
+            plugin = self.client.loadPlugin(spec.origin, "_eglRendererPlugin")
+        if plugin < 0:
             raise RuntimeError("PyBullet's EGL plugin did not load")
         _egl_loaded_pid = os.getpid()
 
@@ -232,15 +241,17 @@ class Simulator:
             if self.renderer == "egl"
             else pybullet.ER_TINY_RENDERER
         )
-        _, _, rgba, _, _ = self.client.getCameraImage(
-            width,
-            height,
-            viewMatrix=view.T.ravel().tolist(),
-            projectionMatrix=projection.T.ravel().tolist(),
-            renderer=flag,
-            shadow=0,
-            flags=pybullet.ER_NO_SEGMENTATION_MASK,
-        )
+        with quiet_c_output() if self._frames < BANNER_FRAMES else nullcontext():
+            _, _, rgba, _, _ = self.client.getCameraImage(
+                width,
+                height,
+                viewMatrix=view.T.ravel().tolist(),
+                projectionMatrix=projection.T.ravel().tolist(),
+                renderer=flag,
+                shadow=0,
+                flags=pybullet.ER_NO_SEGMENTATION_MASK,
+            )
+        self._frames += 1
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
 
     def close(self) -> None:
@@ -249,7 +260,8 @@ class Simulator:
             self._closed = True
             if self._gl is not None:
                 self._gl.release()
-            self.client.disconnect()
+            with quiet_c_output():
+                self.client.disconnect()
 
 
 def quaternion(rotation: np.ndarray) -> list[float]:

@@ -1,5 +1,7 @@
 """Geometry checks of a world config: landmarks on walls, start and path clear of walls.
 
+:func:`check_start_pose` also checks ``reset(options={"start_pose": ...})``.
+
 They raise :class:`~stsf_gym.validation.FieldError` naming the key relative to the config being
 checked (``landmarks[2].at`` in a world, ``world.start`` in the whole env config), so
 :func:`~stsf_gym.validation.build` reports the full key path.
@@ -12,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stsf_gym.validation import require
+from stsf_gym.validation import FieldError, require
 
 if TYPE_CHECKING:
     from envs.config import ObstacleSpec, WorldConfig
@@ -106,30 +108,49 @@ def check_clearance(world: WorldConfig, body_radius: float) -> None:
 
     Keys are relative to the env config (``world.start``, ``world.path[1]``).
     """
-    ends = np.array([p for wall in world.walls for p in (wall[:2], wall[2:])])
-    low, high = ends.min(axis=0), ends.max(axis=0)
-    points = {"world.start": world.start[:2]}
-    points.update({f"world.path[{i}]": p for i, p in enumerate(world.path)})
-    for key, point in points.items():
-        require(
-            bool(np.all((low <= point) & (point <= high))),
-            key,
-            f"must be inside the walls' bounds x in [{low[0]:g}, {high[0]:g}], "
-            f"y in [{low[1]:g}, {high[1]:g}], got {list(point)}",
-        )
-        gaps = [segment_distance(point, w) - world.wall_thickness / 2 for w in world.walls]
-        nearest = int(np.argmin(gaps))
-        require(
-            gaps[nearest] >= body_radius,
-            key,
-            f"must be at least robot.body_radius ({body_radius:g} m) from every wall; "
-            f"walls[{nearest}] is {gaps[nearest]:.3f} m away from {list(point)}",
-        )
+    check_start_pose(world, world.start, body_radius, "world.start")
+    for i, point in enumerate(world.path):
+        _check_clear_of_walls(world, point, body_radius, f"world.path[{i}]")
+
+
+def check_start_pose(world: WorldConfig, pose, body_radius: float, key: str) -> np.ndarray:
+    """``pose`` as three finite numbers ``[x, y, yaw]`` inside the walls' bounds and a robot
+    radius clear of walls and obstacles; a :class:`FieldError` naming ``key`` otherwise."""
+    try:
+        pose = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):
+        raise FieldError(key, f"must be three finite numbers [x, y, yaw], got {pose!r}") from None
+    require(
+        pose.shape == (3,) and bool(np.all(np.isfinite(pose))),
+        key,
+        f"must be three finite numbers [x, y, yaw], got {pose.tolist()}",
+    )
+    _check_clear_of_walls(world, pose[:2], body_radius, key)
     for i, obstacle in enumerate(world.obstacles):
-        gap = obstacle_distance(world.start[:2], obstacle)
+        gap = obstacle_distance(pose[:2], obstacle)
         require(
             gap >= body_radius,
-            "world.start",
+            key,
             f"must be at least robot.body_radius ({body_radius:g} m) from every obstacle; "
-            f"obstacles[{i}] is {gap:.3f} m away from {list(world.start[:2])}",
+            f"obstacles[{i}] is {gap:.3f} m away from {pose[:2].tolist()}",
         )
+    return pose
+
+
+def _check_clear_of_walls(world: WorldConfig, point, body_radius: float, key: str) -> None:
+    ends = np.array([p for wall in world.walls for p in (wall[:2], wall[2:])])
+    low, high = ends.min(axis=0), ends.max(axis=0)
+    require(
+        bool(np.all((low <= point) & (point <= high))),
+        key,
+        f"must be inside the walls' bounds x in [{low[0]:g}, {high[0]:g}], "
+        f"y in [{low[1]:g}, {high[1]:g}], got {list(point)}",
+    )
+    gaps = [segment_distance(point, w) - world.wall_thickness / 2 for w in world.walls]
+    nearest = int(np.argmin(gaps))
+    require(
+        gaps[nearest] >= body_radius,
+        key,
+        f"must be at least robot.body_radius ({body_radius:g} m) from every wall; "
+        f"walls[{nearest}] is {gaps[nearest]:.3f} m away from {list(point)}",
+    )

@@ -1,5 +1,6 @@
 """The ``stsf-gym`` command line. Every command takes ``--seed``, ``--out``, ``--config``,
-``--set key=value`` and ``--json`` (a machine-readable result on stdout)."""
+``--set key=value``, ``--json`` (a machine-readable result on stdout) and ``--verbose``
+(PyBullet's C banners, quiet by default)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import os
 import sys
 from pathlib import Path
 
+from envs.quiet import VERBOSE_ENV
 from stsf_gym.config import ConfigError, parse_overrides
 
 
@@ -29,6 +31,9 @@ def _common(
         help="override one config value, e.g. camera.width=640",
     )
     parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    parser.add_argument(
+        "--verbose", action="store_true", help="show PyBullet's C banners (quiet by default)"
+    )
 
 
 def _demo(args: argparse.Namespace) -> dict:
@@ -41,21 +46,23 @@ def _demo(args: argparse.Namespace) -> dict:
         if args.seconds <= 0:
             raise ConfigError(f"--seconds must be positive, got {args.seconds}")
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
-    summary = run_demo(args.out, seed=args.seed, workers=args.workers, env=env)
+    if args.video_seconds is not None and args.video_seconds < 0:
+        raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")
+    summary = run_demo(args.out, args.seed, args.workers, env, args.video_seconds)
     if not args.json:
         from rich.console import Console
-        from rich.table import Table
 
-        table = Table(title=f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})")
-        cells = [rendered(row, COLUMNS) for row in summary["rows"]]
-        for column in cells[0]:
-            table.add_column(column)
-        for row in cells:
-            table.add_row(*row.values())
+        from stsf_gym.terminal_table import fit_table
+
         console = Console()
-        console.print(table)
+        title = f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})"
+        cells = [rendered(row, COLUMNS) for row in summary["rows"]]
+        rows = [list(row.values()) for row in cells]
+        console.print(fit_table(list(cells[0]), rows, console.width, title, "results.md"))
+        videos = [str(args.out / v) for v in summary.get("videos", {}).values()]
         console.print(
-            f"Wrote {args.out}/results.md, results.json and {', '.join(summary['figures'])}"
+            f"Wrote {args.out}/results.md, results.json, {', '.join(summary['figures'])}"
+            + (f" and {', '.join(videos)}" if videos else "")
         )
     return summary
 
@@ -71,8 +78,11 @@ def _print_markdown(args: argparse.Namespace, path: Path) -> None:
     if not args.json:
         from rich.console import Console
 
-        Console().print(path.read_text())
-        Console().print(f"Wrote {path.parent}/")
+        from stsf_gym.terminal_table import print_markdown
+
+        console = Console()
+        print_markdown(path.read_text(), console, path.name)
+        console.print(f"Wrote {path.parent}/")
 
 
 def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
@@ -298,6 +308,11 @@ def build_parser() -> argparse.ArgumentParser:
     _common(demo, "out/demo")
     demo.add_argument("--seconds", type=float, help="simulated time limit per episode")
     demo.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
+    demo.add_argument(
+        "--video-seconds",
+        type=float,
+        help="simulated seconds of each estimator's episode in its video (40; 0: no videos)",
+    )
     demo.set_defaults(run=_demo)
     reproduce = commands.add_parser("reproduce", help="the paper's experiments")
     reproduce.add_argument("experiment", choices=["table1", "fig10", "fig11"])
@@ -443,7 +458,10 @@ def main(argv: list[str] | None = None) -> int:
         if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
             folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
             _check_writable(folder.absolute())
-        _silence_c_stdout()
+        if args.verbose:
+            os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
+        else:
+            _silence_c_stdout()
         result = args.run(args)
     except (ConfigError, ValueError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
         print(f"{error} {err}", file=sys.stderr)

@@ -8,10 +8,11 @@ then any violation, and exits with status 1 when there is one. The rules (:data:
         -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
     envs -> stsf_gym.vision.landmarks / geometry
 
-plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``,
-``camera_model``: the lens model the simulator renders with and the estimators undistort
-with). Also checked: no module imports another's private (``_name``) name, and no import
-cycle between modules.
+plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``, ``video``,
+``terminal_table``, ``camera_model``: the lens model the simulator renders with and the
+estimators undistort with). Also
+checked: no module imports another's private (``_name``) name, and no import cycle between
+modules.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ LEAVES = (
     "stsf_gym.yaml_layers",
     "stsf_gym.io",
     "stsf_gym.camera_model",
+    "stsf_gym.video",
+    "stsf_gym.terminal_table",
 )
 #: Pure measurement code (numpy/scipy): metrics, the results schema, TUM trajectories.
 MEASURES = ("stsf_gym.metrics", "stsf_gym.results", "stsf_gym.tum")
@@ -60,6 +63,8 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
     "stsf_gym.camera_model": (),
+    "stsf_gym.video": (),
+    "stsf_gym.terminal_table": (),
     "stsf_gym.layers": (),
 }
 

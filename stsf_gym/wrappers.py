@@ -86,7 +86,7 @@ class TruePose(PoseEstimator):
         return self.mean, self.cov
 
 
-class PoseEstimateWrapper(gym.Wrapper):
+class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """Runs a pose estimator on every observation and adds
 
     - ``obs["pose"]``: ``Box((3,), float32)``, the estimate ``[x, y, yaw]`` (world frame);
@@ -110,10 +110,16 @@ class PoseEstimateWrapper(gym.Wrapper):
             ``"truth"`` (privileged).
         start_std: standard deviations of the start pose (m, m, rad).
         **options: estimator options, over ``configs/estimators/<name>.yaml``.
+
+    Its constructor arguments are recorded (``RecordConstructorArgs``), so ``env.spec``
+    re-creates a hand-built stack: ``gym.make(env.spec)``.
     """
 
     def __init__(self, env: gym.Env, estimator: str = "odometry", start_std=START_STD, **options):
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(
+            self, estimator=estimator, start_std=tuple(start_std), **options
+        )
+        gym.Wrapper.__init__(self, env)
         if estimator == TRUTH and options:
             raise ValueError(f"the truth pose source takes no options, got {sorted(options)}")
         self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
@@ -162,6 +168,10 @@ class PoseEstimateWrapper(gym.Wrapper):
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 
     def _with_pose(self, obs: dict, mean: np.ndarray, cov: np.ndarray) -> dict:
+        view = self.env.unwrapped.view  # the env's map (render_mode set) draws the estimate
+        if view is not None:
+            target = None if self.pointer is None else self.pointer.target
+            view.show_estimate(self.estimator.name, mean, cov, target)
         pose = np.array([mean[0], mean[1], np.arctan2(np.sin(mean[2]), np.cos(mean[2]))])
         low, high = self.observation_space["pose"].low, self.observation_space["pose"].high
         return {

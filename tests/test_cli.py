@@ -31,6 +31,9 @@ def test_demo_json_and_files(tmp_path):
     assert (out / "trajectories.png").stat().st_size > 10_000
     assert json.loads((out / "results.json").read_text())["rows"][0]["episodes"] == 1
     assert "| estimator |" in (out / "results.md").read_text()
+    assert sorted(summary["videos"]) == ["conventional", "ekf", "odometry", "stsf"]
+    for video in summary["videos"].values():
+        assert (out / video).stat().st_size > 5_000
 
 
 @pytest.mark.parametrize(

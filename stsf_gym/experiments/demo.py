@@ -1,17 +1,20 @@
 """``stsf-gym demo``: the main job. The path follower drives the IRL corridor once with each
 estimator (odometry, conventional fusion, STSF, EKF) on its own pose estimate, without sonar
-avoidance as in the paper's Fig. 11; a short table and the trajectories over the map, in about
-a minute on two cores.
+avoidance as in the paper's Fig. 11; a short table, the trajectories over the map and a video
+of the start of each episode (``videos/<estimator>.mp4``), in about a minute on two cores.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from stsf_gym.experiments.evaluate import evaluate
+from stsf_gym.experiments.episode_video import record_videos
+from stsf_gym.experiments.episodes import EpisodeSpec
+from stsf_gym.experiments.evaluate import estimator_options, evaluate
 from stsf_gym.experiments.figures import PATH_ONLY
 
 DEMO_ESTIMATORS = ["odometry", "conventional", "stsf", "ekf"]
+VIDEO_SECONDS = 40.0  # simulated seconds recorded per estimator
 #: The columns of the terminal table (a rendering of ``results.json``'s rows).
 COLUMNS = [
     "estimator",
@@ -26,9 +29,17 @@ COLUMNS = [
 ]
 
 
-def run_demo(out: str | Path, seed: int = 0, workers: int = 2, env: dict | None = None) -> dict:
+def run_demo(
+    out: str | Path,
+    seed: int = 0,
+    workers: int = 2,
+    env: dict | None = None,
+    video_seconds: float | None = None,
+) -> dict:
     """One episode per estimator on the IRL corridor; results.md/json, trajectories.png,
-    errors.png, nees.png."""
+    errors.png, nees.png and, unless ``video_seconds`` is 0, a video of each episode's first
+    ``video_seconds`` (default :data:`VIDEO_SECONDS`) in ``videos/``."""
+    video_seconds = VIDEO_SECONDS if video_seconds is None else video_seconds
     summary, _ = evaluate(
         out,
         DEMO_ESTIMATORS,
@@ -39,4 +50,13 @@ def run_demo(out: str | Path, seed: int = 0, workers: int = 2, env: dict | None 
         env=env,
         agent_options=PATH_ONLY,
     )
+    if video_seconds > 0:
+        specs = [
+            EpisodeSpec(
+                "irl_corridor", e, seed, "follower", env or {}, estimator_options(e), PATH_ONLY
+            )
+            for e in DEMO_ESTIMATORS
+        ]
+        videos = record_videos(specs, Path(out) / "videos", video_seconds, workers)
+        summary["videos"] = {e: f"videos/{name}" for e, name in videos.items()}
     return summary

@@ -1,0 +1,80 @@
+"""Tables for the terminal: as many columns as the console is wide (80 when it is not a
+terminal), never a number broken across lines; the other columns are in the files.
+
+:func:`print_markdown` prints a Markdown report (``results.md``) with each of its tables
+fitted that way; :func:`fit_table` fits rows of values.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from rich import box
+from rich.cells import cell_len
+from rich.console import Console
+from rich.table import Table
+
+
+def _cell(value) -> str:
+    return f"{value:.3f}" if isinstance(value, float) else str(value)
+
+
+def fit_table(
+    header: Sequence[str],
+    rows: Sequence[Sequence],
+    width: int,
+    title: str | None = None,
+    rest_in: str | None = None,
+) -> Table:
+    """A rich table of ``rows`` with the leading columns that fit in ``width`` characters.
+
+    The first column always stays; headers may wrap onto several lines, cells never do. When
+    columns are left out, the caption names them and ``rest_in`` (where they are).
+    """
+    cells = [[_cell(v) for v in row] for row in rows]
+    widths = [
+        max([cell_len(row[i]) for row in cells] + [cell_len(w) for w in name.split()] + [1])
+        for i, name in enumerate(header)
+    ]
+    keep = len(header)
+    # the columns and, between two, a space of padding on each side of a blank separator
+    while keep > 1 and sum(widths[:keep]) + 3 * (keep - 1) > width:
+        keep -= 1
+    table = Table(
+        title=title, box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, title_justify="left"
+    )
+    for name, column_width in zip(header[:keep], widths, strict=False):
+        table.add_column(name, width=column_width, overflow="fold")
+    for row in cells:
+        table.add_row(*row[:keep])
+    left_out = header[keep:]
+    if left_out:
+        where = f" (in {rest_in})" if rest_in else ""
+        table.caption = f"{len(left_out)} more column(s){where}: {', '.join(left_out)}"
+        table.caption_justify = "left"
+    return table
+
+
+def _markdown_table(lines: list[str]) -> tuple[list[str], list[list[str]]]:
+    split = [[c.strip() for c in line.strip().strip("|").split("|")] for line in lines]
+    body = [r for r in split[1:] if not all(set(c) <= set("-: ") for c in r)]
+    return split[0], body
+
+
+def print_markdown(text: str, console: Console, rest_in: str | None = None) -> None:
+    """Print a Markdown report: prose as it is, each table fitted to the console's width."""
+    block: list[str] = []
+
+    def flush_table() -> None:
+        if block:
+            header, rows = _markdown_table(block)
+            console.print(fit_table(header, rows, console.width, rest_in=rest_in))
+            block.clear()
+
+    for line in text.splitlines():
+        if line.lstrip().startswith("|"):
+            block.append(line)
+            continue
+        flush_table()
+        console.print(line, markup=False, highlight=False)
+    flush_table()
