@@ -331,7 +331,8 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument(
         "--estimators",
         default="odometry,conventional,stsf,ekf",
-        help="comma-separated estimator names",
+        help="comma-separated pose sources: odometry, conventional (the paper's: current pair "
+        "only), conventional-filter, stsf, ekf, truth, degraded-truth",
     )
     evaluate.add_argument(
         "--world", default="irl_corridor", help="world name, YAML path, or generated"

@@ -37,6 +37,7 @@ from stsf_gym.vision.landmarks import (
     LandmarkPattern,
     board_corners,
     cell_centre,
+    landmark_image,
     lit_cells,
     square_centres,
 )
@@ -76,6 +77,7 @@ class PredictedMatcher:
         self.min_correlation, self.min_board_px = float(min_correlation), float(min_board_px)
         self.min_contrast = float(min_contrast)
         self.plane_corners = board_corners(pattern)
+        self._textures: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         g = pattern.grid
         self._cells = np.array([cell_centre(r, c, pattern) for r in range(g) for c in range(g)])
         ring = pattern.size / 2 - pattern.border / 2  # the black border's middle line
@@ -144,29 +146,29 @@ class PredictedMatcher:
     ) -> tuple[np.ndarray, np.ndarray]:
         """The board (white squares 1, black 0), area-sampled into a ``shape`` image through
         the homography, and the uint8 mask of the pixels wholly on the board."""
-        h, w = shape
-        s = (np.arange(SUPERSAMPLE) + 0.5) / SUPERSAMPLE - 0.5
-        ys, xs = np.meshgrid(
-            (np.arange(h)[:, None] + s).ravel(), (np.arange(w)[:, None] + s).ravel(), indexing="ij"
+        texture, texture_to_plane = self._texture(landmark_id)
+        to_super = np.array(
+            [[SUPERSAMPLE, 0, (SUPERSAMPLE - 1) / 2], [0, SUPERSAMPLE, (SUPERSAMPLE - 1) / 2]]
         )
-        plane = apply_homography(np.linalg.inv(plane_to_pixels), np.stack([xs, ys], axis=-1))
-        p = self.pattern
-        half = p.size / 2
-        on_board = (np.abs(plane) <= half).all(axis=-1)
-        g = p.grid
-        col = np.rint(plane[..., 0] / p.pitch + (g - 1) / 2).astype(int)
-        row = np.rint((g - 1) / 2 - plane[..., 1] / p.pitch).astype(int)
-        lit = np.zeros((g, g), bool)
-        for r, c in lit_cells(landmark_id, p):
-            lit[r, c] = True
-        valid = (col >= 0) & (col < g) & (row >= 0) & (row < g)
-        centre = np.stack([(col - (g - 1) / 2) * p.pitch, ((g - 1) / 2 - row) * p.pitch], axis=-1)
-        in_square = (np.abs(plane - centre) <= p.square_size / 2).all(axis=-1)
-        white = valid & in_square & lit[np.clip(row, 0, g - 1), np.clip(col, 0, g - 1)]
-        area = (h, SUPERSAMPLE, w, SUPERSAMPLE)
-        template = (white & on_board).reshape(area).mean(axis=(1, 3)).astype(np.float32)
-        mask = (on_board.reshape(area).mean(axis=(1, 3)) >= 0.999).astype(np.uint8)
-        return template, mask
+        warp = np.vstack([to_super, [0, 0, 1]]) @ plane_to_pixels @ texture_to_plane
+        size = (shape[1] * SUPERSAMPLE, shape[0] * SUPERSAMPLE)
+        fine = cv2.warpPerspective(texture, warp, size, flags=cv2.INTER_LINEAR)
+        board = cv2.warpPerspective(np.ones_like(texture), warp, size, flags=cv2.INTER_NEAREST)
+        small = (shape[1], shape[0])
+        template = cv2.resize(fine, small, interpolation=cv2.INTER_AREA)
+        mask = cv2.resize(board, small, interpolation=cv2.INTER_AREA) >= 0.999
+        return template, mask.astype(np.uint8)
+
+    def _texture(self, landmark_id: int) -> tuple[np.ndarray, np.ndarray]:
+        """The board's image (float32, 0..1) and the map from its pixels to the plane (m)."""
+        if landmark_id not in self._textures:
+            image = landmark_image(landmark_id, self.pattern).astype(np.float32) / 255
+            scale, half = image.shape[0] / self.pattern.size, self.pattern.size / 2
+            to_plane = np.array(
+                [[1 / scale, 0, 0.5 / scale - half], [0, -1 / scale, half - 0.5 / scale], [0, 0, 1]]
+            )
+            self._textures[landmark_id] = image, to_plane
+        return self._textures[landmark_id]
 
     def _reads_id(self, grey: np.ndarray, homography: np.ndarray, landmark_id: int) -> bool:
         """Whether the board under ``homography`` reads ``landmark_id``: every cell lit for
