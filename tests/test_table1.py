@@ -33,7 +33,10 @@ def camera_at(distance: float, approach_deg: float = 40.0) -> np.ndarray:
     return np.array([distance, lateral, 0.9])
 
 
-def synthetic_places(distances=DISTANCES, heading=math.radians(180 - 40)) -> list[Place]:
+HEADING = math.radians(180 - 40)  # along the line of places, towards the board's wall
+
+
+def synthetic_places(distances=DISTANCES, heading=HEADING) -> list[Place]:
     """Noise-free places: the squares projected exactly, odometry exact (camera on the axle)."""
     places, previous = [], None
     for distance in distances:
@@ -83,7 +86,7 @@ def test_each_method_uses_the_places_of_the_protocol(place):
     (pairs k-1, k) and STSF from row ``place`` on (it fuses every place so far)."""
     clean = rows_of(synthetic_places())
     places = synthetic_places()
-    places[place].points = {i: p + (0.02, -0.01) for i, p in places[place].points.items()}
+    places[place].points = {i: p + np.array([0.02, -0.01]) for i, p in places[place].points.items()}
     moved = rows_of(places)
     rows = np.arange(1, len(DISTANCES))
     changed = {
@@ -98,7 +101,9 @@ def test_stsf_carries_earlier_places_by_odometry():
     """A wrong odometry leg between places 2 and 3 moves STSF from row 3 on (carried
     measurements) while the conventional rows ignore the distance driven along the normal."""
     places = synthetic_places()
-    places[3].motion = places[3].motion + np.array([0.05, 0.0, 0.0])  # odometry overshoots: nearer by 5 cm x cos 40°
+    places[3].motion = places[3].motion + np.array(
+        [0.05, 0.0, 0.0]
+    )  # odometry overshoots: nearer by 5 cm x cos 40°
     step, _ = range_step(places[2], places[3], NORMAL, 0.0)
     clean_step, _ = range_step(synthetic_places()[2], synthetic_places()[3], NORMAL, 0.0)
     assert clean_step - step == pytest.approx(0.05 * math.cos(math.radians(40)), rel=1e-6)

@@ -164,6 +164,11 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
             row[f"{name}_m"] = stat(estimates)
             row[f"{name}_error_m"] = stat(errors)  # signed: mean is the bias, std the spread
             row[f"{name}_rms_error_m"] = finite_or_none(rms([e for e in errors if e == e]))
+        if k:  # shared errors: the same wheel calibration turns every leg's heading
+            row["conventional_error_correlation"] = _correlation(
+                [r.conventional[k - 1] - r.truth[k - 1] for r in results],
+                [r.conventional[k] - r.truth[k] for r in results],
+            )
         row["bound_m"] = float(
             stereo_range_bound(distance, focal_length(cfg), baseline, cfg.sigma_px)
         )
@@ -177,6 +182,15 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
             }
         rows.append(row)
     return rows
+
+
+def _correlation(a: list[float], b: list[float]) -> float | None:
+    """Pearson correlation over the seeds where both are finite (None: too few)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    both = np.isfinite(a) & np.isfinite(b)
+    if both.sum() < 3 or np.std(a[both]) == 0 or np.std(b[both]) == 0:
+        return None
+    return float(np.corrcoef(a[both], b[both])[0, 1])
 
 
 def _markdown(rows: list[dict], cfg: Table1Config) -> str:
