@@ -163,7 +163,9 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
             errors = [e - r.truth[k] for e, r in zip(estimates, results, strict=True)]
             row[f"{name}_m"] = stat(estimates)
             row[f"{name}_error_m"] = stat(errors)  # signed: mean is the bias, std the spread
-            row[f"{name}_rms_error_m"] = finite_or_none(rms([e for e in errors if e == e]))
+            finite = [abs(e) for e in errors if math.isfinite(e)]
+            row[f"{name}_rms_error_m"] = finite_or_none(rms(finite))
+            row[f"{name}_median_error_m"] = float(np.median(finite)) if finite else None
         if k:  # shared errors: the same wheel calibration turns every leg's heading
             row["conventional_error_correlation"] = _correlation(
                 [r.conventional[k - 1] - r.truth[k - 1] for r in results],
@@ -184,6 +186,11 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
     return rows
 
 
+def _rms(value: dict) -> float:
+    """Root mean square of a stat's values (from its mean and population std)."""
+    return math.hypot(value["mean"], value["std"]) if value["mean"] is not None else math.nan
+
+
 def _correlation(a: list[float], b: list[float]) -> float | None:
     """Pearson correlation over the seeds where both are finite (None: too few)."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
@@ -197,14 +204,20 @@ def _markdown(rows: list[dict], cfg: Table1Config) -> str:
     head = (
         f"{cfg.seeds} seeds; places at {', '.join(f'{d:g}' for d in cfg.distances)} m from the "
         f"board (start {cfg.start_distance:g} m), {cfg.frames_per_place} frames per place. "
-        "Error: RMS over seeds, (spread: std of the signed errors); baseline: distance driven "
-        f"from the previous place; bound: sqrt(2) Z^2 sigma_px / (f b), sigma_px = {cfg.sigma_px}."
+        "Error: RMS over seeds (spread: std of the signed errors), median: of the absolute "
+        "errors; baseline: distance driven from the previous place; bound: sqrt(2) Z^2 "
+        f"sigma_px / (f b), sigma_px = {cfg.sigma_px}; odometry heading error: RMS over seeds "
+        "of odometry's turn between the places less the true turn."
         "\n\n"
     )
 
     def error(row: dict, name: str) -> str:
         value, spread = row[f"{name}_rms_error_m"], row[f"{name}_error_m"]["std"]
         return "-" if value is None else f"{value:.3f} ({spread:.3f})"
+
+    def median(row: dict, name: str) -> str:
+        value = row[f"{name}_median_error_m"]
+        return "-" if value is None else f"{value:.3f}"
 
     def mean(value: dict) -> str:
         return "-" if value["mean"] is None else f"{value['mean']:.2f}"
@@ -216,11 +229,14 @@ def _markdown(rows: list[dict], cfg: Table1Config) -> str:
             "baseline (m)": mean(row["baseline_m"]),
             "conventional (m)": mean(row["conventional_m"]),
             "error (m)": error(row, "conventional"),
+            "median": median(row, "conventional"),
             "paper conv. error (m)": row.get("paper_conventional_error_m", "-"),
             "STSF (m)": mean(row["stsf_m"]),
             "STSF error (m)": error(row, "stsf"),
+            "STSF median": median(row, "stsf"),
             "paper STSF error (m)": row.get("paper_stsf_error_m", "-"),
             "bound (m)": f"{row['bound_m']:.3f}",
+            "odometry heading error (mrad)": f"{1e3 * _rms(row['heading_error_rad']):.1f}",
         }
         for row in rows
     ]

@@ -11,8 +11,8 @@ from stsf_gym.io import save_figure
 
 
 def plot_table1(rows: list[dict], path: Path) -> Path:
-    """RMS error per row (bars: spread over seeds) of conventional fusion and STSF, the paper's
-    errors and the stereo bound, on a log scale."""
+    """Per row, conventional fusion's and STSF's RMS error (bars: spread over seeds; hollow:
+    median) beside the paper's errors and the stereo bound, on a log scale."""
     plt = pyplot()
     x = np.arange(len(rows))
     fig, ax = plt.subplots(figsize=(9, 4.5))
@@ -25,6 +25,11 @@ def plot_table1(rows: list[dict], path: Path) -> Path:
         )
         spread = np.array([r[f"{name}_error_m"]["std"] or 0.0 for r in rows])
         ax.errorbar(x + offset, rms, yerr=spread, fmt="o", color=color, capsize=3, label=label)
+        median = [
+            np.nan if r[f"{name}_median_error_m"] is None else r[f"{name}_median_error_m"]
+            for r in rows
+        ]
+        ax.plot(x + offset, median, "D", mfc="none", color=color, label=f"{label}, median")
     for name, label, color in (
         ("paper_conventional_error_m", "conventional (paper)", "tab:orange"),
         ("paper_stsf_error_m", "STSF (paper)", "tab:blue"),
