@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from envs.config import ConfigError
+from envs.config import ConfigError, load_config
 from stsf_gym.experiments.table1 import (
     PAPER_TABLE1,
     SeedResult,
@@ -164,6 +164,21 @@ def test_summary_rows_have_the_paper_the_bound_and_the_baselines():
     bound = math.sqrt(2) * 7.81**2 * 0.5 / (focal_length(cfg) * 1.1)
     assert rows[0]["bound_m"] == pytest.approx(bound)
     assert focal_length(cfg) == pytest.approx(240 / math.tan(math.radians(22.5)))  # 640x480, 45°
+
+
+def test_the_default_protocol_is_the_papers():
+    cfg = load_table1_config()
+    assert list(cfg.distances) == [row[0] for row in PAPER_TABLE1]
+    assert cfg.start_distance > cfg.distances[0]  # row 1's pair: the robot approaches
+    assert cfg.frames_per_place == 10 and cfg.sigma_px == 0.5 and cfg.seeds == 20
+    camera = load_config(cfg.env).camera
+    assert (camera.width, camera.height, camera.profile, camera.mode) == (
+        640,
+        480,
+        "paper",
+        "rendered",
+    )
+    assert camera.feature_rms_px == 0.5  # the profile gives the paper's feature noise
 
 
 def test_bad_experiment_keys_and_values_are_named():
