@@ -42,27 +42,26 @@ def register_envs() -> None:
     """Register every stsf-gym id that is not registered yet."""
     if GENERATED_ID not in registry:
         register(id=GENERATED_ID, entry_point="envs.generated_env:GeneratedCorridorEnv")
-    for suffix, estimator in ESTIMATOR_IDS.items():
-        estimating_id = GENERATED_ID.replace("-v0", f"-{suffix}-v0")
-        if estimating_id not in registry:
-            register(
-                id=estimating_id,
-                entry_point="stsf_gym.episode_env:make_episode_env",
-                kwargs={"world": "generated", "estimator": estimator},
-            )
+    _register_estimating(GENERATED_ID, "generated")
     for env_id, world in ENV_WORLDS.items():
         if env_id not in registry:
             register(
                 id=env_id, entry_point="envs.corridor_env:CorridorEnv", kwargs={"world": world}
             )
-        for suffix, estimator in ESTIMATOR_IDS.items():
-            estimating_id = env_id.replace("-v0", f"-{suffix}-v0")
-            if estimating_id not in registry:
-                register(
-                    id=estimating_id,
-                    entry_point="stsf_gym.episode_env:make_episode_env",
-                    kwargs={"world": world, "estimator": estimator},
-                )
+        _register_estimating(env_id, world)
+
+
+def _register_estimating(env_id: str, world: str) -> None:
+    """``<env_id minus -v0>-<Estimator>-v0`` for every estimator: the env of ``world`` with
+    the pose estimate wrapper."""
+    for suffix, estimator in ESTIMATOR_IDS.items():
+        estimating_id = env_id.replace("-v0", f"-{suffix}-v0")
+        if estimating_id not in registry:
+            register(
+                id=estimating_id,
+                entry_point="stsf_gym.episode_env:make_episode_env",
+                kwargs={"world": world, "estimator": estimator},
+            )
 
 
 register_envs()

@@ -301,6 +301,28 @@ def _bench(args: argparse.Namespace) -> dict:
     return summary
 
 
+def _backend_args(parser: argparse.ArgumentParser) -> None:
+    """Where cells run: ``--backend``, ``--address``, ``--workers``."""
+    parser.add_argument(
+        "--backend",
+        choices=["local", "ray"],
+        default="local",
+        help="where cells run: local processes or Ray tasks (local)",
+    )
+    parser.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
+    parser.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
+
+
+def _world_args(parser: argparse.ArgumentParser) -> None:
+    """``--world`` (a name, a YAML path or ``generated``) and ``--split``."""
+    parser.add_argument(
+        "--world", default="irl_corridor", help="world name, YAML path, or generated"
+    )
+    parser.add_argument(
+        "--split", help="with --world generated: the world-seed split, train or test"
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -334,12 +356,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="comma-separated pose sources: odometry, conventional (the paper's: current pair "
         "only), conventional-filter, stsf, ekf, truth, degraded-truth",
     )
-    evaluate.add_argument(
-        "--world", default="irl_corridor", help="world name, YAML path, or generated"
-    )
-    evaluate.add_argument(
-        "--split", help="with --world generated: the world-seed split, train or test"
-    )
+    _world_args(evaluate)
     evaluate.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")
     evaluate.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
     evaluate.add_argument(
@@ -356,24 +373,12 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
     train.add_argument("--timesteps", type=int, help="total env steps (hyper-parameter file)")
     train.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
-    train.add_argument(
-        "--world", default="irl_corridor", help="world name, YAML path, or generated"
-    )
-    train.add_argument(
-        "--split", help="with --world generated: the world-seed split, train or test"
-    )
+    _world_args(train)
     train.set_defaults(run=_train)
     sweep = commands.add_parser("sweep", help="a grid of evaluation or training cells")
     sweep.add_argument("file", type=Path, help="sweep YAML, e.g. configs/sweeps/noise.yaml")
     _common(sweep, "out/sweeps")
-    sweep.add_argument(
-        "--backend",
-        choices=["local", "ray"],
-        default="local",
-        help="where cells run: local processes or Ray tasks (local)",
-    )
-    sweep.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
-    sweep.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
+    _backend_args(sweep)
     sweep.set_defaults(run=_sweep)
     curve = commands.add_parser(
         "accuracy-curve", help="success against localization error: how good must it be?"
@@ -401,9 +406,7 @@ def build_parser() -> argparse.ArgumentParser:
         default="odometry,conventional,stsf,ekf",
         help="estimators placed as points on the curve (comma-separated; '' for none)",
     )
-    curve.add_argument("--backend", choices=["local", "ray"], default="local", help="(local)")
-    curve.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
-    curve.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
+    _backend_args(curve)
     curve.set_defaults(run=_accuracy_curve)
     world = commands.add_parser(
         "world", help="a generated world as world YAML (--seed N), or a grid of them (--grid)"

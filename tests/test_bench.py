@@ -27,7 +27,7 @@ def _summary(row: dict, **changes) -> dict:
     rows[1]["renderer"] = "gl"
     rows[2]["ms_per_frame"] = {"detect": 1.5, "ekf update": 0.1}
     return {
-        "machine": {"cpu": "test", "cores": 2, "python": "3"},
+        "machine": {"cpu": "test", "cores": 2, "python": "3", "reference_ms": 50.0},
         "speed": rows,
         "render": [{"renderer": "gl", "ms_320x240": 1.5, "ms_640x480": 4.5, "peak_rss_mb": 99}],
         "vector": {"steps_per_s_1_worker": 100.0, "steps_per_s_2_workers": 160.0, "speed_up": 1.6},
@@ -46,3 +46,4 @@ def test_targets_are_judged_against_their_bounds(fast_row):
     summary["targets"] = targets(summary)
     text = to_markdown(summary)
     assert "ratio 1.50" in text and "| 2 workers / 1 worker (rendered pipeline) |" in text
+    assert "Reference workload (fixed Python + numpy work, best of 3): 50.0 ms" in text

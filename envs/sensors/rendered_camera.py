@@ -72,8 +72,13 @@ class RenderedCamera:
             pose, linear, angular, self.cfg.sensor.exposure_s, self.camera.focal_px
         )
         size = self.lens.render_size
-        renders = [self.sim.render(*size, view_matrix(p), self.projection) for p in poses]
-        render = renders[0] if len(renders) == 1 else np.mean(renders, axis=0, dtype=np.float32)
+        render = self.sim.render(*size, view_matrix(poses[0]), self.projection)
+        if len(poses) > 1:  # the exposure's mean, summed in place
+            total = np.zeros(render.shape, np.float32)
+            cv2.accumulate(render, total)
+            for p in poses[1:]:
+                cv2.accumulate(self.sim.render(*size, view_matrix(p), self.projection), total)
+            render = np.multiply(total, 1 / len(poses), out=total)
         image = self.lens(render)
         if self.cfg.lens.defocus_px > 0:
             image = cv2.GaussianBlur(image, (0, 0), self.cfg.lens.defocus_px)

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import os
 import platform
+import time
 from pathlib import Path
 
+import numpy as np
 from tqdm import tqdm
 
 from stsf_gym.bench.speed import CASES, render_latency, run_case, vector_scaling
@@ -38,7 +40,30 @@ def machine() -> dict:
             if ln.startswith("model name")
         ]
         cpu = names[0] if names else cpu
-    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version()}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "reference_ms": reference_ms(),
+    }
+
+
+def reference_ms() -> float:
+    """Milliseconds of a fixed Python + numpy workload (best of 3): the machine's speed at the
+    time of the run, so figures from runs on a busy or throttled machine can be told apart."""
+
+    def work() -> None:
+        sum(i * i for i in range(300_000))
+        a = np.random.default_rng(0).standard_normal((200, 200))
+        for _ in range(20):
+            a = np.tanh(a @ a.T / 200)
+
+    best = float("inf")
+    for _ in range(3):
+        start = time.perf_counter()
+        work()
+        best = min(best, time.perf_counter() - start)
+    return 1000 * best
 
 
 def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, seed: int = 0):
@@ -136,7 +161,8 @@ def to_markdown(summary: dict) -> str:
     ]
     parts = [
         f"# stsf-gym bench\n\n{m['cpu']}, {m['cores']} cores, Python {m['python']}; "
-        "each speed case in its own process pinned to one core.\n",
+        "each speed case in its own process pinned to one core. Reference workload "
+        f"(fixed Python + numpy work, best of 3): {m['reference_ms']:.1f} ms.\n",
         "## Env speed (IRL corridor, follower driving)\n\n" + markdown_table(speed_rows),
         "## Renderers alone (one core)\n\n" + markdown_table(summary["render"]),
         "## Latency per camera frame (320x240)\n\n" + markdown_table(latency_rows),

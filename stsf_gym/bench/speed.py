@@ -54,13 +54,12 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
 
     import stsf_gym  # noqa: F401 - registers the ids
     from agents.follower import PathFollower
-    from stsf_gym.experiments.episodes import estimator_options
-    from stsf_gym.wrappers import PoseEstimateWrapper
+    from stsf_gym.wrappers import PoseEstimateWrapper  # the estimator's settings from configs/
 
     overrides, source = CASES[name]
     env = gym.make("stsf_gym/Corridor-v0", **overrides)
     if source != "truth":
-        env = PoseEstimateWrapper(env, source, **estimator_options(source))
+        env = PoseEstimateWrapper(env, source)
     frame_time = _time_frames(env.unwrapped)
     follower = PathFollower.for_env(env)
     steps = round(sim_seconds / env.unwrapped.dt)

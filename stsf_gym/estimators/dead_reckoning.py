@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import ClassVar
 
 import numpy as np
-from scipy.linalg import block_diag
 
 from stsf_gym.estimators.base import PoseEstimator, SensorModel
 from stsf_gym.estimators.odometry import odometry_step
@@ -30,11 +29,16 @@ class OdometryEstimator(PoseEstimator):
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        considered = block_diag(
-            model.odometry_noise.calibration_cov,
-            self.mount_std**2 * np.eye(2),
-            np.diag(np.square(model.camera_calibration_std)),
+        # block diagonal: wheel calibration, mount, camera calibration (numpy: the env
+        # process then loads no scipy.linalg, about 30 MB)
+        calibration = np.asarray(model.odometry_noise.calibration_cov, float)
+        considered = np.diag(
+            [0.0] * len(calibration)
+            + [self.mount_std**2] * 2
+            + list(np.square(model.camera_calibration_std))
         )
+        n = len(calibration)
+        considered[:n, :n] = calibration
         self.errors = PoseErrors(self.cov, considered)
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:

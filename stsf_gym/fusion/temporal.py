@@ -35,7 +35,6 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from scipy.special import gammaincinv
 
 from stsf_gym.fusion.covariance import DenseCovariance, TrackCovariance
@@ -125,10 +124,10 @@ def significance(
 def _gls_weights(sigma: Array, k: int, m: int) -> Array:
     """``W = (E^T sigma^-1 E)^-1 E^T sigma^-1`` as ``(k, m, m)`` blocks."""
     try:
-        factor = cho_factor(sigma)
-    except LinAlgError as err:
+        np.linalg.cholesky(sigma)  # the test of positive definiteness
+    except np.linalg.LinAlgError as err:
         raise ValueError("the joint covariance must be positive definite for GLS") from err
-    g = cho_solve(factor, np.tile(np.eye(m), (k, 1))).reshape(k, m, m)  # sigma^-1 E
+    g = np.linalg.solve(sigma, np.tile(np.eye(m), (k, 1))).reshape(k, m, m)  # sigma^-1 E
     information = g.sum(axis=0)  # E^T sigma^-1 E
     return np.linalg.solve(information, np.swapaxes(g, 1, 2))
 
