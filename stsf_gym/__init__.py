@@ -26,7 +26,8 @@ ENV_WORLDS: dict[str, str] = {
 #: :class:`stsf_gym.wrappers.PoseEstimateWrapper`, which points the camera).
 ESTIMATOR_IDS: dict[str, str] = {
     "Odometry": "odometry",
-    "Conventional": "conventional",
+    "Conventional": "conventional",  # the paper's: the current two frames only
+    "ConventionalFilter": "conventional-filter",  # the same pairs, merged recursively
     "STSF": "stsf",
     "EKF": "ekf",
     "Truth": "truth",  # privileged: the true pose, for reference runs

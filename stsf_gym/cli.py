@@ -353,7 +353,8 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument(
         "--estimators",
         default="odometry,conventional,stsf,ekf",
-        help="comma-separated estimator names",
+        help="comma-separated pose sources: odometry, conventional (the paper's: current pair "
+        "only), conventional-filter, stsf, ekf, truth, degraded-truth",
     )
     _world_args(evaluate)
     evaluate.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")

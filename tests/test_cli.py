@@ -23,6 +23,7 @@ def test_demo_json_and_files(tmp_path):
     assert [row["estimator"] for row in summary["rows"]] == [
         "odometry",
         "conventional",
+        "conventional-filter",
         "stsf",
         "ekf",
     ]
@@ -31,7 +32,13 @@ def test_demo_json_and_files(tmp_path):
     assert (out / "trajectories.png").stat().st_size > 10_000
     assert json.loads((out / "results.json").read_text())["rows"][0]["episodes"] == 1
     assert "| estimator |" in (out / "results.md").read_text()
-    assert sorted(summary["videos"]) == ["conventional", "ekf", "odometry", "stsf"]
+    assert sorted(summary["videos"]) == [
+        "conventional",
+        "conventional-filter",
+        "ekf",
+        "odometry",
+        "stsf",
+    ]
     for video in summary["videos"].values():
         assert (out / video).stat().st_size > 5_000
 

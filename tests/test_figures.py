@@ -2,7 +2,7 @@ import json
 
 import pytest
 
-from stsf_gym.experiments.figures import fig10, fig11
+from stsf_gym.experiments.figures import FIG11_ESTIMATORS, fig10, fig11
 from stsf_gym.results import check_rows
 
 SHORT = {"sim": {"max_episode_seconds": 3.0}}
@@ -12,7 +12,7 @@ SHORT = {"sim": {"max_episode_seconds": 3.0}}
     ("run", "estimators"),
     [
         (fig10, ["odometry", "stsf", "ekf"]),
-        (fig11, ["odometry", "conventional", "stsf", "ekf"]),
+        (fig11, FIG11_ESTIMATORS),
     ],
 )
 def test_reproduce_figures_schema(tmp_path, run, estimators):

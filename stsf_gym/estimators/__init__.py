@@ -14,10 +14,13 @@ import importlib
 from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
 from stsf_gym.estimators.settings import load_settings
 
-#: Estimators by name: "module:class", imported when first made.
+#: Estimators by name: "module:class", imported when first made. ``conventional`` is the
+#: paper's (the pose from the current two frames only), ``conventional-filter`` the same pair
+#: measurement merged with the odometry prediction.
 ESTIMATORS: dict[str, str] = {
     "odometry": "stsf_gym.estimators.dead_reckoning:OdometryEstimator",
-    "conventional": "stsf_gym.estimators.landmark_fusion:ConventionalEstimator",
+    "conventional": "stsf_gym.estimators.conventional:ConventionalEstimator",
+    "conventional-filter": "stsf_gym.estimators.landmark_fusion:ConventionalFilterEstimator",
     "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
 }

@@ -3,7 +3,14 @@
 With a rendered camera the detector runs on ``obs["image"]``; in the fast sensor mode the env
 has already simulated its output (``obs["landmark_ids"]``, ``obs["landmark_points"]``, see
 :mod:`envs.sensors.fast_camera`), which is unpacked into the same :class:`Detection` records,
-so every estimator runs one code path in both modes. Either way the image points are then
+so every estimator runs one code path in both modes.
+
+With ``predictions`` (:class:`~stsf_gym.vision.predicted.BoardPrediction`, from an estimator's
+landmark tracks), a predicted board the detector did not find is searched where and at the size
+predicted (track-aided matching, :class:`~stsf_gym.vision.predicted.PredictedMatcher`). That
+needs the image: the fast mode simulates the plain detector's output only, so there the
+predictions change nothing (its statistics, ``camera.fast``, were fitted to the plain detector).
+Either way the image points are then
 undistorted with the calibration the robot believes it has
 (:attr:`~stsf_gym.estimators.base.SensorModel.camera_calibration`): the estimators work with
 an ideal pinhole camera of that calibration's K.
@@ -18,31 +25,56 @@ import cv2
 import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration
-from stsf_gym.vision.detector import Detection, LandmarkDetector
+from stsf_gym.vision.detector import Detection, LandmarkDetector, to_grey
 from stsf_gym.vision.landmarks import LandmarkPattern, square_centres
+from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
 
 
 class FrameDetector:
-    """``detector(obs) -> list[Detection]`` for boards whose id is in ``valid_ids``, their
-    points undistorted with ``calibration`` (none: taken as they are)."""
+    """``detector(obs, predictions) -> list[Detection]`` for boards whose id is in
+    ``valid_ids``, their points undistorted with ``calibration`` (none: taken as they are);
+    ``matcher`` searches the predicted boards the detector missed (none: no such search)."""
 
     def __init__(
         self,
         pattern: LandmarkPattern,
         valid_ids: set[int],
         calibration: CameraCalibration | None = None,
+        matcher: PredictedMatcher | None = None,
     ) -> None:
         self.pattern, self.valid_ids = pattern, frozenset(valid_ids)
-        self.calibration = calibration
+        self.calibration, self.matcher = calibration, matcher
+        #: Detections of the last call that only the predicted search found.
+        self.aided: list[Detection] = []
 
-    def __call__(self, obs: dict) -> list[Detection]:
+    def __call__(self, obs: dict, predictions: list[BoardPrediction] = ()) -> list[Detection]:
+        self.aided = []
         if "landmark_ids" in obs:
             found = self._unpack(obs["landmark_ids"], obs["landmark_points"])
         else:
             found = _image_detector(self.pattern, self.valid_ids).detect(obs["image"])
+            if self.matcher is not None and predictions:
+                self.aided = self._search(obs["image"], predictions, found)
+                found = found + self.aided
         if self.calibration is None or not self.calibration.distorted:
             return found
         return [self._undistorted(d) for d in found]
+
+    def _search(
+        self, image: np.ndarray, predictions: list[BoardPrediction], found: list[Detection]
+    ) -> list[Detection]:
+        """The predicted boards of ids the detector did not find, where the matcher finds them."""
+        grey = to_grey(image)
+        have = {d.landmark_id for d in found}
+        matches = []
+        for prediction in predictions:
+            if prediction.landmark_id in have or prediction.landmark_id not in self.valid_ids:
+                continue
+            match = self.matcher.match(grey, prediction)
+            if match is not None:
+                matches.append(match)
+                have.add(match.landmark_id)
+        return matches
 
     def _undistorted(self, detection: Detection) -> Detection:
         points = self.calibration.undistort_pixels(detection.image_points)

@@ -1,4 +1,4 @@
-"""The paper's estimators: conventional fusion (two frames) and STSF (all frames of a track).
+"""The landmark estimators of the paper: conventional fusion and STSF, on one machinery.
 
 Every step starts with the odometry prediction. On each camera frame, every detected map
 landmark seen in the previous frame too gives a measurement of its pose relative to the robot,
@@ -9,7 +9,10 @@ landmark seen in the previous frame too gives a measurement of its pose relative
 - its bearing and orientation from the board's image (planar PnP,
   :mod:`stsf_gym.estimators.landmark_observation`).
 
-**Conventional** fusion uses that measurement of the current two frames. **STSF** keeps the
+**Conventional** fusion uses that measurement of the current two frames: the paper's
+(``conventional``, :mod:`stsf_gym.estimators.conventional`) takes the robot pose it gives as
+the estimate, keeping nothing else; ``conventional-filter`` merges it with the odometry
+prediction, so the estimate keeps what earlier pairs measured. **STSF** keeps the
 landmark's track: each earlier measurement is carried into the current frame by the odometry
 between frames (eq. 3, with its uncertainty and the correlation between reused frames) and
 all are fused with the significance weights of eq. 4-5 (eq. 2); conventional fusion is the
@@ -22,7 +25,10 @@ STSF's fused track reuses frames already merged into the estimate, shares the od
 each frame with it, and every motion-stereo baseline depends on the same unknown wheel
 calibration as the prediction; the merge keeps those correlations
 (:class:`~stsf_gym.estimators.pose_errors.PoseErrors`), so each frame's information counts
-once. A track is dropped after ``max_gap_frames`` frames without the landmark.
+once. A track is dropped after ``max_gap_frames`` frames without the landmark. With
+``matching: track-aided`` (STSF's default) every track predicts where its board appears in the
+next frame and at what size (:mod:`stsf_gym.estimators.board_prediction`), and a board the
+detector misses is searched there (:mod:`stsf_gym.vision.predicted`).
 
 The two frames of a pair are the current frame and the landmark's last key frame at least
 ``min_baseline`` metres of odometry earlier: at 5 Hz and 12 cm/s consecutive frames are
@@ -38,6 +44,7 @@ from typing import ClassVar
 import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
+from stsf_gym.estimators.board_prediction import predict_board
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
@@ -52,6 +59,7 @@ from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import ConventionalSettings, STSFSettings
 from stsf_gym.fusion import STSFTrack
 from stsf_gym.geometry import compose, compose_jacobians, to_se3, wrap_angle
+from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
 
 
 class _Seen:
@@ -79,7 +87,7 @@ class _Seen:
 
 
 class LandmarkFusionEstimator(OdometryEstimator):
-    """Shared machinery of :class:`ConventionalEstimator` and :class:`STSFEstimator`: landmark
+    """Shared machinery of the conventional estimators and :class:`STSFEstimator`: landmark
     tracks of at most ``max_track_frames`` frames, fused with ``weights`` (eq. 2-5); the rest of
     the settings in ``configs/estimators/conventional.yaml``."""
 
@@ -95,11 +103,18 @@ class LandmarkFusionEstimator(OdometryEstimator):
         self.position_std_per_m = s.position_std_per_m
         self.gate = chi_square_gate(s.gate_probability, dof=3)
         self.relocaliser = Relocaliser(s.relocalise_after, s.relocalise_inflation, self.gate)
+        self.matching, self.aided_search_px = s.matching, s.aided_search_px
+        self.aided_limits = (s.aided_min_correlation, s.aided_min_board_px)
         self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
-        self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
+        matcher = None
+        if self.matching == "track-aided":
+            matcher = PredictedMatcher(model.pattern, *self.aided_limits)
+        self.detector = FrameDetector(
+            model.pattern, set(model.landmarks), model.camera_calibration, matcher
+        )
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
         self.frame_count = 0
@@ -122,9 +137,10 @@ class LandmarkFusionEstimator(OdometryEstimator):
 
     def _frame(self, obs: dict) -> None:
         self.counters["frames"] += 1
-        with self.timed("detect"):
-            detections = self.detector(obs)
         pan, tilt = (float(a) for a in obs["camera_pan_tilt"])
+        with self.timed("detect"):
+            detections = self.detector(obs, self._predictions(pan, tilt))
+        aided = {d.landmark_id for d in self.detector.aided}
         observed = set()
         for detection in detections:
             with self.timed("observe"):
@@ -147,11 +163,32 @@ class LandmarkFusionEstimator(OdometryEstimator):
             with self.timed("fusion"):
                 self._fuse(current, *measured)
         self.counters["frames_matched"] += bool(observed)
+        self.counters["frames_matched_aided_only"] += bool(observed) and observed <= aided
         for landmark_id in set(self.seen) - observed:
             self.seen[landmark_id].missed += 1
             if self.seen[landmark_id].missed > self.max_gap_frames:
                 del self.seen[landmark_id]
                 self._drop_track(landmark_id)
+
+    def _predictions(self, pan: float, tilt: float) -> list[BoardPrediction]:
+        """Where each tracked landmark's board must appear in this frame (track-aided matching
+        only; none otherwise)."""
+        if self.detector.matcher is None:
+            return []
+        robot_from_camera = self.model.robot_from_camera(pan, tilt)
+        predictions = []
+        for landmark_id, seen in self.seen.items():
+            predicted = predict_board(
+                self.model.landmarks[landmark_id],
+                seen.observation.z,
+                seen.motion,
+                self.model,
+                robot_from_camera,
+                self.aided_search_px,
+            )
+            if predicted is not None:
+                predictions.append(predicted)
+        return predictions
 
     def _pair_measurement(
         self, previous: _Seen, current: LandmarkObservation
@@ -236,12 +273,9 @@ class LandmarkFusionEstimator(OdometryEstimator):
         track = self.tracks.setdefault(landmark.id, STSFTrack(self.max_track_frames))
         calibration_cov = self.model.odometry_noise.calibration_cov
         track.add(z, cov + by_calibration @ calibration_cov @ by_calibration.T)
-        jac = robot_pose_jacobian(landmark, z)
         self.frame_count += 1
-        # a camera mounted m off puts the landmark -m off in the robot frame
-        by_camera = jac @ current.by_camera()
-        by_considered = np.hstack([jac @ by_calibration, -jac[:, :2], by_camera])
-        self.errors.add((landmark.id, self.frame_count), jac @ cov @ jac.T, by_considered)
+        pose_cov, by_considered = self._robot_pose_errors(current, z, cov, by_calibration)
+        self.errors.add((landmark.id, self.frame_count), pose_cov, by_considered)
         keys = [key for key in self.errors.keys if key[0] == landmark.id]
         self.errors.remove(keys[: len(keys) - len(track)])  # the frames the track let go
         fused = track.fuse(self.weights)
@@ -256,30 +290,51 @@ class LandmarkFusionEstimator(OdometryEstimator):
         innovation[2] = wrap_angle(innovation[2])
         correction = self.errors.merge(weights, innovation, self.gate)
         if correction is None:
-            self.counters["gated_out"] += 1
             self._drop_track(landmark.id)
-            candidate = robot_pose_from_landmark(landmark, current.z, current.cov)
-            found = self.relocaliser.rejected(*candidate, self.mean)
-            if found is not None:  # lost (kidnapped): start again from the landmarks
-                self.restart(*found)
-                self.tracks.clear()
-                self.counters["relocalised"] += 1
+            self._rejected(current)
             return
+        self._accepted(self.mean + correction)
+
+    def _robot_pose_errors(
+        self, current: LandmarkObservation, z: np.ndarray, cov: np.ndarray, by_calibration
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The covariance of the independent error of the robot pose that ``z`` gives, and
+        its Jacobian by the considered errors (calibration, mount, camera)."""
+        jac = robot_pose_jacobian(current.landmark, z)
+        # a camera mounted m off puts the landmark -m off in the robot frame
+        by_camera = jac @ current.by_camera()
+        return jac @ cov @ jac.T, np.hstack([jac @ by_calibration, -jac[:, :2], by_camera])
+
+    def _accepted(self, mean: np.ndarray) -> None:
+        """A landmark measurement passed the gate: the estimate is now ``mean`` and
+        ``errors.P``."""
         self.relocaliser.clear()
-        self.mean = self.mean + correction
+        self.mean = mean
         self.mean[2] = wrap_angle(self.mean[2])
         self.cov = self.errors.P
         self.counters["landmark_updates"] += 1
+
+    def _rejected(self, current: LandmarkObservation) -> None:
+        """A measurement of ``current``'s board was gated out: it goes to the re-localisation
+        rule with the robot pose of its board alone."""
+        self.counters["gated_out"] += 1
+        candidate = robot_pose_from_landmark(current.landmark, current.z, current.cov)
+        found = self.relocaliser.rejected(*candidate, self.mean)
+        if found is not None:  # lost (kidnapped): start again from the landmarks
+            self.restart(*found)
+            self.tracks.clear()
+            self.counters["relocalised"] += 1
 
     def _drop_track(self, landmark_id: int) -> None:
         self.tracks.pop(landmark_id, None)
         self.errors.remove([key for key in self.errors.keys if key[0] == landmark_id])
 
 
-class ConventionalEstimator(LandmarkFusionEstimator):
-    """Conventional sensor fusion: the landmark measured from the current two frames."""
+class ConventionalFilterEstimator(LandmarkFusionEstimator):
+    """Conventional fusion as a filter: the landmark measured from the current two frames,
+    merged with the odometry prediction (so the estimate keeps earlier pairs' information)."""
 
-    name = "conventional"
+    name = "conventional-filter"
     settings_type: ClassVar[type] = ConventionalSettings
 
     def __init__(self, settings: ConventionalSettings) -> None:

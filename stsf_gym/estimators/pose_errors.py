@@ -33,7 +33,12 @@ the identity plus ``K L`` in the rows of ``e`` (the Joseph form, for the whole `
 
 - an EKF measurement ``z = h(x) + v``: ``L = [-H, 0, 0]``, ``K = P H^T S^-1``;
 - a fused track ``r = sum_j W_j r_j``: ``L = [-I, 0, W_1 ... W_n]``, ``R = 0``. With ``c``
-  left out and one independent pose this is eq. 23-24 exactly (the conventional fusion).
+  left out and one independent pose this is eq. 23-24 exactly (the conventional filter).
+
+**Replacement** (the paper's conventional fusion): the estimate becomes a measured pose whose
+error is ``v + M c`` (``v`` independent, covariance ``R``); the innovation ``r - x`` is only
+tested (``L = [-I, M, 0]``), then ``e``'s rows and columns are replaced, the carried poses
+dropped: nothing of the earlier estimate is kept.
 """
 
 from __future__ import annotations
@@ -144,6 +149,28 @@ class PoseErrors:
         for key, weight in weights.items():
             L[:, self._pose_rows(self.keys.index(key))] = weight
         return self._update(L, np.zeros((3, 3)), innovation, gate)
+
+    def replace(
+        self, cov: np.ndarray, by_considered: np.ndarray, innovation: np.ndarray, gate: float
+    ) -> bool:
+        """Make the estimate a measured pose (independent covariance ``cov``, Jacobian
+        ``by_considered`` by ``c``; ``innovation`` = measured - estimate), unless gated out
+        (then nothing changes and ``False`` is returned)."""
+        M = self._considered(by_considered)
+        L = np.zeros((3, len(self.joint)))
+        L[:, POSE], L[:, self.considered] = -np.eye(3), M
+        S = L @ self.joint @ L.T + cov
+        try:
+            whitened = np.linalg.solve(np.linalg.cholesky(0.5 * (S + S.T)), innovation)
+        except np.linalg.LinAlgError:
+            return False
+        self.nis.append((float(whitened @ whitened), len(innovation)))
+        if not whitened @ whitened <= gate:  # also rejects NaN
+            return False
+        self.restart(cov + M @ self.joint[self.considered, self.considered] @ M.T)
+        self.joint[POSE, self.considered] = M @ self.joint[self.considered, self.considered]
+        self.joint[self.considered, POSE] = self.joint[POSE, self.considered].T
+        return True
 
     def _update(
         self, L: np.ndarray, R: np.ndarray, innovation: np.ndarray, gate: float

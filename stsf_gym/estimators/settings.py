@@ -56,8 +56,13 @@ class RelocalisationSettings:
 
 @dataclass(frozen=True)
 class ConventionalSettings(RelocalisationSettings, OdometrySettings):
-    """Conventional fusion of the current frame pair (``conventional.yaml``)."""
+    """The landmark pair measurement and its use, shared by ``conventional``,
+    ``conventional-filter`` and ``stsf`` (``conventional.yaml``)."""
 
+    matching: Literal["plain", "track-aided"]  # track-aided: also search where tracks predict
+    aided_min_correlation: OpenProbability  # ECC correlation a track-aided match needs
+    aided_search_px: Positive  # px, radius searched around a predicted board
+    aided_min_board_px: Positive  # px, smallest predicted board searched
     sigma_px: Positive
     gate_probability: OpenProbability
     max_gap_frames: FrameCount

@@ -21,7 +21,13 @@ PANELS = (
     ("collision_rate", "collision rate"),
     ("path_error_rms_m", "path-following error, RMS (m)"),
 )
-MARKERS = {"odometry": "s", "conventional": "^", "stsf": "o", "ekf": "D"}
+MARKERS = {
+    "odometry": "s",
+    "conventional": "^",
+    "conventional-filter": "v",
+    "stsf": "o",
+    "ekf": "D",
+}
 
 
 def _xy(points: list[dict], key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

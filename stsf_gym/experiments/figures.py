@@ -2,8 +2,12 @@
 
 - Fig. 10: the straight 10 m at 12.2 cm/s, odometry against STSF (EKF as the reference):
   final and largest error per axis, and the largest error once 5 m have been driven.
-- Fig. 11: the IRL corridor with odometry, conventional fusion, STSF and EKF: success, where
-  odometry fails, errors along the path and in its latter part, landmark match rates.
+- Fig. 11: the IRL corridor under the paper's camera (profile ``paper``) with odometry, the
+  paper's conventional fusion (current pair only), the conventional filter, STSF and EKF:
+  success, where odometry fails, position and orientation error curves along the path (in the
+  JSON too), the error in the latter part (after :data:`LATTER_PART_M`) and landmark match
+  rates: the share of camera frames in which the estimator matched at least one map landmark
+  it could measure, with STSF's relative to the paper conventional's.
 
 Both are evaluations (:mod:`stsf_gym.experiments.evaluate`) of the path follower driving
 on each estimate, with the paper's figures beside ours.
@@ -18,8 +22,10 @@ import numpy as np
 from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.statistics import error_curves
 from stsf_gym.io import markdown_table
 from stsf_gym.results import rendered, stat
+from stsf_gym.yaml_layers import deep_merge
 
 FIG10_PAPER = {
     "odometry": "about 0.40 m off after 10 m; max 0.212 m in x, 0.405 m in y",
@@ -30,7 +36,18 @@ FIG11_PAPER = {
     "conventional": "reaches the goal; error grows along the path",
     "stsf": "reaches the goal; smallest error in the latter part; match rate about 22 % higher",
 }
+#: The paper's Fig. 11 claims as numbers: reached the goal (1) or not (0), where odometry
+#: stopped (m), STSF's landmark match rate relative to conventional fusion's (+22 %).
+FIG11_PAPER_NUMBERS = {
+    "odometry": {"paper_success": 0.0, "paper_distance_before_failure_m": 17.0},
+    "conventional": {"paper_success": 1.0},
+    "stsf": {"paper_success": 1.0, "paper_match_rate_vs_conventional": 0.22},
+}
+FIG11_ESTIMATORS = ["odometry", "conventional", "conventional-filter", "stsf", "ekf"]
+#: Fig. 11 runs under the paper's camera whatever the defaults (``--set`` may still change it).
+PAPER_CAMERA = {"camera": {"profile": "paper"}}
 LATTER_PART_M = 12.0
+CURVE_STEP_M = 0.5  # grid of the error curves in the JSON
 #: The paper's navigation experiments measure localisation: the follower drives on the pose
 #: alone, without the sonar avoidance that would steer a lost robot off the walls.
 PATH_ONLY = {"avoidance": {"enabled": False}}
@@ -43,6 +60,8 @@ HEADERS = {
     "max_y_error_m": "max y error (m)",
     "max_error_after_5m_m": "max error after 5 m (m)",
     "mean_error_after_12m_m": f"mean error after {LATTER_PART_M:g} m (m)",
+    "mean_heading_error_after_12m_deg": f"mean heading error after {LATTER_PART_M:g} m (deg)",
+    "match_rate_vs_conventional": "match rate vs conventional",
 }
 
 
@@ -85,13 +104,16 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
 
 
 def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
-    names = ["odometry", "conventional", "stsf", "ekf"]
+    names = FIG11_ESTIMATORS
+    env = deep_merge(PAPER_CAMERA, env or {})
     summary, by_estimator = evaluate(
         out, names, seeds, seed, "irl_corridor", workers=workers, env=env, agent_options=PATH_ONLY
     )
+    match = {row["estimator"]: row["match_rate"]["mean"] for row in summary["rows"]}
     rows = []
     for name, row in zip(names, summary["rows"], strict=True):
         latter = [_after(e, LATTER_PART_M) for e in by_estimator[name]]
+        late_heading = [_heading_after(e, LATTER_PART_M) for e in by_estimator[name]]
         rows.append(
             {
                 "estimator": name,
@@ -100,6 +122,8 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
                     for key in ("success_rate", "collision_rate", "distance_before_failure_m")
                 },
                 "mean_error_after_12m_m": stat(a.mean() if a.size else None for a in latter),
+                "mean_heading_error_after_12m_deg": stat(late_heading),
+                "match_rate_vs_conventional": _relative(match[name], match["conventional"]),
                 **{
                     key: row[key]
                     for key in (
@@ -111,9 +135,40 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
                     )
                 },
                 "paper": FIG11_PAPER.get(name, "-"),
+                **FIG11_PAPER_NUMBERS.get(name, {}),
             }
         )
+    summary["error_curves"] = _error_curves(by_estimator)
     return _write(out, "fig11", "Fig. 11: navigation along the IRL corridor", summary, rows)
+
+
+def _heading_after(episode: EpisodeResult, distance: float) -> float | None:
+    """Mean absolute heading error (deg) once ``distance`` metres have been driven."""
+    late = np.asarray(episode.heading_errors)[np.asarray(episode.travelled) >= distance]
+    return float(np.degrees(np.abs(late)).mean()) if late.size else None
+
+
+def _relative(value: float | None, reference: float | None) -> float | None:
+    """``value / reference - 1`` (None when either is missing or the reference is 0)."""
+    if value is None or not reference:
+        return None
+    return value / reference - 1.0
+
+
+def _error_curves(by_estimator: dict[str, list[EpisodeResult]]) -> dict:
+    """Mean position (m) and orientation (deg) error on a grid of distance driven, per
+    estimator (null where no episode got that far): the numbers behind ``errors.png``."""
+    longest = max(e.travelled[-1] for episodes in by_estimator.values() for e in episodes)
+    grid = np.arange(0.0, longest + CURVE_STEP_M, CURVE_STEP_M)
+    curves: dict = {"distance_m": grid.tolist()}
+    for name, episodes in by_estimator.items():
+        position, heading = error_curves(episodes, grid)
+        curves[name] = {"position_m": _numbers(position), "orientation_deg": _numbers(heading)}
+    return curves
+
+
+def _numbers(values: np.ndarray) -> list[float | None]:
+    return [float(v) if np.isfinite(v) else None for v in values]
 
 
 def _maximum(values: np.ndarray) -> float | None:

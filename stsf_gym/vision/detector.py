@@ -31,7 +31,7 @@ from stsf_gym.vision.board import GROW, BoardFit, BoardFitter, apply_homography
 from stsf_gym.vision.landmarks import LandmarkPattern
 from stsf_gym.vision.template import Candidate, TemplateMatcher
 
-__all__ = ["Detection", "LandmarkDetector"]
+__all__ = ["Detection", "LandmarkDetector", "to_grey"]
 
 ROI_HALF_SIDE = 0.9  # first region of interest: this many candidate sizes either side (+2 px)
 ROI_GROWTH = 1.7  # factor by which the region grows while the board touches its edge
@@ -63,7 +63,8 @@ class Detection:
         return apply_homography(self.homography, np.asarray(plane_xy, dtype=np.float64))
 
 
-def _to_grey(image: np.ndarray) -> np.ndarray:
+def to_grey(image: np.ndarray) -> np.ndarray:
+    """The uint8 grey image of an HxW grey or HxWx3(4) RGB(A) uint8 image."""
     image = np.asarray(image)
     if image.dtype != np.uint8:
         raise TypeError(f"image must be uint8, got {image.dtype}")
@@ -164,7 +165,7 @@ class LandmarkDetector:
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         """Landmarks in ``image`` (HxW grey or HxWx3 RGB, uint8), best NCC score first."""
-        grey = _to_grey(image)
+        grey = to_grey(image)
         detections: list[Detection] = []
         tried = 0
         for cand in self.candidates(grey):
