@@ -204,9 +204,21 @@ def test_relocalisation_needs_agreeing_candidates():
     truth = np.array([1.3 + 0.5 * math.cos(0.1), 0.1 + 0.5 * math.sin(0.1), 0.1])
     assert rule.rejected(truth, cov, moved) is None  # two of the three agree: not yet
     pose, pose_cov = rule.rejected(truth, cov, moved)
-    assert pose == pytest.approx(truth)
+    assert pose == pytest.approx(truth)  # the first and the two newest agree exactly
     assert np.all(np.linalg.eigvalsh(pose_cov) > 4 * 1e-4)  # inflated
     assert rule.candidates == []
+
+
+def test_relocalisation_restarts_at_the_agreeing_candidates_mean():
+    from stsf_gym.estimators.relocalise import Relocaliser
+
+    rule = Relocaliser(after=3, inflation=4.0, gate=11.34)
+    cov = np.diag([0.04, 0.04, 0.01])  # noisy candidates (a near, oblique board)
+    mean = np.zeros(3)  # the estimate does not move: the candidates need no carrying
+    for pose in ([2.1, 1.0, 0.05], [1.9, 1.0, -0.05]):
+        assert rule.rejected(np.array(pose), cov, mean) is None
+    pose, _ = rule.rejected(np.array([2.3, 1.0, 0.0]), cov, mean)
+    assert pose == pytest.approx([2.1, 1.0, 0.0])  # not the newest candidate
 
 
 def test_evaluate_reports_fault_runs(tmp_path):

@@ -16,8 +16,11 @@ its own (the landmark's pose relative to the robot through its map pose,
   is added to it.
 - The last ``2 after - 1`` candidates are kept. When ``after`` of them, the newest included,
   agree with the newest (the chi-square ``gate`` on the sum of their covariances), the estimate
-  is re-initialised at the newest with its covariance times ``inflation``, so an odd outlier
-  among them does not stop it. An accepted measurement clears the candidates.
+  is re-initialised at their information-weighted mean, carried to now (one PnP pose of a near
+  or oblique board can be tens of centimetres off; the mean of the agreeing ones is not), with
+  the newest one's covariance times ``inflation`` (their errors share the systematic part, so
+  the mean is not trusted more than one of them). An odd outlier among them does not stop it.
+  An accepted measurement clears the candidates.
 
 A single wrong detection is one candidate that the following ones contradict, so it never moves
 the estimate. A decoy board seen in ``after`` measurements in a row, with no real landmark
@@ -55,19 +58,37 @@ class Relocaliser:
         if self.after == 0:
             return None
         cov = cov + np.diag(np.square(CANDIDATE_FLOOR_STD))
-        agreeing = sum(self._agrees(*c, pose, cov, mean) for c in self.candidates)
+        carried = [self._carried(*c, mean) for c in self.candidates]
+        agreeing = [(x, p) for x, p in carried if self._agrees(x, p, pose, cov)]
         self.candidates = [*self.candidates, (pose.copy(), cov.copy(), mean.copy())]
         self.candidates = self.candidates[-(2 * self.after - 1) :]
-        if agreeing + 1 < self.after:
+        if len(agreeing) + 1 < self.after:
             return None
         self.clear()
-        return pose.copy(), cov * self.inflation
+        return _information_mean([*agreeing, (pose, cov)]), cov * self.inflation
 
-    def _agrees(self, old, old_cov, old_mean, pose, cov, mean) -> bool:
+    @staticmethod
+    def _carried(old, old_cov, old_mean, mean) -> tuple[np.ndarray, np.ndarray]:
+        """An earlier candidate carried to now by the odometry since, with its covariance."""
         odometry = compose(inverse(old_mean), mean)
-        carried = compose(old, odometry)
         jac, _ = compose_jacobians(old, odometry)
+        return compose(old, odometry), jac @ old_cov @ jac.T
+
+    def _agrees(self, carried, carried_cov, pose, cov) -> bool:
         error = carried - pose
         error[2] = wrap_angle(error[2])
-        total = jac @ old_cov @ jac.T + cov
-        return float(error @ np.linalg.solve(total, error)) <= self.gate
+        return float(error @ np.linalg.solve(carried_cov + cov, error)) <= self.gate
+
+
+def _information_mean(poses: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Information-weighted mean of poses ``(x, P)``, headings taken relative to the last."""
+    reference = poses[-1][0]
+    information = sum(np.linalg.inv(p) for _, p in poses)
+    weighted = np.zeros(3)
+    for x, p in poses:
+        offset = x - reference
+        offset[2] = wrap_angle(offset[2])
+        weighted += np.linalg.solve(p, offset)
+    fused = reference + np.linalg.solve(information, weighted)
+    fused[2] = wrap_angle(fused[2])
+    return fused
