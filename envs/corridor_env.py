@@ -150,6 +150,8 @@ class CorridorEnv(gym.Env):
         self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
         self.observation_space = self._observation_space()
         self._initial_state: int | None = None
+        #: The top-down map (``render_mode`` set): wrappers hand it their estimates.
+        self.view = None if render_mode is None else self._map_view()
         self._build_world(cfg.world)
         if self.sim.renderer == "egl" and self._rendered_camera:
             # The first two EGL frames of a client are shaded differently from all later ones
@@ -159,8 +161,6 @@ class CorridorEnv(gym.Env):
         self._frame_pan_tilt = np.zeros(2, np.float32)
         self._frame_pose = np.eye(4)
         self._last_obs: dict = {}
-        #: The top-down map (``render_mode`` set): wrappers hand it their estimates.
-        self.view = None if render_mode is None else self._map_view()
 
     def _build_world(self, world: WorldConfig) -> None:
         """Make ``world`` the env's world: its bodies (rebuilt with the robot's from an empty
@@ -177,6 +177,8 @@ class CorridorEnv(gym.Env):
             self.robot = DiffDriveRobot(self.sim, self.config.robot)
             self.camera_sensor = self._camera_sensor()
         self.config = dataclasses.replace(self.config, world=world)
+        if self.view is not None:  # the map of the new world
+            self.view = self._map_view()
         self.task = PathTask(world, self.config.reward)
         self.faults = FaultInjector(
             self.config.faults, self.world, self.robot, self.observation_space
