@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.sonar_avoidance import AvoidanceConfig, SonarAvoidance
-from envs.config import CONFIG_DIR, build, deep_merge, overrides_to_tree, read_yaml
-from envs.task import Polyline
+from stsf_gym.agents.sonar_avoidance import AvoidanceConfig, SonarAvoidance
+from stsf_gym.envs.config import CONFIG_DIR, build, deep_merge, overrides_to_tree, read_yaml
+from stsf_gym.envs.task import Polyline
 
 
 @dataclass(frozen=True)
@@ -37,9 +37,9 @@ class PathFollower:
     The curvature to reach a point (x_r, y_r) in the robot frame is ``2 y_r / d^2``; the
     follower drives at ``speed`` with yaw rate ``speed * curvature`` (clipped), and turns on
     the spot when the point is more than ``turn_in_place`` radians off its heading. Given the
-    sonar ranges, :class:`~agents.sonar_avoidance.SonarAvoidance` (``avoidance`` in the config)
-    may bend or slow that command around obstacles. Actions are scaled to the env's ``[-1, 1]``
-    box by the robot's ``max_speed`` and ``max_yaw_rate``.
+    sonar ranges, :class:`~stsf_gym.agents.sonar_avoidance.SonarAvoidance` (``avoidance`` in the
+    config) may bend or slow that command around obstacles. Actions are scaled to the env's ``[-1,
+    1]`` box by the robot's ``max_speed`` and ``max_yaw_rate``.
     """
 
     def __init__(

@@ -21,7 +21,14 @@ from typing import Any
 import gymnasium as gym
 
 import stsf_gym  # noqa: F401 - registers the env ids that name sections
-from envs.config import CONFIG_DIR, ConfigError, build, deep_merge, overrides_to_tree, read_yaml
+from stsf_gym.envs.config import (
+    CONFIG_DIR,
+    ConfigError,
+    build,
+    deep_merge,
+    overrides_to_tree,
+    read_yaml,
+)
 
 #: Supported algorithms: name -> "module:class".
 ALGORITHMS: dict[str, str] = {"ppo": "stable_baselines3:PPO", "sac": "stable_baselines3:SAC"}
@@ -45,7 +52,7 @@ class TrainingConfig:
     checkpoint_freq: int  # env steps (summed over the envs) between checkpoints
     policy_kwargs: dict = field(default_factory=dict)
     env: dict = field(default_factory=dict)  # env overrides, as gym.make keyword sections
-    observation: dict = field(default_factory=dict)  # agents.observation.ObservationConfig
+    observation: dict = field(default_factory=dict)  # stsf_gym.agents.observation.ObservationConfig
 
     def __post_init__(self) -> None:
         for name in ("n_envs", "n_timesteps", "eval_freq", "n_eval_episodes", "checkpoint_freq"):

@@ -14,8 +14,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import build
-from envs.task import Polyline
+from stsf_gym.envs.config import build
+from stsf_gym.envs.task import Polyline
 
 STD_FLOOR, STD_CEIL = 1e-3, 10.0  # clip range of a standard deviation before its log
 TANGENT_STEP = 0.1  # m, arc length over which the path's direction is measured

@@ -4,7 +4,7 @@ observation is the SB3 agents').
 ```python
 from ray.rllib.algorithms.ppo import PPOConfig
 from ray.tune.registry import register_env
-from agents.rllib import env_creator
+from stsf_gym.agents.rllib import env_creator
 
 register_env("stsf_gym", env_creator)
 config = PPOConfig().environment(
@@ -14,8 +14,8 @@ config = PPOConfig().environment(
 
 ``env_config`` keys: ``env_id`` (a registered id, default :data:`DEFAULT_ID`), ``seed`` (the
 base seed, default 0), ``policy_observation`` (default true: the flat ``Box`` of
-:class:`agents.observation.PolicyObservation` that the SB3 agents use, for MLP policies; needs
-an estimating id; false keeps the ``Dict`` observation); every other key goes to
+:class:`stsf_gym.agents.observation.PolicyObservation` that the SB3 agents use, for MLP policies;
+needs an estimating id; false keeps the ``Dict`` observation); every other key goes to
 ``gymnasium.make`` (``camera__mode="fast"``, ``sim__max_episode_seconds=60``, ...).
 
 Each env is reset once here with its own seed, drawn from the base seed, the env runner's
@@ -35,7 +35,7 @@ import gymnasium as gym
 import numpy as np
 
 import stsf_gym  # noqa: F401 - registers the ids
-from agents.observation import PolicyObservation
+from stsf_gym.agents.observation import PolicyObservation
 
 DEFAULT_ID = "stsf_gym/Corridor-Truth-v0"
 _made: Counter = Counter()  # envs this process made per (worker_index, vector_index)

@@ -16,9 +16,9 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from agents.hyperparams import algorithm_class
-from agents.observation import PolicyObservation, observation_config
-from envs.config import ConfigError
+from stsf_gym.agents.hyperparams import algorithm_class
+from stsf_gym.agents.observation import PolicyObservation, observation_config
+from stsf_gym.envs.config import ConfigError
 
 META_KEY = "stsf_meta"
 

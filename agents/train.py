@@ -25,10 +25,10 @@ from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 import stsf_gym
-from agents.hyperparams import algorithm_class, load_hyperparams, policy_kwargs_for_sb3
-from agents.observation import PolicyObservation, observation_config
-from agents.sb3_agent import META_KEY, model_metadata
-from agents.training_log import (
+from stsf_gym.agents.hyperparams import algorithm_class, load_hyperparams, policy_kwargs_for_sb3
+from stsf_gym.agents.observation import PolicyObservation, observation_config
+from stsf_gym.agents.sb3_agent import META_KEY, model_metadata
+from stsf_gym.agents.training_log import (
     EPISODES_CSV,
     EVAL_CSV,
     EpisodeLog,
@@ -37,8 +37,8 @@ from agents.training_log import (
     last_evaluation,
     plot_learning_curve,
 )
-from envs.config import ConfigError
-from envs.generated_env import parse_world
+from stsf_gym.envs.config import ConfigError
+from stsf_gym.envs.generated_env import parse_world
 from stsf_gym.episode_env import make_episode_env
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.wrappers import POSE_SOURCES

@@ -1,11 +1,11 @@
-"""Hyper-parameters for rl-zoo3 (``python -m rl_zoo3.train --conf-file agents.zoo``), made from
-``configs/agents/ppo.yaml`` as ``stsf-gym train`` reads it: one section per estimating id, with
-the policy observation (:class:`agents.observation.PolicyObservation`) as ``env_wrapper`` and
-the section's env overrides as ``env_kwargs``.
+"""Hyper-parameters for rl-zoo3 (``python -m rl_zoo3.train --conf-file stsf_gym.agents.zoo``), made
+from ``configs/agents/ppo.yaml`` as ``stsf-gym train`` reads it: one section per estimating id, with
+the policy observation (:class:`stsf_gym.agents.observation.PolicyObservation`) as ``env_wrapper``
+and the section's env overrides as ``env_kwargs``.
 
 ```bash
 python -m rl_zoo3.train --algo ppo --env stsf_gym/Corridor-STSF-v0 --gym-packages stsf_gym \\
-    --conf-file agents.zoo -n 20000
+    --conf-file stsf_gym.agents.zoo -n 20000
 ```
 
 rl-zoo3's own options (``--eval-freq``, ``--save-freq``, ``-params``) replace the training keys
@@ -18,10 +18,10 @@ from __future__ import annotations
 import gymnasium as gym
 
 import stsf_gym
-from agents.hyperparams import load_hyperparams, policy_kwargs_for_sb3
-from agents.observation import observation_config
+from stsf_gym.agents.hyperparams import load_hyperparams, policy_kwargs_for_sb3
+from stsf_gym.agents.observation import observation_config
 
-WRAPPER = "agents.observation.PolicyObservation"
+WRAPPER = "stsf_gym.agents.observation.PolicyObservation"
 
 
 def estimating_ids() -> list[str]:
@@ -54,5 +54,5 @@ def zoo_hyperparams(algo: str) -> dict[str, dict]:
     return {env_id: zoo_section(algo, env_id) for env_id in estimating_ids()}
 
 
-#: What rl-zoo3 reads from ``--conf-file agents.zoo``.
+#: What rl-zoo3 reads from ``--conf-file stsf_gym.agents.zoo``.
 hyperparams = zoo_hyperparams("ppo")

@@ -33,7 +33,7 @@ RANGE_BINS = [(0, 2), (2, 3), (3, 4), (4, 6), (6, 9)]
 
 
 def _env(world: str, estimator: str, mode: str, options: dict):
-    from agents.follower import PathFollower
+    from stsf_gym.agents.follower import PathFollower
     from stsf_gym.episode_env import make_episode_env
     from stsf_gym.experiments.figures import PATH_ONLY
 

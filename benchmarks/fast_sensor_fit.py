@@ -31,7 +31,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 import stsf_gym  # noqa: F401 - registers the ids
-from envs.config import CONFIG_DIR
+from stsf_gym.envs.config import CONFIG_DIR
 from stsf_gym.experiments.detector_views import detection_records, room_world, summarise_records
 
 

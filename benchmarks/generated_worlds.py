@@ -3,11 +3,11 @@
     python benchmarks/generated_worlds.py --count 1000 --out out/bench/generated_worlds.json
 
 For each world seed (from ``--first``): generate it; build the env config from its YAML tree
-(the world checks and the clearance checks of :mod:`envs.world_checks`); recheck that every
-path point sees a landmark (:mod:`envs.world_visibility`) and that the path is passable; build
-its bodies in a PyBullet simulator. Then the rebuild cost in the env: ``reset(seed=k)`` of
-``stsf_gym/Generated-v0`` onto a new world each time (generation and build), against a reset
-that keeps the world and against the steps of an episode.
+(the world checks and the clearance checks of :mod:`stsf_gym.envs.worlds.checks`); recheck that
+every path point sees a landmark (:mod:`stsf_gym.envs.worlds.visibility`) and that the path is
+passable; build its bodies in a PyBullet simulator. Then the rebuild cost in the env:
+``reset(seed=k)`` of ``stsf_gym/Generated-v0`` onto a new world each time (generation and build),
+against a reset that keeps the world and against the steps of an episode.
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ import numpy as np
 from tqdm import tqdm
 
 import stsf_gym  # noqa: F401
-from envs.config import load_config
-from envs.generator_config import load_generator_config
-from envs.simulator import Simulator
-from envs.world import CorridorWorld
-from envs.world_generator import generate_world, path_clearance, world_tree
+from stsf_gym.envs.config import load_config
+from stsf_gym.envs.simulator import Simulator
+from stsf_gym.envs.worlds.corridor import CorridorWorld
+from stsf_gym.envs.worlds.generator import generate_world, path_clearance, world_tree
+from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.io import write_json
 
 

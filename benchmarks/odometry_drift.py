@@ -16,7 +16,7 @@ import numpy as np
 from tqdm import tqdm
 
 import stsf_gym  # noqa: F401
-from agents.follower import PathFollower
+from stsf_gym.agents.follower import PathFollower
 from stsf_gym.estimators.odometry import integrate_wheel_travel
 from stsf_gym.io import markdown_table
 

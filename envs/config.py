@@ -4,9 +4,10 @@ Every number lives in ``configs/``: ``configs/default.yaml`` holds the robot, se
 ``configs/worlds/<name>.yaml`` the worlds. :func:`load_config` merges, in order, the defaults,
 a user config (YAML path or dict), then keyword overrides, and builds an :class:`EnvConfig`.
 Every number has an allowed range (``Annotated[..., Range(...)]``, :mod:`stsf_gym.validation`) and
-the world's geometry is checked (:mod:`envs.world_checks`). A misspelt or unknown key, a value of
-the wrong type or out of range raises :class:`ConfigError` naming the YAML file that set it, the
-full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius must be > 0, got -0.1``.
+the world's geometry is checked (:mod:`stsf_gym.envs.worlds.checks`). A misspelt or unknown key, a
+value of the wrong type or out of range raises :class:`ConfigError` naming the YAML file that set
+it, the full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius must be > 0, got
+-0.1``.
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from envs.fault_spec import FaultSpec
-from envs.world_checks import check_clearance, check_world
+from stsf_gym.envs.fault_spec import FaultSpec
+from stsf_gym.envs.worlds.checks import check_clearance, check_world
 from stsf_gym.validation import (
     ConfigError,
     Count,
@@ -154,7 +155,7 @@ Relative = Annotated[float, Range(ge=0, lt=0.5)]
 
 @dataclass(frozen=True)
 class LensConfig:
-    """The lens (:mod:`envs.sensors.lens`): distortion, vignetting and defocus."""
+    """The lens (:mod:`stsf_gym.envs.sensors.lens`): distortion, vignetting and defocus."""
 
     distortion: tuple[float, float, float, float, float]  # OpenCV k1 k2 p1 p2 k3
     vignetting: Annotated[float, Range(ge=0, lt=1)]  # share of light lost at the image corner
@@ -163,7 +164,7 @@ class LensConfig:
 
 @dataclass(frozen=True)
 class SensorConfig:
-    """The image sensor (:mod:`envs.sensors.image_sensor`): exposure and noise."""
+    """The image sensor (:mod:`stsf_gym.envs.sensors.image_sensor`): exposure and noise."""
 
     exposure_s: NonNegative  # exposure time: the camera's motion during it blurs the frame
     gain_std: Relative  # per-frame exposure/gain variation, relative

@@ -10,21 +10,21 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import EnvConfig, WorldConfig, load_config
-from envs.faults import FaultInjector
-from envs.render_view import MapView, detections_frame
-from envs.render_window import HumanWindow, display_available
-from envs.robot import DiffDriveRobot
-from envs.sensors.camera import PinholeCamera, believed_calibration, look_at, view_matrix
-from envs.sensors.encoders import WheelEncoders
-from envs.sensors.fast_camera import SimulatedDetector
-from envs.sensors.rendered_camera import RenderedCamera
-from envs.sensors.sonar import SonarRing
-from envs.simulator import Simulator
-from envs.task import PathTask
-from envs.world import CorridorWorld, Landmark
-from envs.world_checks import check_start_pose
 from stsf_gym.camera_model import CameraCalibration
+from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
+from stsf_gym.envs.faults import FaultInjector
+from stsf_gym.envs.rendering.map_view import MapView, detections_frame
+from stsf_gym.envs.rendering.window import HumanWindow, display_available
+from stsf_gym.envs.robot import DiffDriveRobot
+from stsf_gym.envs.sensors.camera import PinholeCamera, believed_calibration, look_at, view_matrix
+from stsf_gym.envs.sensors.encoders import WheelEncoders
+from stsf_gym.envs.sensors.fast_camera import SimulatedDetector
+from stsf_gym.envs.sensors.rendered_camera import RenderedCamera
+from stsf_gym.envs.sensors.sonar import SonarRing
+from stsf_gym.envs.simulator import Simulator
+from stsf_gym.envs.task import PathTask
+from stsf_gym.envs.worlds.checks import check_start_pose
+from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
 from stsf_gym.geometry import OdometryCalibration
 
 MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
@@ -51,10 +51,11 @@ class CorridorEnv(gym.Env):
       frames are taken at ``camera.rate_hz`` of simulated time, independent of the control
       period, so between frames the previous one is repeated. The frame is rendered
       (``camera.renderer``) through the lens and sensor of ``camera.profile``
-      (:mod:`envs.sensors.rendered_camera`: distortion, vignetting, defocus, motion blur over
-      the exposure, gain and noise).
+      (:mod:`stsf_gym.envs.sensors.rendered_camera`: distortion, vignetting, defocus, motion blur
+      over the exposure, gain and noise).
     - ``image_new``: ``Discrete(2)``, 1 when a camera frame was taken during this step (or reset).
-    - With ``camera.mode: fast`` (no rendering; :mod:`envs.sensors.fast_camera`) ``image`` is
+    - With ``camera.mode: fast`` (no rendering; :mod:`stsf_gym.envs.sensors.fast_camera`) ``image``
+    is
       replaced by the frame's simulated detections: ``landmark_ids`` ``Box((L,), int64)``
       (-1 marks an empty slot) and ``landmark_points`` ``Box((L * 2 grid^2,), float32)``, the
       pixels ``x0, y0, x1, y1, ...`` of each detected board's lit squares, slot after slot
@@ -75,8 +76,8 @@ class CorridorEnv(gym.Env):
     truncated after ``sim.max_episode_seconds`` of simulated time.
 
     ## Faults
-    The ``faults:`` config section (none by default, :mod:`envs.faults`) injects timed faults:
-    camera blackout, blur and dropped frames, landmarks removed, occluded or faked, sonar
+    The ``faults:`` config section (none by default, :mod:`stsf_gym.envs.faults`) injects timed
+    faults: camera blackout, blur and dropped frames, landmarks removed, occluded or faked, sonar
     dropouts and false echoes, encoder spikes, a kidnapped robot.
 
     ## Info
@@ -95,9 +96,9 @@ class CorridorEnv(gym.Env):
     - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
     - ``config``: YAML path or mapping merged over ``configs/default.yaml``.
     - ``render_mode``: ``None``, ``"rgb_array"`` or ``"human"`` (a window; needs a display).
-      ``render.view`` picks the picture: ``map`` (default; :mod:`envs.render_view`: a top-down
-      map with the true pose, the estimates a wrapper hands to :attr:`view`, sensors and an
-      inset of the camera frame), ``chase`` (a rendered camera behind the robot) or ``top``
+      ``render.view`` picks the picture: ``map`` (default; :mod:`stsf_gym.envs.rendering.map_view`:
+      a top-down map with the true pose, the estimates a wrapper hands to :attr:`view`, sensors and
+      an inset of the camera frame), ``chase`` (a rendered camera behind the robot) or ``top``
       (a rendered view of the whole world from above).
     - ``**overrides``: single values, e.g. ``camera__width=640`` or ``camera={"rate_hz": 10}``.
 

@@ -1,4 +1,5 @@
-"""The ``faults:`` config section: timed sensor and world faults (applied by :mod:`envs.faults`).
+"""The ``faults:`` config section: timed sensor and world faults (applied by
+:mod:`stsf_gym.envs.faults`).
 
 Each entry has a ``kind``, a ``start`` (s of simulated time) and exactly the parameters its kind
 takes (:data:`FAULT_PARAMETERS`); a parameter another kind takes is an error, so a misplaced

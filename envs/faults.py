@@ -1,4 +1,5 @@
-"""Fault injection: the timed faults of the ``faults:`` config section (:mod:`envs.fault_spec`).
+"""Fault injection: the timed faults of the ``faults:`` config section
+(:mod:`stsf_gym.envs.fault_spec`).
 
 The env calls one :class:`FaultInjector` at fixed points of its cycle:
 
@@ -31,8 +32,8 @@ import cv2
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import LandmarkSpec
-from envs.fault_spec import INSTANT_KINDS, FaultSpec
+from stsf_gym.envs.config import LandmarkSpec
+from stsf_gym.envs.fault_spec import INSTANT_KINDS, FaultSpec
 
 FRAME_KEYS = ("image", "camera_pan_tilt", "landmark_ids", "landmark_points")
 BOARD_KINDS = ("landmark_removed", "landmark_occluded", "outlier_detection")

@@ -11,10 +11,10 @@ from typing import Any
 
 import gymnasium as gym
 
-from envs.config import EnvConfig, WorldConfig, load_config
-from envs.corridor_env import CorridorEnv
-from envs.generator_config import GeneratorConfig, load_generator_config
-from envs.world_generator import generate_world, world_tree
+from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
+from stsf_gym.envs.corridor_env import CorridorEnv
+from stsf_gym.envs.worlds.generator import generate_world, world_tree
+from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
 
 GENERATED = "generated"  # the world name of generated worlds; ``generated:<split>`` labels
 
@@ -71,7 +71,7 @@ def world_for_seed(split: str, seed: int, env_cfg: EnvConfig) -> WorldConfig:
 
 
 class GeneratedCorridorEnv(CorridorEnv):
-    """:class:`~envs.corridor_env.CorridorEnv` whose world is drawn at each reset.
+    """:class:`~stsf_gym.envs.corridor_env.CorridorEnv` whose world is drawn at each reset.
 
     - ``reset(seed=s)``: world seed ``first + s % count`` of the split (``world_seed_for``);
     - ``reset()`` without a seed: a world seed of the split drawn with ``self.np_random``;

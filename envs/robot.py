@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from envs.config import RobotConfig
-from envs.simulator import Simulator, cache_file
+from stsf_gym.envs.config import RobotConfig
+from stsf_gym.envs.simulator import Simulator, cache_file
 
 CASTER_FRACTION = 0.45  # caster sphere radius as a fraction of the wheel radius
 BODY_CLEARANCE = 0.05  # floor to body bottom (m)

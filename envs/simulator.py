@@ -2,7 +2,7 @@
 
 Every env owns one :class:`Simulator` and never touches the global ``pybullet`` state, so
 many envs live in one process and in vector-env workers. PyBullet's C banners are captured
-(:mod:`envs.quiet`) unless ``STSF_GYM_VERBOSE`` is set.
+(:mod:`stsf_gym.envs.quiet`) unless ``STSF_GYM_VERBOSE`` is set.
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from envs.gl_renderer import GLRenderer, gl_inherited
-from envs.quiet import quiet_c_output
-from envs.scene import Board, Box, Scene, Shape
+from stsf_gym.envs.quiet import quiet_c_output
+from stsf_gym.envs.rendering.gl_renderer import GLRenderer, gl_inherited
+from stsf_gym.envs.rendering.scene import Board, Box, Scene, Shape
 
 with quiet_c_output():  # PyBullet's banners: envs/quiet.py
     import pybullet
@@ -81,12 +81,13 @@ class Simulator:
     Args:
         physics_hz: physics steps per simulated second.
         renderer: ``"gl"`` (the project's OpenGL renderer of :attr:`scene`,
-            :mod:`envs.gl_renderer`), ``"egl"`` (PyBullet's EGL plugin), ``"tiny"`` (PyBullet's
-            TinyRenderer), ``"auto"`` (the first of gl, egl, tiny that works here) or ``"none"``
-            when nothing is rendered. The choice is in :attr:`renderer`. EGL cannot be used in
-            a process forked after its parent made an EGL context (Mesa deadlocks): ``"auto"``
-            then falls back to TinyRenderer with a warning, ``"gl"``/``"egl"`` raise; vector
-            envs should use the ``"forkserver"`` or ``"spawn"`` start method.
+            :mod:`stsf_gym.envs.rendering.gl_renderer`), ``"egl"`` (PyBullet's EGL plugin),
+            ``"tiny"`` (PyBullet's TinyRenderer), ``"auto"`` (the first of gl, egl, tiny that works
+            here) or ``"none"`` when nothing is rendered. The choice is in :attr:`renderer`. EGL
+            cannot be used in a process forked after its parent made an EGL context (Mesa
+            deadlocks): ``"auto"`` then falls back to TinyRenderer with a warning,
+            ``"gl"``/``"egl"`` raise; vector envs should use the ``"forkserver"`` or ``"spawn"``
+            start method.
     """
 
     def __init__(self, physics_hz: float, renderer: str = "auto") -> None:

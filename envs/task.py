@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from envs.config import RewardConfig, WorldConfig
+from stsf_gym.envs.config import RewardConfig, WorldConfig
 
 
 class Polyline:

@@ -5,7 +5,7 @@ Importing the package registers the environments with Gymnasium (idempotently):
 - ``stsf_gym/Corridor-v0``: the IRL corridor (about 24 m with a turn, 8 landmarks).
 - ``stsf_gym/Straight10m-v0``: a straight 10 m corridor (the paper's Fig. 10).
 - ``stsf_gym/Generated-v0``: a generated corridor world per episode (``split="train"`` or
-  ``"test"``, :mod:`envs.generated_env`).
+  ``"test"``, :mod:`stsf_gym.envs.generated_env`).
 
 Each also has an id per pose source, e.g. ``stsf_gym/Corridor-STSF-v0`` (see below).
 """
@@ -41,12 +41,14 @@ GENERATED_ID = "stsf_gym/Generated-v0"
 def register_envs() -> None:
     """Register every stsf-gym id that is not registered yet."""
     if GENERATED_ID not in registry:
-        register(id=GENERATED_ID, entry_point="envs.generated_env:GeneratedCorridorEnv")
+        register(id=GENERATED_ID, entry_point="stsf_gym.envs.generated_env:GeneratedCorridorEnv")
     _register_estimating(GENERATED_ID, "generated")
     for env_id, world in ENV_WORLDS.items():
         if env_id not in registry:
             register(
-                id=env_id, entry_point="envs.corridor_env:CorridorEnv", kwargs={"world": world}
+                id=env_id,
+                entry_point="stsf_gym.envs.corridor_env:CorridorEnv",
+                kwargs={"world": world},
             )
         _register_estimating(env_id, world)
 

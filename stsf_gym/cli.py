@@ -10,8 +10,8 @@ import os
 import sys
 from pathlib import Path
 
-from envs.quiet import VERBOSE_ENV
 from stsf_gym.config import ConfigError, parse_overrides
+from stsf_gym.envs.quiet import VERBOSE_ENV
 
 
 def _common(
@@ -88,14 +88,14 @@ def _print_markdown(args: argparse.Namespace, path: Path) -> None:
 def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
     """Env settings from ``--config FILE`` and ``--set key=value`` (later wins), validated
     here (on ``world``) so a bad value is named before any work starts."""
-    from envs.config import deep_merge, load_config, overrides_to_tree, read_yaml
+    from stsf_gym.envs.config import deep_merge, load_config, overrides_to_tree, read_yaml
 
     overrides = parse_overrides(args.overrides)
     env = deep_merge(read_yaml(args.config) if args.config else {}, overrides_to_tree(overrides))
     if "world" in env:
         where = "use --world" if hasattr(args, "world") else "it uses its own world"
         raise ConfigError(f"--config/--set cannot change the world of this command ({where})")
-    from envs.generated_env import parse_world
+    from stsf_gym.envs.generated_env import parse_world
 
     generated = world is not None and parse_world(world) is not None
     load_config(args.config, world=None if generated else world, **overrides)
@@ -104,7 +104,7 @@ def _env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
 
 def _world(args: argparse.Namespace) -> str:
     """``--world``, or ``generated:<split>`` for ``--world generated --split NAME``."""
-    from envs.generated_env import GENERATED, generated_label
+    from stsf_gym.envs.generated_env import GENERATED, generated_label
 
     if args.world == GENERATED:
         if args.split is None:
@@ -144,7 +144,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
     agents = [a.strip() for a in args.agent.split(",") if a.strip()]
     models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
     if models:
-        from agents.sb3_agent import model_metadata
+        from stsf_gym.agents.sb3_agent import model_metadata
 
         for model in sorted(models):
             model_metadata(model)  # a missing or foreign model file fails here, clearly
@@ -180,7 +180,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
 
 def _reproduce(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.figures import fig10, fig11
-    from stsf_gym.experiments.table1 import run_table1
+    from stsf_gym.experiments.table1.run import run_table1
 
     _check_counts(args)
     out = args.out / args.experiment
@@ -198,7 +198,7 @@ def _reproduce(args: argparse.Namespace) -> dict:
 
 
 def _train(args: argparse.Namespace) -> dict:
-    from agents.train import train
+    from stsf_gym.agents.train import train
 
     args.world = _world(args)
     try:
@@ -231,7 +231,7 @@ def _train(args: argparse.Namespace) -> dict:
 
 
 def _sweep(args: argparse.Namespace) -> dict:
-    from stsf_gym.experiments.sweep import run_sweep
+    from stsf_gym.experiments.sweep.run import run_sweep
 
     _check_counts(args)
     out = args.out / args.file.stem
@@ -246,7 +246,7 @@ def _sweep(args: argparse.Namespace) -> dict:
 
 def _accuracy_curve(args: argparse.Namespace) -> dict:
     from stsf_gym.estimators import make_estimator
-    from stsf_gym.experiments.accuracy_curve import accuracy_curve
+    from stsf_gym.experiments.curve.run import accuracy_curve
     from stsf_gym.wrappers import POSE_SOURCES
 
     _check_counts(args)
@@ -257,7 +257,7 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
             raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
     models = [a for a in agents if a != "follower"]
     if models:
-        from agents.sb3_agent import model_metadata
+        from stsf_gym.agents.sb3_agent import model_metadata
 
         for model in models:
             model_metadata(model)  # a missing or foreign model file fails here, clearly

@@ -1,6 +1,7 @@
-"""Configuration entry points for users of the library (the schema lives in ``envs.config``)."""
+"""Configuration entry points for users of the library (the schema lives in
+``stsf_gym.envs.config``)."""
 
-from envs.config import CONFIG_DIR, ConfigError, EnvConfig, load_config
+from stsf_gym.envs.config import CONFIG_DIR, ConfigError, EnvConfig, load_config
 
 __all__ = ["CONFIG_DIR", "ConfigError", "EnvConfig", "load_config", "parse_overrides"]
 

@@ -22,9 +22,9 @@ def make_episode_env(
     ``"generated:<split>"``: a generated world per episode) with the pan camera (pointed by the
     wrapper, so the action stays ``[v, w]``), the env settings ``env`` and ``overrides``
     (``config``, ``render_mode``, ``camera__width``, ...; see
-    :class:`envs.corridor_env.CorridorEnv`), wrapped in :class:`PoseEstimateWrapper` for the
-    pose source ``estimator`` with ``estimator_options`` over its YAML settings."""
-    from envs.generated_env import make_world_env
+    :class:`stsf_gym.envs.corridor_env.CorridorEnv`), wrapped in :class:`PoseEstimateWrapper` for
+    the pose source ``estimator`` with ``estimator_options`` over its YAML settings."""
+    from stsf_gym.envs.generated_env import make_world_env
 
     corridor = make_world_env(world, **{"camera__control": "pan", **(env or {}), **overrides})
     try:

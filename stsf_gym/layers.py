@@ -4,9 +4,10 @@
 ``import`` statement counts, inside functions too; those under ``if TYPE_CHECKING:`` do not),
 then any violation, and exits with status 1 when there is one. The rules (:data:`ALLOWED`):
 
-    stsf_gym.cli, stsf_gym.experiments -> agents -> stsf_gym.wrappers -> stsf_gym.estimators
-        -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
-    envs -> stsf_gym.vision.landmarks / geometry
+    stsf_gym.cli, stsf_gym.experiments -> stsf_gym.agents -> stsf_gym.wrappers
+        -> stsf_gym.estimators -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
+    stsf_gym.envs (and its folders .worlds, .rendering) -> stsf_gym.vision.landmarks / geometry;
+    stsf_gym.envs.rendering never imports PyBullet
 
 plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``, ``video``,
 ``terminal_table``, ``camera_model``: the lens model the simulator renders with and the
@@ -22,7 +23,9 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("stsf_gym", "envs", "agents")
+#: The folders of the repository that make the one import namespace (pyproject's package-dir);
+#: an installed wheel holds them all under ``stsf_gym/``.
+PACKAGE_DIRS = {"stsf_gym": "stsf_gym", "stsf_gym.envs": "envs", "stsf_gym.agents": "agents"}
 EXTERNAL = ("pybullet", "pybullet_utils")  # third-party layers the rules name
 LEAVES = (
     "stsf_gym.geometry",
@@ -33,24 +36,39 @@ LEAVES = (
     "stsf_gym.video",
     "stsf_gym.terminal_table",
 )
+#: What the simulator side may use of the library, and its folders by idea.
+ENV_SHARED = ("stsf_gym.geometry", "stsf_gym.vision.landmarks", *LEAVES[1:])
+ENV_FOLDERS = ("stsf_gym.envs.worlds", "stsf_gym.envs.rendering")
 #: Pure measurement code (numpy/scipy): metrics, the results schema, TUM trajectories.
 MEASURES = ("stsf_gym.metrics", "stsf_gym.results", "stsf_gym.tum")
 CORE = (*LEAVES, *MEASURES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
 ESTIMATION = (*CORE, "stsf_gym.estimators")
-EPISODE = (*ESTIMATION, "stsf_gym", "stsf_gym.wrappers", "stsf_gym.episode_env", "envs")
+EPISODE = (
+    *ESTIMATION,
+    "stsf_gym",
+    "stsf_gym.wrappers",
+    "stsf_gym.episode_env",
+    "stsf_gym.envs",
+    *ENV_FOLDERS,
+)
 ANY = "*"
 
 #: Each layer and the layers it may import, top to bottom.
 ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.cli": ANY,
-    "stsf_gym.experiments": (*EPISODE, "agents", "stsf_gym.config"),
-    "stsf_gym.bench": (*EPISODE, "agents", "stsf_gym.experiments"),
-    "agents": EPISODE,
-    "stsf_gym.config": ("envs", "stsf_gym.validation", "stsf_gym.yaml_layers"),
-    "stsf_gym.episode_env": ("stsf_gym.wrappers", "envs"),
+    "stsf_gym.experiments": (*EPISODE, "stsf_gym.agents", "stsf_gym.config"),
+    "stsf_gym.bench": (*EPISODE, "stsf_gym.agents", "stsf_gym.experiments"),
+    "stsf_gym.agents": EPISODE,
+    "stsf_gym.config": ("stsf_gym.envs", "stsf_gym.validation", "stsf_gym.yaml_layers"),
+    "stsf_gym.episode_env": ("stsf_gym.wrappers", "stsf_gym.envs"),
     "stsf_gym.wrappers": ESTIMATION,
     "stsf_gym": (),  # the package's __init__: registration only
-    "envs": ("stsf_gym.geometry", "stsf_gym.vision.landmarks", *LEAVES[1:], *EXTERNAL),
+    "stsf_gym.envs": (*ENV_SHARED, *ENV_FOLDERS, *EXTERNAL),
+    # worlds: layouts, checks, the generator (numpy) and the PyBullet builder of a world
+    "stsf_gym.envs.worlds": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.rendering", *EXTERNAL),
+    # rendering: the scene, GL renderer, map and window draw what the worlds describe; no PyBullet
+    "stsf_gym.envs.rendering": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.worlds"),
+    "stsf_gym.configs": (),  # package data only
     "stsf_gym.estimators": CORE,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
     "stsf_gym.metrics": ("stsf_gym.geometry",),
@@ -70,11 +88,13 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
 
 
 def module_files(root: Path = ROOT) -> dict[str, Path]:
-    """Every module of the project's packages under ``root``, by dotted name."""
+    """Every module of the project's packages under ``root`` (a checkout or an installed
+    wheel's site folder), by dotted name."""
     files = {}
-    for package in PACKAGES:
-        for path in sorted((root / package).rglob("*.py")):
-            parts = path.relative_to(root).with_suffix("").parts
+    for package, folder in PACKAGE_DIRS.items():
+        base = root / folder if (root / folder).is_dir() else root / package.replace(".", "/")
+        for path in sorted(base.rglob("*.py")):
+            parts = (*package.split("."), *path.relative_to(base).with_suffix("").parts)
             files[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
     return files
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Mapping
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,9 @@ import yaml
 
 from stsf_gym.validation import ConfigError
 
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
+#: The package's configs (package data: ``configs/`` of the repository, ``stsf_gym/configs`` of an
+#: installed wheel). The package is installed as files, so this is a real folder.
+CONFIG_DIR = Path(str(files("stsf_gym.configs")))
 
 
 def read_yaml(path: str | Path) -> dict:
@@ -40,10 +43,10 @@ def read_yaml(path: str | Path) -> dict:
 
 
 def shown(path: str | Path) -> str:
-    """``path`` as errors show it: relative to the project for its own configs."""
+    """``path`` as errors show it: ``configs/...`` for the package's own configs."""
     path = Path(path)
     try:
-        return str(path.resolve().relative_to(CONFIG_DIR.parent))
+        return str(Path("configs") / path.resolve().relative_to(CONFIG_DIR.resolve()))
     except ValueError:
         return str(path)
 

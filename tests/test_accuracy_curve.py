@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from stsf_gym.experiments.accuracy_curve import accuracy_curve, tolerated_ate
+from stsf_gym.experiments.curve.run import accuracy_curve, tolerated_ate
 from stsf_gym.results import check_rows
 
 TINY = ["--world", "straight_10m", "--seeds", "1", "--levels", "1,30", "--estimators", "odometry"]

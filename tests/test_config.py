@@ -6,7 +6,7 @@ import gymnasium as gym
 import pytest
 import yaml
 
-from envs.config import CONFIG_DIR, ConfigError, EnvConfig, load_config
+from stsf_gym.envs.config import CONFIG_DIR, ConfigError, EnvConfig, load_config
 
 
 def test_defaults_and_world_layers():

@@ -10,8 +10,8 @@ import pytest
 from scipy.stats import chi2
 
 import stsf_gym  # noqa: F401 - registers the ids
-from agents.follower import PathFollower
-from envs.config import ConfigError
+from stsf_gym.agents.follower import PathFollower
+from stsf_gym.envs.config import ConfigError
 from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.ekf import EKFEstimator
 from stsf_gym.estimators.landmark_observation import LandmarkObservation

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from conftest import NOISE_FREE_ENCODERS
 
-from envs.config import load_config
-from envs.sensors.encoders import WheelEncoders
+from stsf_gym.envs.config import load_config
+from stsf_gym.envs.sensors.encoders import WheelEncoders
 from stsf_gym.estimators.odometry import integrate_wheel_travel
 
 

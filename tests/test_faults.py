@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from envs.config import ConfigError, load_config
+from stsf_gym.envs.config import ConfigError, load_config
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
 from stsf_gym.experiments.fault_runs import recovery

@@ -6,9 +6,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.follower import PathFollower, load_follower_config
-from agents.sonar_avoidance import SonarAvoidance
-from envs.config import ConfigError
+from stsf_gym.agents.follower import PathFollower, load_follower_config
+from stsf_gym.agents.sonar_avoidance import SonarAvoidance
+from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
 
 BODY_RADIUS, MAX_RANGE, SONARS = 0.25, 5.0, 16

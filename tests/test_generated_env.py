@@ -10,8 +10,8 @@ import pytest
 import yaml
 from conftest import drive
 
-from agents.observation import PolicyObservation
-from envs.generator_config import load_generator_config
+from stsf_gym.agents.observation import PolicyObservation
+from stsf_gym.envs.worlds.generator_config import load_generator_config
 
 FAST = {"camera__mode": "fast"}
 ACTIONS = [[1.0, 0.2]] * 15

@@ -7,7 +7,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.follower import PathFollower
+from stsf_gym.agents.follower import PathFollower
 from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise

@@ -32,24 +32,32 @@ def test_the_estimators_load_without_the_simulator():
     )
     modules = json.loads(done.stdout)
     assert "stsf_gym.estimators.landmark_fusion" in modules  # the walk imported everything
-    loaded = [m for m in modules if m.split(".")[0] in ("envs", "pybullet", "pybullet_utils")]
+    loaded = [m for m in modules if m.startswith(("stsf_gym.envs", "pybullet"))]
     assert not loaded, f"the estimation core loaded the simulator: {loaded}"
 
 
 def test_the_import_graph_points_one_way():
     assert layers.violations() == []
     graph = layers.layer_graph(layers.module_imports())
-    assert "stsf_gym.experiments" not in graph["agents"]
+    assert "stsf_gym.experiments" not in graph["stsf_gym.agents"]
     for core in ("stsf_gym.estimators", "stsf_gym.fusion", "stsf_gym.vision"):
-        assert not graph[core] & {"envs", "pybullet", "agents", "stsf_gym.wrappers"}, core
-    assert graph["envs"] - {"pybullet", "pybullet_utils"} <= {
+        assert not graph[core] & {
+            "stsf_gym.envs",
+            "pybullet",
+            "stsf_gym.agents",
+            "stsf_gym.wrappers",
+        }, core
+    assert "pybullet" not in graph["stsf_gym.envs.rendering"]
+    assert graph["stsf_gym.envs"] - {"pybullet", "pybullet_utils", *layers.ENV_FOLDERS} <= {
         "stsf_gym.geometry",
         "stsf_gym.vision.landmarks",
         "stsf_gym.validation",
         "stsf_gym.yaml_layers",
         "stsf_gym.camera_model",
     }
-    assert "envs" not in graph["stsf_gym.wrappers"]  # the episode env builder joins the two
+    assert (
+        "stsf_gym.envs" not in graph["stsf_gym.wrappers"]
+    )  # the episode env builder joins the two
 
 
 def _tree(tmp_path: Path, files: dict[str, str]) -> Path:
@@ -65,7 +73,7 @@ def test_violations_are_found(tmp_path):
         tmp_path,
         {
             "stsf_gym/estimators/__init__.py": "def f():\n    import pybullet\n",
-            "stsf_gym/estimators/model.py": "from envs.robot import Robot\n",
+            "stsf_gym/estimators/model.py": "from stsf_gym.envs.robot import Robot\n",
             "envs/robot.py": "from stsf_gym.estimators import model\nRobot = 1\n",
             "agents/train.py": "from stsf_gym.experiments.runs import _private\n",
             "stsf_gym/experiments/__init__.py": "",
@@ -78,11 +86,14 @@ def test_violations_are_found(tmp_path):
     )
     found = "\n".join(layers.violations(root))
     assert "stsf_gym.estimators imports pybullet" in found
-    assert "stsf_gym.estimators.model imports envs.robot" in found
-    assert "envs.robot imports stsf_gym.estimators.model" in found
-    assert "agents.train imports stsf_gym.experiments.runs (agents ->" in found
+    assert "stsf_gym.estimators.model imports stsf_gym.envs.robot" in found
+    assert "stsf_gym.envs.robot imports stsf_gym.estimators.model" in found
+    assert "stsf_gym.agents.train imports stsf_gym.experiments.runs (stsf_gym.agents ->" in found
     assert "private name stsf_gym.experiments.runs._private" in found
-    assert "import cycle: envs.robot -> stsf_gym.estimators.model -> envs.robot" in found
+    assert (
+        "import cycle: stsf_gym.envs.robot -> stsf_gym.estimators.model -> stsf_gym.envs.robot"
+        in found
+    )
     assert "stsf_gym.newlayer: layer stsf_gym.newlayer has no rule" in found  # every layer has
     assert "stsf_gym.cli" not in found  # imports for type checking only do not count
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from envs.quiet import VERBOSE_ENV, quiet_c_output
+from stsf_gym.envs.quiet import VERBOSE_ENV, quiet_c_output
 from stsf_gym.terminal_table import fit_table, print_markdown
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -210,7 +210,7 @@ def test_parallel_soak_matches_serial_bit_for_bit():
 
 def _renderers_here() -> list[str]:
     """TinyRenderer, and those of the OpenGL renderers that start on this machine."""
-    from envs.simulator import Simulator
+    from stsf_gym.envs.simulator import Simulator
 
     here = ["tiny"]
     for renderer in ("egl", "gl"):

@@ -4,7 +4,7 @@ trains on a registered id (optional extra ``stsf-gym[rllib]``)."""
 import numpy as np
 import pytest
 
-from agents.rllib import env_creator
+from stsf_gym.agents.rllib import env_creator
 
 
 class Context(dict):
@@ -33,7 +33,7 @@ def test_env_creator_gives_each_worker_and_vector_slot_its_own_stream():
 
 
 def test_env_creator_repeats_in_a_new_process_and_keeps_the_dict_on_request():
-    from agents import rllib
+    from stsf_gym.agents import rllib
 
     rllib._made.clear()  # as in a fresh worker process
     first = _first_steps(env_creator(Context(CONFIG, 3, 0)))

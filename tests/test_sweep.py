@@ -10,10 +10,10 @@ import sys
 import pytest
 import yaml
 
-from envs.config import ConfigError
-from stsf_gym.experiments import sweep_cells
-from stsf_gym.experiments.sweep import load_sweep, run_sweep
-from stsf_gym.experiments.sweep_cells import CellKind
+from stsf_gym.envs.config import ConfigError
+from stsf_gym.experiments.sweep import cells as sweep_cells
+from stsf_gym.experiments.sweep.cells import CellKind
+from stsf_gym.experiments.sweep.run import load_sweep, run_sweep
 from stsf_gym.results import check_rows
 
 TINY = {  # 2 estimators x 1 noise key x 2 levels x 1 seed, 12 s episodes, fast camera

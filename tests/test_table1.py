@@ -6,8 +6,9 @@ import sys
 import numpy as np
 import pytest
 
-from envs.config import ConfigError, load_config
-from stsf_gym.experiments.table1 import (
+from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.experiments.table1.measure import Place, average_features, measure_rows, range_step
+from stsf_gym.experiments.table1.run import (
     PAPER_TABLE1,
     SeedResult,
     focal_length,
@@ -15,7 +16,6 @@ from stsf_gym.experiments.table1 import (
     run_seed,
     summarise,
 )
-from stsf_gym.experiments.table1_measure import Place, average_features, measure_rows, range_step
 from stsf_gym.results import check_rows
 
 F, CENTRE = 600.0, np.array([319.5, 239.5])

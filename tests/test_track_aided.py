@@ -5,7 +5,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.follower import PathFollower
+from stsf_gym.agents.follower import PathFollower
 from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.pose_errors import PoseErrors
 from stsf_gym.vision.detector import LandmarkDetector, to_grey

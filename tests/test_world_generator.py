@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import yaml
 
-from envs.config import ConfigError, load_config
-from envs.corridor_layout import Rect, boundary_walls
-from envs.generator_config import load_generator_config
-from envs.world_generator import generate_world, path_clearance, world_tree
-from envs.world_visibility import CameraView, path_samples, seen_matrix
+from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.worlds.generator import generate_world, path_clearance, world_tree
+from stsf_gym.envs.worlds.generator_config import load_generator_config
+from stsf_gym.envs.worlds.layout import Rect, boundary_walls
+from stsf_gym.envs.worlds.visibility import CameraView, path_samples, seen_matrix
 from stsf_gym.experiments.generated_worlds import write_world_yaml
 
 ENV = load_config()

@@ -9,7 +9,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-from agents.observation import PolicyObservation
+from stsf_gym.agents.observation import PolicyObservation
 from stsf_gym.wrappers import POSE_SOURCES, PoseEstimateWrapper
 
 

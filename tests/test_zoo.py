@@ -1,4 +1,4 @@
-"""rl-zoo3 runs on the registered ids with ``--conf-file agents.zoo``."""
+"""rl-zoo3 runs on the registered ids with ``--conf-file stsf_gym.agents.zoo``."""
 
 import os
 import re
@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from agents.zoo import hyperparams, zoo_section
+from stsf_gym.agents.zoo import hyperparams, zoo_section
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -23,7 +23,16 @@ def test_sections_follow_the_training_config():
 def test_rl_zoo3_trains_ppo_through_gym_packages(tmp_path):
     command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo"]
     command += ["--env", "stsf_gym/Straight10m-Truth-v0", "--gym-packages", "stsf_gym"]
-    command += ["--conf-file", "agents.zoo", "-n", "128", "--seed", "0", "--eval-freq", "-1"]
+    command += [
+        "--conf-file",
+        "stsf_gym.agents.zoo",
+        "-n",
+        "128",
+        "--seed",
+        "0",
+        "--eval-freq",
+        "-1",
+    ]
     command += ["-f", str(tmp_path), "-params", "n_envs:1", "n_steps:64", "batch_size:32"]
     command += ["--eval-env-kwargs", "camera:{'enabled':False}"]
     result = subprocess.run(

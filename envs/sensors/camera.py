@@ -3,8 +3,9 @@
 Camera axes follow OpenCV (x right, y down, z forward). The renderers draw with OpenGL axes
 (x right, y up, z backward) and an OpenGL projection; the two are built here from the same
 numbers, so a world point projected through K (and the lens's distortion, applied to the
-rendered frame by :mod:`envs.sensors.lens`) lands where the renderer draws it (pixel centres
-at integer coordinates; with the default K the principal point is ``(W/2 - 0.5, H/2 - 0.5)``).
+rendered frame by :mod:`stsf_gym.envs.sensors.lens`) lands where the renderer draws it (pixel
+centres at integer coordinates; with the default K the principal point is ``(W/2 - 0.5, H/2 -
+0.5)``).
 """
 
 from __future__ import annotations
@@ -13,8 +14,8 @@ import math
 
 import numpy as np
 
-from envs.config import CalibrationErrorConfig
 from stsf_gym.camera_model import CameraCalibration
+from stsf_gym.envs.config import CalibrationErrorConfig
 
 #: Maps OpenCV camera axes to OpenGL camera axes (and back): flip y and z.
 CV_TO_GL = np.diag([1.0, -1.0, -1.0, 1.0])

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from envs.config import EncoderConfig
+from stsf_gym.envs.config import EncoderConfig
 from stsf_gym.geometry import OdometryCalibration
 
 

@@ -28,9 +28,9 @@ from __future__ import annotations
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import FastCameraConfig
-from envs.sensors.camera import PinholeCamera
-from envs.world import CorridorWorld
+from stsf_gym.envs.config import FastCameraConfig
+from stsf_gym.envs.sensors.camera import PinholeCamera
+from stsf_gym.envs.worlds.corridor import CorridorWorld
 from stsf_gym.vision.landmarks import square_centres
 
 PHANTOM_DEPTH = (2.0, 6.0)  # m, range of a false detection's depth

@@ -17,7 +17,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from envs.config import SensorConfig
+from stsf_gym.envs.config import SensorConfig
 
 BANK_FRAMES = 4
 

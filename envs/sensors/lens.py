@@ -16,7 +16,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from envs.sensors.camera import PinholeCamera, projection_from_K
+from stsf_gym.envs.sensors.camera import PinholeCamera, projection_from_K
 
 MARGIN_PX = 2  # render pixels beyond the outermost source pixel (bilinear needs a neighbour)
 

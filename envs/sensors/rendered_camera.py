@@ -4,8 +4,8 @@ A frame is exposed for ``sensor.exposure_s`` centred on its time stamp. When the
 motion during that time (the robot's and the pan/tilt mount's, from PyBullet's link
 velocities) moves the image by more than ``SUBFRAME_PX``, the frame is the mean of renders at
 poses spread over the exposure (motion blur); otherwise one render. Then the lens
-(:mod:`envs.sensors.lens`: distortion, vignetting's gain) and its defocus, and the sensor
-(:mod:`envs.sensors.image_sensor`: exposure gain, noise, 8 bits).
+(:mod:`stsf_gym.envs.sensors.lens`: distortion, vignetting's gain) and its defocus, and the sensor
+(:mod:`stsf_gym.envs.sensors.image_sensor`: exposure gain, noise, 8 bits).
 """
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ import cv2
 import numpy as np
 from gymnasium import spaces
 
-from envs.config import CameraConfig
-from envs.sensors.camera import PinholeCamera, view_matrix
-from envs.sensors.image_sensor import ImageSensor
-from envs.sensors.lens import Lens, cos4_gain
+from stsf_gym.envs.config import CameraConfig
+from stsf_gym.envs.sensors.camera import PinholeCamera, view_matrix
+from stsf_gym.envs.sensors.image_sensor import ImageSensor
+from stsf_gym.envs.sensors.lens import Lens, cos4_gain
 
 SUBFRAME_PX = 1.0  # image motion (px) per render of a motion-blurred frame
 MAX_SUBFRAMES = 6

@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 
-from envs.config import SonarConfig
-from envs.simulator import Simulator
+from stsf_gym.envs.config import SonarConfig
+from stsf_gym.envs.simulator import Simulator
 
 
 class SonarRing:

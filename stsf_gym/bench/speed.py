@@ -53,7 +53,7 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
     import gymnasium as gym
 
     import stsf_gym  # noqa: F401 - registers the ids
-    from agents.follower import PathFollower
+    from stsf_gym.agents.follower import PathFollower
     from stsf_gym.wrappers import PoseEstimateWrapper  # the estimator's settings from configs/
 
     overrides, source = CASES[name]
@@ -179,7 +179,7 @@ def _render_latency(renderer: str, frames: int, cpu: int | None) -> dict:
     import gymnasium as gym
 
     import stsf_gym  # noqa: F401 - registers the ids
-    from envs.sensors.camera import PinholeCamera, view_matrix
+    from stsf_gym.envs.sensors.camera import PinholeCamera, view_matrix
 
     try:
         env = gym.make("stsf_gym/Corridor-v0", camera__renderer=renderer)

@@ -2,8 +2,8 @@
 
 With a rendered camera the detector runs on ``obs["image"]``; in the fast sensor mode the env
 has already simulated its output (``obs["landmark_ids"]``, ``obs["landmark_points"]``, see
-:mod:`envs.sensors.fast_camera`), which is unpacked into the same :class:`Detection` records,
-so every estimator runs one code path in both modes.
+:mod:`stsf_gym.envs.sensors.fast_camera`), which is unpacked into the same :class:`Detection`
+records, so every estimator runs one code path in both modes.
 
 With ``predictions`` (:class:`~stsf_gym.vision.predicted.BoardPrediction`, from an estimator's
 landmark tracks), a predicted board the detector did not find is searched where and at the size

@@ -51,7 +51,7 @@ def agent_name(template: str, estimator: str) -> str:
     """A short name for the table: ``follower``, or the algorithm of the saved model."""
     if template == "follower":
         return template
-    from agents.sb3_agent import training_record
+    from stsf_gym.agents.sb3_agent import training_record
 
     return training_record(agent_for(template, estimator))["algo"].upper()
 

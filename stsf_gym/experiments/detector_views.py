@@ -81,14 +81,15 @@ def detection_records(
 
     Works in both camera modes (the rendered image through the detector, or the fast mode's
     simulated detections), so the two can be compared. Each record: ``distance``, ``angle``,
-    ``size_px`` (the board's apparent size, see :func:`envs.sensors.fast_camera.apparent_size_px`),
-    ``detected``, ``wrong_ids`` (detections of other ids), ``residuals`` ((N, 2) pixels,
-    detected minus true square centres through the true K and distortion: the sensor's error;
-    empty when not detected) and ``calibrated_residuals`` (the same points as the estimators
-    see them: undistorted with the episode's believed calibration, minus the true square
-    centres projected through the believed K: the sensor's and the calibration's error).
+    ``size_px`` (the board's apparent size, see
+    :func:`stsf_gym.envs.sensors.fast_camera.apparent_size_px`), ``detected``, ``wrong_ids``
+    (detections of other ids), ``residuals`` ((N, 2) pixels, detected minus true square centres
+    through the true K and distortion: the sensor's error; empty when not detected) and
+    ``calibrated_residuals`` (the same points as the estimators see them: undistorted with the
+    episode's believed calibration, minus the true square centres projected through the believed K:
+    the sensor's and the calibration's error).
     """
-    from envs.sensors.fast_camera import apparent_size_px
+    from stsf_gym.envs.sensors.fast_camera import apparent_size_px
     from stsf_gym.estimators.frame_detector import FrameDetector
 
     u = env.unwrapped

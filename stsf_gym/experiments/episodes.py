@@ -121,7 +121,7 @@ def agent_label(agent: str) -> str:
     """``follower``, or a saved model's file stem and content digest (a file-name part)."""
     if agent == "follower":
         return agent
-    from agents.sb3_agent import model_digest
+    from stsf_gym.agents.sb3_agent import model_digest
 
     return f"{Path(agent).stem}-{model_digest(agent)}"
 
@@ -130,12 +130,12 @@ def make_agent(name: str, env, options: dict | None = None):
     """``obs -> action`` for the wrapped ``env``: the follower (``options`` override
     ``configs/agents/follower.yaml``), or a saved SB3 model's path."""
     if name == "follower":
-        from agents.follower import PathFollower
+        from stsf_gym.agents.follower import PathFollower
 
         follower = PathFollower.for_env(env, **(options or {}))
         return lambda obs: follower.act(obs["pose"], obs["sonar"])
     if name.endswith(".zip"):
-        from agents.sb3_agent import load_agent
+        from stsf_gym.agents.sb3_agent import load_agent
 
         return load_agent(name, env)
     raise ValueError(f"unknown agent {name!r}; known: follower or a saved model (.zip)")

@@ -70,7 +70,7 @@ def evaluate(
     }
     title = agent
     if agent != "follower":  # a saved model: record what it was trained on
-        from agents.sb3_agent import training_record
+        from stsf_gym.agents.sb3_agent import training_record
 
         summary["trained"] = training_record(agent)
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])

@@ -1,7 +1,7 @@
 """``stsf-gym evaluate --faults FILE...``: every fault set on every estimator, and the recovery.
 
-A fault file holds a ``faults:`` list (:mod:`envs.fault_spec`) and nothing else; its file stem
-names the fault set. Each episode runs with the set's faults added to the env settings. The
+A fault file holds a ``faults:`` list (:mod:`stsf_gym.envs.fault_spec`) and nothing else; its file
+stem names the fault set. Each episode runs with the set's faults added to the env settings. The
 table (``results.md``, ``results.json``) has one row per fault set and estimator:
 
 - success rate and collisions, final and max position error;
@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from envs.config import ConfigError, load_config, read_yaml
-from envs.fault_spec import fault_span
+from stsf_gym.envs.config import ConfigError, load_config, read_yaml
+from stsf_gym.envs.fault_spec import fault_span
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,

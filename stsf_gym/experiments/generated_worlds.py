@@ -1,7 +1,7 @@
 """``stsf-gym world``: a generated world written out as world YAML, or a grid of them drawn.
 
 ``--world generated --split NAME`` elsewhere in the CLI is the label ``generated:NAME``
-(:func:`envs.generated_env.parse_world`): episodes then run in ``stsf_gym/Generated-v0`` on
+(:func:`stsf_gym.envs.generated_env.parse_world`): episodes then run in ``stsf_gym/Generated-v0`` on
 that split, and the episode seed ``s`` is that split's world ``s`` (``reset(seed=s)``).
 """
 
@@ -11,9 +11,9 @@ from pathlib import Path
 
 import yaml
 
-from envs.config import load_config
-from envs.generator_config import load_generator_config
-from envs.world_generator import world_tree
+from stsf_gym.envs.config import load_config
+from stsf_gym.envs.worlds.generator import world_tree
+from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.io import save_figure, write_atomic
 
 
@@ -36,8 +36,8 @@ def plot_world_grid(seeds: list[int], out: str | Path, env: dict | None = None) 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from envs.task import Polyline
-    from envs.world_generator import generate_world
+    from stsf_gym.envs.task import Polyline
+    from stsf_gym.envs.worlds.generator import generate_world
     from stsf_gym.experiments.plots import draw_world_config
 
     gen, env_cfg = load_generator_config(), load_config(**(env or {}))

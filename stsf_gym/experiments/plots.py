@@ -44,7 +44,7 @@ def draw_world_config(ax, world) -> None:
 
 def plot_trajectories(world: str, by_estimator: dict[str, list[EpisodeResult]], path: Path):
     """True and estimated paths of the first episode per estimator, over the map."""
-    from envs.generated_env import episode_world
+    from stsf_gym.envs.generated_env import episode_world
 
     plt = pyplot()
     n = len(by_estimator)

@@ -7,7 +7,7 @@ distance from the board's plane. The camera thus moves sideways to its line of s
 as along it: motion stereo needs that parallax. At each place
 it waits for the body to settle and captures ``frames_per_place`` frames with the camera
 panned onto the board from the odometry pose (:class:`LandmarkPointer`). What the robot knows
-is kept in a :class:`~stsf_gym.experiments.table1_measure.Place`: the detector's square centres
+is kept in a :class:`~stsf_gym.experiments.table1.measure.Place`: the detector's square centres
 (:class:`FrameDetector`: undistorted with the believed calibration) averaged over the frames,
 its believed camera pose, and the odometry motion since the previous place with its covariance
 (the estimators' dead reckoning, :class:`OdometryEstimator`). Beside it, for evaluation: the
@@ -27,7 +27,7 @@ from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
-from stsf_gym.experiments.table1_measure import Place, average_features
+from stsf_gym.experiments.table1.measure import Place, average_features
 from stsf_gym.geometry import to_se3, wrap_angle
 from stsf_gym.wrappers import sensor_model
 

@@ -1,4 +1,5 @@
-"""The camera's OpenGL renderer: the world's :class:`~envs.scene.Scene` drawn with moderngl.
+"""The camera's OpenGL renderer: the world's :class:`~stsf_gym.envs.rendering.scene.Scene` drawn
+with moderngl.
 
 A headless EGL context (Mesa's llvmpipe on a CPU, or a GPU's driver) is made once per process
 and shared by every env in it. Each renderer uploads its scene's static triangles once (again
@@ -9,7 +10,7 @@ read-back. Lighting is a fixed directional light plus ambient, so walls and floo
 shade as they do under PyBullet's renderers.
 
 EGL cannot be used in a process forked after its parent made a context (Mesa deadlocks):
-:func:`gl_inherited` tells, and :class:`~envs.simulator.Simulator` then falls back.
+:func:`gl_inherited` tells, and :class:`~stsf_gym.envs.simulator.Simulator` then falls back.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import os
 
 import numpy as np
 
-from envs.scene import Scene
+from stsf_gym.envs.rendering.scene import Scene
 
 LIGHT_DIRECTION = (0.35, -0.25, 0.9)  # towards the light, world frame (mostly from above)
 AMBIENT = 0.55

@@ -1,10 +1,11 @@
 """The world's scene description: the one list of shapes that both PyBullet and the camera use.
 
-The world builder (:mod:`envs.world`) describes every static thing once, as a :class:`Box`, a
-:class:`Cylinder` or a textured :class:`Board`. :meth:`envs.simulator.Simulator.add` turns each
-into a PyBullet body (collision for contacts and sonar rays, a visual shape for PyBullet's own
-renderers) and keeps it in the :class:`Scene`, which the OpenGL camera renderer
-(:mod:`envs.gl_renderer`) draws as triangles. Nothing here imports PyBullet.
+The world builder (:mod:`stsf_gym.envs.worlds.corridor`) describes every static thing once, as a
+:class:`Box`, a :class:`Cylinder` or a textured :class:`Board`.
+:meth:`stsf_gym.envs.simulator.Simulator.add` turns each into a PyBullet body (collision for
+contacts and sonar rays, a visual shape for PyBullet's own renderers) and keeps it in the
+:class:`Scene`, which the OpenGL camera renderer (:mod:`stsf_gym.envs.rendering.gl_renderer`) draws
+as triangles. Nothing here imports PyBullet.
 """
 
 from __future__ import annotations

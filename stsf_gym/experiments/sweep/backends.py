@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
-from envs.config import ConfigError
+from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.cache import Runner, process_runner
-from stsf_gym.experiments.sweep_cells import failure
+from stsf_gym.experiments.sweep.cells import failure
 
 BACKENDS = ("local", "ray")
 

@@ -1,5 +1,5 @@
-"""Corridor worlds drawn from a seed: the same :class:`~envs.config.WorldConfig` a YAML world
-gives, checked like one. Pure numpy, no PyBullet.
+"""Corridor worlds drawn from a seed: the same :class:`~stsf_gym.envs.config.WorldConfig` a YAML
+world gives, checked like one. Pure numpy, no PyBullet.
 
 :func:`generate_world` draws, with ``numpy.random.default_rng(seed)`` only:
 
@@ -10,12 +10,12 @@ gives, checked like one. Pure numpy, no PyBullet.
    ``min_path_length`` long;
 2. **dead-end side branches** (T junctions): perpendicular to a leg's middle, or straight on
    past a turn, ``branch_length`` long;
-3. **walls**: the boundary of the legs' union (:mod:`envs.corridor_layout`);
+3. **walls**: the boundary of the legs' union (:mod:`stsf_gym.envs.worlds.layout`);
 4. **clutter**: boxes and cylinders against the walls, each leaving ``robot.body_radius +
    path_clearance`` free around the path and ``corner_distance`` from turns, start and goal;
 5. **landmarks**: candidates on every wall every ``candidate_step``; a greedy cover keeps
    those that make every path point see ``landmarks_in_view`` of them (at least one is a
-   must: :mod:`envs.world_visibility` defines *seen*).
+   must: :mod:`stsf_gym.envs.worlds.visibility` defines *seen*).
 
 A layout that fails a step is drawn again (up to ``attempts`` times). The world is returned as
 the mapping a world YAML holds (:func:`world_tree`), so it can be written out and edited.
@@ -27,11 +27,11 @@ import math
 
 import numpy as np
 
-from envs.config import EnvConfig, WorldConfig, build
-from envs.corridor_layout import DIRECTIONS, Rect, boundary_walls
-from envs.generator_config import GeneratorConfig
-from envs.world_checks import obstacle_distance
-from envs.world_visibility import CameraView, choose_landmarks, path_samples, seen_matrix
+from stsf_gym.envs.config import EnvConfig, WorldConfig, build
+from stsf_gym.envs.worlds.checks import obstacle_distance
+from stsf_gym.envs.worlds.generator_config import GeneratorConfig
+from stsf_gym.envs.worlds.layout import DIRECTIONS, Rect, boundary_walls
+from stsf_gym.envs.worlds.visibility import CameraView, choose_landmarks, path_samples, seen_matrix
 
 CAP = 3  # decimals of every coordinate in a generated world (millimetres)
 

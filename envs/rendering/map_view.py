@@ -16,8 +16,8 @@ from itertools import cycle
 import cv2
 import numpy as np
 
-from envs.config import WorldConfig
-from envs.world import Landmark
+from stsf_gym.envs.config import WorldConfig
+from stsf_gym.envs.worlds.corridor import Landmark
 
 BACKGROUND = (236, 236, 232)
 WALL, CLUTTER, PATH, GOAL = (70, 70, 70), (150, 110, 80), (120, 160, 220), (60, 170, 90)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from envs.generator_config import VisibilityConfig
+from stsf_gym.envs.worlds.generator_config import VisibilityConfig
 
 SIGHT_END = 0.15  # m: the sight line stops this short of the board (clear of its own wall)
 

@@ -16,9 +16,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from envs.config import ConfigError, deep_merge
+from stsf_gym.envs.config import ConfigError, deep_merge
 
-#: ``train`` keys that are arguments of ``agents.train.train`` (with their defaults in a
+#: ``train`` keys that are arguments of ``stsf_gym.agents.train.train`` (with their defaults in a
 #: sweep: one env per cell); every other ``train`` key is a hyper-parameter override.
 TRAIN_ARGUMENTS = {"algo": "ppo", "timesteps": None, "n_envs": 1, "config": None}
 
@@ -70,7 +70,7 @@ def evaluate_cell(cell: dict) -> dict:
 def train_cell(cell: dict) -> dict:
     """Train an SB3 agent on the cell's pose source (in ``cell["out"]``, resumable), then
     evaluate the model for one episode on an evaluation seed, as an evaluate cell does."""
-    from agents.train import EVAL_SEED_OFFSET, train
+    from stsf_gym.agents.train import EVAL_SEED_OFFSET, train
 
     arguments, hyperparams = _train_arguments(cell)
     summary = train(
@@ -103,8 +103,8 @@ def train_cell(cell: dict) -> dict:
 def check_train_cell(cell: dict) -> None:
     """The trainer must be installed and the cell's hyper-parameters valid."""
     try:
-        from agents.hyperparams import load_hyperparams
-        from agents.train import env_id_for
+        from stsf_gym.agents.hyperparams import load_hyperparams
+        from stsf_gym.agents.train import env_id_for
     except ImportError as err:
         raise ConfigError(f"cell kind 'train' is not available: {err}") from err
     arguments, hyperparams = _train_arguments(cell)

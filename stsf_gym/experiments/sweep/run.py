@@ -15,7 +15,7 @@ A sweep file (``configs/sweeps/<name>.yaml``) holds:
 
 Each cell's result is its own JSON file in ``<out>/cells/``, written when the cell finishes;
 a rerun skips finished cells and retries failed ones. The summary is written by
-:mod:`stsf_gym.experiments.sweep_report`; the sweep is named after its file.
+:mod:`stsf_gym.experiments.sweep.report`; the sweep is named after its file.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from envs.config import (
+from stsf_gym.envs.config import (
     CONFIG_DIR,
     ConfigError,
     deep_merge,
@@ -36,9 +36,9 @@ from envs.config import (
 )
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.episodes import estimator_options
-from stsf_gym.experiments.sweep_backends import make_runner
-from stsf_gym.experiments.sweep_cells import cell_kind, run_cell
-from stsf_gym.experiments.sweep_report import write_report
+from stsf_gym.experiments.sweep.backends import make_runner
+from stsf_gym.experiments.sweep.cells import cell_kind, run_cell
+from stsf_gym.experiments.sweep.report import write_report
 
 CELL_VERSION = 1  # bumped when a cell's result changes meaning, so older cell files are rerun
 FILE_KEYS = ("base", "grid", "one_at_a_time")

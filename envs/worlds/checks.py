@@ -17,7 +17,7 @@ import numpy as np
 from stsf_gym.validation import FieldError, require
 
 if TYPE_CHECKING:
-    from envs.config import ObstacleSpec, WorldConfig
+    from stsf_gym.envs.config import ObstacleSpec, WorldConfig
 
 ON_WALL_TOLERANCE = 1e-3  # m: how far a landmark's ``at`` may be off a wall centre line
 SQUARE_TOLERANCE_DEG = 1.0  # how far a landmark's normal may be off square to its wall

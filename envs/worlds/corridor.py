@@ -1,6 +1,7 @@
-"""The corridor world built from a :class:`~envs.config.WorldConfig`: floor, walls, clutter and
-textured landmark boards (the paper's Fig. 3 pattern), described once as scene shapes
-(:mod:`envs.scene`) that the simulator turns into PyBullet bodies and the camera draws.
+"""The corridor world built from a :class:`~stsf_gym.envs.config.WorldConfig`: floor, walls, clutter
+and textured landmark boards (the paper's Fig. 3 pattern), described once as scene shapes
+(:mod:`stsf_gym.envs.rendering.scene`) that the simulator turns into PyBullet bodies and the camera
+draws.
 """
 
 from __future__ import annotations
@@ -10,10 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from envs.config import LandmarkSpec, WorldConfig
-from envs.scene import Board, Box, Cylinder
-from envs.sensors.camera import PinholeCamera
-from envs.simulator import Simulator
+from stsf_gym.envs.config import LandmarkSpec, WorldConfig
+from stsf_gym.envs.rendering.scene import Board, Box, Cylinder
+from stsf_gym.envs.sensors.camera import PinholeCamera
+from stsf_gym.envs.simulator import Simulator
 from stsf_gym.vision.landmarks import (
     board_corners,
     landmark_image,

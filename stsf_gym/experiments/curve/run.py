@@ -9,7 +9,7 @@ same axes as points. The reading is the agent's **tolerated ATE**: the largest m
 of the dial's levels up to which the agent reaches the goal in at least
 :data:`REQUIRED_SUCCESS` of episodes at every level.
 
-Every episode is a sweep cell (:mod:`stsf_gym.experiments.sweep_cells`), run on the sweep's
+Every episode is a sweep cell (:mod:`stsf_gym.experiments.sweep.cells`), run on the sweep's
 local or Ray backend with its resume: each finished cell is a JSON file in ``<out>/cells/``.
 Writes ``curve.json`` (numbers, the results schema), ``curve.md`` and ``curve.png``.
 """
@@ -18,13 +18,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from envs.config import ConfigError, deep_merge, load_config
+from stsf_gym.envs.config import ConfigError, deep_merge, load_config
 from stsf_gym.experiments.cache import run_cached
-from stsf_gym.experiments.curve_plot import plot_curve
+from stsf_gym.experiments.curve.plot import plot_curve
 from stsf_gym.experiments.episodes import estimator_options
-from stsf_gym.experiments.sweep import cell_name, forget_failures
-from stsf_gym.experiments.sweep_backends import make_runner
-from stsf_gym.experiments.sweep_cells import run_cell
+from stsf_gym.experiments.sweep.backends import make_runner
+from stsf_gym.experiments.sweep.cells import run_cell
+from stsf_gym.experiments.sweep.run import cell_name, forget_failures
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
 
@@ -173,7 +173,7 @@ def agent_label(agent: str) -> str:
     """``follower``, or a saved model's algorithm and the pose source it was trained on."""
     if agent == "follower":
         return agent
-    from agents.sb3_agent import training_record
+    from stsf_gym.agents.sb3_agent import training_record
 
     record = training_record(agent)
     return f"{record['algo'].upper()} trained on {record['estimator']}"

@@ -20,7 +20,7 @@ from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
 from stsf_gym.results import METRICS, SCHEMA_VERSION, render, stats
 
 if TYPE_CHECKING:
-    from stsf_gym.experiments.sweep import Sweep
+    from stsf_gym.experiments.sweep.run import Sweep
 
 FINAL, RMS = "final_error_m", "ate_rmse_m"
 FIGURE = "errors.png"

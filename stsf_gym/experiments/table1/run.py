@@ -5,8 +5,8 @@ The paper's sect. 4.2: the robot captures one landmark from six places, 7.81, 7.
 conventional fusion is motion stereo (eq. 8-20) between places ``k-1`` and ``k``; STSF fuses
 the distances of every place so far, carried by odometry (eq. 2-5, eq. 3). A start place, where
 the robot first captures the landmark, gives row 1 its pair. The rig is
-:mod:`~stsf_gym.experiments.table1_rig`, the two measurements
-:mod:`~stsf_gym.experiments.table1_measure`. Errors are over seeds (RMS, with the signed
+:mod:`~stsf_gym.experiments.table1.rig`, the two measurements
+:mod:`~stsf_gym.experiments.table1.measure`. Errors are over seeds (RMS, with the signed
 errors' mean and spread), beside the paper's columns, the baselines the robot drove and the
 stereo bound ``sqrt(2) Z^2 sigma_px / (f b)``.
 """
@@ -19,13 +19,20 @@ from pathlib import Path
 
 import numpy as np
 
-from envs.config import CONFIG_DIR, build, deep_merge, load_config, overrides_to_tree, read_yaml
+from stsf_gym.envs.config import (
+    CONFIG_DIR,
+    build,
+    deep_merge,
+    load_config,
+    overrides_to_tree,
+    read_yaml,
+)
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms
-from stsf_gym.experiments.table1_measure import measure_rows
-from stsf_gym.experiments.table1_plot import plot_table1
-from stsf_gym.experiments.table1_rig import Table1Rig
+from stsf_gym.experiments.table1.measure import measure_rows
+from stsf_gym.experiments.table1.plot import plot_table1
+from stsf_gym.experiments.table1.rig import Table1Rig
 from stsf_gym.fusion import stereo_range_bound
 from stsf_gym.geometry import wrap_angle
 from stsf_gym.io import markdown_table

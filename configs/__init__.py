@@ -1,0 +1,1 @@
+"""The package's configuration files (package data, read with :mod:`importlib.resources`)."""

@@ -1,0 +1,1 @@
+"""``stsf-gym accuracy-curve``: the run and its figure."""

@@ -1,0 +1,1 @@
+"""``stsf-gym sweep``: cells over config keys, where they run, and the summary."""
