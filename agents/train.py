@@ -5,7 +5,10 @@ pointed by :class:`PoseEstimateWrapper`), with :class:`PolicyObservation` on top
 ``Monitor`` outside. ``OUT`` receives ``checkpoints/``, ``tb/`` (TensorBoard), ``monitor/``,
 ``eval/`` and ``best/`` (the best evaluated model), ``episodes.csv``, ``eval.csv``,
 ``learning_curve.png``, ``model.zip`` and ``train.json``. Rerunning with the same ``OUT``
-continues from the newest checkpoint; Ctrl-C saves one first.
+continues from the newest checkpoint; Ctrl-C saves one first. A checkpoint made by other code
+or another resolved configuration (its :func:`~stsf_gym.results.provenance.fingerprint` differs) is
+not resumed: the run says so, moves the old checkpoints to ``stale-checkpoints/`` and starts
+afresh. ``train.json`` and every model file carry the run's provenance.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from __future__ import annotations
 import io
 import re
 import signal
+import sys
 import time
 import warnings
 from dataclasses import asdict
@@ -39,8 +43,9 @@ from stsf_gym.agents.training_log import (
 )
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.generated_env import parse_world
-from stsf_gym.episode_env import make_episode_env
+from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.io import write_atomic, write_json
+from stsf_gym.results.provenance import fingerprint, provenance
 from stsf_gym.wrappers import POSE_SOURCES
 
 PREFIX = "model"  # checkpoints are checkpoints/model_<timesteps>_steps.zip
@@ -149,6 +154,14 @@ def _resume(cls: type, out: Path, meta: dict, env: VecEnv):
                 f"{out} holds a run with {key} {saved.get(key)!r}, not {meta[key]!r}; "
                 "choose another --out"
             )
+    if saved.get("made_by") != meta["made_by"]:
+        stale = _set_aside(out)
+        print(
+            f"{out}: the checkpoints were made by other code or settings; they are kept in "
+            f"{stale} and training starts afresh",
+            file=sys.stderr,
+        )
+        return None
     model = cls.load(str(path), env=env, device="cpu")
     setattr(model, META_KEY, {**meta, "wall_time_s": saved.get("wall_time_s", 0.0)})
     buffer = path.with_name(f"{PREFIX}_replay_buffer_{steps}_steps.pkl")
@@ -157,6 +170,18 @@ def _resume(cls: type, out: Path, meta: dict, env: VecEnv):
     for name in (EPISODES_CSV, EVAL_CSV):
         drop_rows_after(out / name, steps)
     return model
+
+
+def _set_aside(out: Path) -> Path:
+    """Move ``out``'s checkpoints to a new folder under ``stale-checkpoints/``; forget the
+    episodes and evaluations they logged."""
+    stale = out / "stale-checkpoints"
+    stale.mkdir(exist_ok=True)
+    target = stale / str(len(list(stale.iterdir())))
+    (out / "checkpoints").rename(target)
+    for name in (EPISODES_CSV, EVAL_CSV):
+        drop_rows_after(out / name, 0)
+    return target
 
 
 def train(
@@ -189,7 +214,21 @@ def train(
     spec = {"world": world, "estimator": estimator, "env": cfg.env, "observation": observation}
     training = {k: v for k, v in asdict(cfg).items() if k not in ("env", "observation")}
     hyperparams = {"section": hp.section, **training, **hp.algo_kwargs, "n_envs": n_envs}
-    meta = {"algo": algo, "seed": seed, **spec, "hyperparams": hyperparams, "wall_time_s": 0.0}
+    resolved = {
+        **resolved_config(world, estimator, cfg.env),
+        "algo": algo,
+        "hyperparams": hyperparams,
+        "observation": observation,
+    }
+    meta = {
+        "algo": algo,
+        "seed": seed,
+        **spec,
+        "hyperparams": hyperparams,
+        "wall_time_s": 0.0,
+        "made_by": fingerprint(resolved),
+        "provenance": provenance(resolved, [seed]),
+    }
     cls = algorithm_class(algo)
     train_env = make_vec_env(n_envs, out, "train", **spec)
     eval_env = make_vec_env(1, out, "eval", **spec)

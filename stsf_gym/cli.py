@@ -12,6 +12,7 @@ from pathlib import Path
 
 from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.envs.quiet import VERBOSE_ENV
+from stsf_gym.results.provenance import set_command
 
 
 def _common(
@@ -48,14 +49,15 @@ def _demo(args: argparse.Namespace) -> dict:
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
     if args.video_seconds is not None and args.video_seconds < 0:
         raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")
-    summary = run_demo(args.out, args.seed, args.workers, env, args.video_seconds)
+    summary = run_demo(args.out, args.seed, args.workers, env, args.video_seconds, args.seeds)
     if not args.json:
         from rich.console import Console
 
         from stsf_gym.terminal_table import fit_table
 
         console = Console()
-        title = f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})"
+        seeds = f"seed {args.seed}" if args.seeds == 1 else f"{args.seeds} seeds from {args.seed}"
+        title = f"stsf-gym demo: follower on the IRL corridor ({seeds})"
         cells = [rendered(row, COLUMNS) for row in summary["rows"]]
         rows = [list(row.values()) for row in cells]
         console.print(fit_table(list(cells[0]), rows, console.width, title, "results.md"))
@@ -329,6 +331,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo = commands.add_parser("demo", help="the follower on each estimator, IRL corridor")
     _common(demo, "out/demo")
     demo.add_argument("--seconds", type=float, help="simulated time limit per episode")
+    demo.add_argument("--seeds", type=int, default=1, help="episodes per estimator (1)")
     demo.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
     demo.add_argument(
         "--video-seconds",
@@ -457,6 +460,7 @@ def main(argv: list[str] | None = None) -> int:
     from stsf_gym.experiments.cache import JobsFailed
 
     args = build_parser().parse_args(argv)
+    set_command(["stsf-gym", *(sys.argv[1:] if argv is None else argv)])
     error = f"stsf-gym {args.command}: error:"
     try:
         if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one

@@ -9,8 +9,9 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from stsf_gym.envs.sensors.fast_camera import apparent_size_px, detection_probability
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.detector_views import detection_records, room_world, summarise_records
-from stsf_gym.experiments.episodes import EpisodeSpec, estimator_options, run_episode
+from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
 
 
 @pytest.fixture(scope="module")

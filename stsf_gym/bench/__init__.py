@@ -25,6 +25,7 @@ from tqdm import tqdm
 
 from stsf_gym.bench.speed import CASES, render_latency, run_case, vector_scaling
 from stsf_gym.io import markdown_table, write_atomic, write_json
+from stsf_gym.results.provenance import provenance
 
 PAPER_MS = {"detect": 127.0, "localise": 332.0}  # sect. 4.3, 1 GHz Pentium IV
 PROFILED_CASE = "e: camera + detector + STSF"
@@ -77,6 +78,7 @@ def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, se
     vector = vector_scaling(vector_steps, seed)
     summary = {"machine": machine(), "speed": speed, "render": renders, "vector": vector}
     summary["targets"] = targets(summary)
+    summary["provenance"] = provenance({"sim_seconds": sim_seconds, "vector_steps": vector_steps})
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "bench.json", summary)
     write_atomic(out / "bench.md", to_markdown(summary))

@@ -15,12 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from stsf_gym.episode_env import make_episode_env
-from stsf_gym.estimators import estimator_settings
+from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
-from stsf_gym.wrappers import TRUTH
 
 RESULT_VERSION = 5  # bumped when EpisodeResult changes, so older episode files are rerun
 
@@ -40,6 +38,12 @@ class EpisodeSpec:
     @property
     def key(self) -> str:
         return f"{self.world}-{self.estimator}-{agent_label(self.agent)}-{self.seed}"
+
+    def resolved(self) -> dict:
+        """Every value this episode runs with: the env's and pose source's settings
+        (:func:`~stsf_gym.episode_env.resolved_config`) and the agent's."""
+        config = resolved_config(self.world, self.estimator, self.env, self.options)
+        return {**config, "agent": agent_config(self.agent, self.agent_options)}
 
 
 @dataclass
@@ -111,12 +115,6 @@ class EpisodeResult:
         return float(np.mean(self.nees_trace))
 
 
-def estimator_options(source: str) -> dict:
-    """The settings of pose source ``source`` (``configs/estimators/<name>.yaml``) as plain
-    values, recorded with every episode (part of its cache key); ``truth`` has none."""
-    return {} if source == TRUTH else asdict(estimator_settings(source))
-
-
 def agent_label(agent: str) -> str:
     """``follower``, or a saved model's file stem and content digest (a file-name part)."""
     if agent == "follower":
@@ -124,6 +122,18 @@ def agent_label(agent: str) -> str:
     from stsf_gym.agents.sb3_agent import model_digest
 
     return f"{Path(agent).stem}-{model_digest(agent)}"
+
+
+def agent_config(name: str, options: dict | None = None) -> dict:
+    """The resolved settings of agent ``name``: the follower's config with ``options`` over
+    it, or a saved model's path and content digest."""
+    if name == "follower":
+        from stsf_gym.agents.follower import load_follower_config
+
+        return {"follower": asdict(load_follower_config(**(options or {})))}
+    from stsf_gym.agents.sb3_agent import model_digest
+
+    return {"model": name, "digest": model_digest(name)}
 
 
 def make_agent(name: str, env, options: dict | None = None):
@@ -220,13 +230,29 @@ def _name(job: dict) -> str:
     return _spec(job).key
 
 
+def _resolved(job: dict) -> dict:
+    return _spec(job).resolved()
+
+
+def specs_config(specs: list[EpisodeSpec]) -> dict:
+    """The resolved configurations of ``specs`` by world, pose source and agent (what a results
+    file's provenance records: every value, once per distinct combination)."""
+    resolved: dict[str, dict] = {}
+    for spec in specs:
+        key = f"{spec.world} / {spec.estimator} / {agent_label(spec.agent)}"
+        if key not in resolved:
+            resolved[key] = spec.resolved()
+    return resolved
+
+
 def run_episodes(
     specs: list[EpisodeSpec], folder: Path, workers: int = 1, desc: str = "episodes"
 ) -> list[EpisodeResult]:
     """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``; the
     TUM trajectories of each go to ``folder/trajectories/<episode>/``."""
     jobs = [{"version": RESULT_VERSION, **asdict(spec)} for spec in specs]
-    results = [EpisodeResult(**r) for r in run_cached(_run, jobs, folder, _name, workers, desc)]
+    done = run_cached(_run, jobs, folder, _name, workers, desc, config=_resolved)
+    results = [EpisodeResult(**r) for r in done]
     for episode in results:
         write_trajectories(episode, Path(folder) / "trajectories")
     return results

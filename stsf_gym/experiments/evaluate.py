@@ -14,12 +14,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.consistency_plot import plot_nees
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
-    estimator_options,
     run_episodes,
+    specs_config,
 )
 from stsf_gym.experiments.fault_runs import evaluate_faults
 from stsf_gym.experiments.plots import plot_errors, plot_trajectories
@@ -75,7 +76,14 @@ def evaluate(
         summary["trained"] = training_record(agent)
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
     table = markdown_table([rendered(row) for row in rows])
-    write_report(out, summary, f"Evaluation: {title} on {world}", table)
+    write_report(
+        out,
+        summary,
+        f"Evaluation: {title} on {world}",
+        table,
+        config=specs_config(specs),
+        seeds=(spec.seed for spec in specs),
+    )
     summary["figures"] = [
         str(plot_trajectories(world, by_estimator, out / "trajectories.png")),
         str(plot_errors(by_estimator, out / "errors.png")),

@@ -180,5 +180,15 @@ def _write(out: Path, name: str, title: str, summary: dict, rows: list[dict]) ->
     paper = markdown_table([rendered(row, headers=HEADERS) for row in rows])
     every = markdown_table([rendered(row) for row in summary["rows"]])
     body = f"{paper}\n## All metrics\n\n{every}"
-    write_report(out, summary, title, body, f"{name}.json", f"{name}.md")
+    made_by = summary["provenance"]  # the evaluation's: same episodes, same configuration
+    write_report(
+        out,
+        summary,
+        title,
+        body,
+        f"{name}.json",
+        f"{name}.md",
+        config=made_by["config"],
+        seeds=made_by["seeds"],
+    )
     return summary

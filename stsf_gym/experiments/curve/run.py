@@ -19,14 +19,15 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, deep_merge, load_config
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.curve.plot import plot_curve
-from stsf_gym.experiments.episodes import estimator_options
 from stsf_gym.experiments.sweep.backends import make_runner
-from stsf_gym.experiments.sweep.cells import run_cell
+from stsf_gym.experiments.sweep.cells import cell_config, run_cell
 from stsf_gym.experiments.sweep.run import cell_name, forget_failures
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
+from stsf_gym.results.provenance import by_digest, provenance
 
 DIAL = "degraded-truth"
 DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
@@ -114,8 +115,16 @@ def accuracy_curve(
     )
     forget_failures(cells, out / "cells")
     runner = make_runner(backend, workers, address)
+    configs = {cell_name(cell): cell_config(cell) for cell in cells}
     results = run_cached(
-        run_cell, cells, out / "cells", cell_name, workers, "accuracy curve", runner
+        run_cell,
+        cells,
+        out / "cells",
+        cell_name,
+        workers,
+        "accuracy curve",
+        runner,
+        config=lambda cell: configs[cell_name(cell)],
     )
     summary = summarise_curve(cells, results)
     summary.update(
@@ -124,6 +133,7 @@ def accuracy_curve(
         seeds=[seed, seed + seeds - 1],
         dial={**estimator_options(DIAL), **dial},
     )
+    summary["provenance"] = provenance(by_digest(configs), (cell["seed"] for cell in cells))
     write_json(out / "curve.json", summary)
     write_atomic(out / "curve.md", curve_markdown(summary))
     summary["figures"] = [str(plot_curve(summary, out / "curve.png"))]

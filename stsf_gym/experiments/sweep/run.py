@@ -34,10 +34,10 @@ from stsf_gym.envs.config import (
     overrides_to_tree,
     read_yaml,
 )
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.cache import run_cached
-from stsf_gym.experiments.episodes import estimator_options
 from stsf_gym.experiments.sweep.backends import make_runner
-from stsf_gym.experiments.sweep.cells import cell_kind, run_cell
+from stsf_gym.experiments.sweep.cells import cell_config, cell_kind, run_cell
 from stsf_gym.experiments.sweep.report import write_report
 
 CELL_VERSION = 1  # bumped when a cell's result changes meaning, so older cell files are rerun
@@ -112,8 +112,18 @@ def run_sweep(
     folder = out / "cells"
     cells = [_with_run_folder(cell, out) for cell in sweep.cells]
     forget_failures(cells, folder)
-    results = run_cached(run_cell, cells, folder, cell_name, workers, f"sweep {sweep.name}", runner)
-    return write_report(sweep, results, out)
+    configs = {cell_name(cell): cell_config(cell) for cell in cells}
+    results = run_cached(
+        run_cell,
+        cells,
+        folder,
+        cell_name,
+        workers,
+        f"sweep {sweep.name}",
+        runner,
+        config=lambda cell: configs[cell_name(cell)],
+    )
+    return write_report(sweep, results, out, configs)
 
 
 def cell_name(cell: dict) -> str:

@@ -14,7 +14,7 @@ stereo bound ``sqrt(2) Z^2 sigma_px / (f b)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +27,7 @@ from stsf_gym.envs.config import (
     overrides_to_tree,
     read_yaml,
 )
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms
@@ -109,6 +110,16 @@ def run_seed(cfg: Table1Config, seed: int) -> SeedResult:
     )
 
 
+def resolved_table1(cfg: Table1Config) -> dict:
+    """Every value Table I runs with: its protocol, the rig's env config after all layers and
+    the settings of the estimators whose code it uses."""
+    return {
+        "table1": cfg.__dict__,
+        "env": asdict(load_config(cfg.env)),
+        "estimators": {name: estimator_options(name) for name in ("odometry", "stsf")},
+    }
+
+
 def _run_seed(job: dict) -> SeedResult:
     return run_seed(load_table1_config(**job["config"]), job["seed"])
 
@@ -124,12 +135,17 @@ def run_table1(
     cfg = load_table1_config(config, **overrides)
     out = Path(out)
     jobs = [{"config": cfg.__dict__, "seed": s} for s in range(seed, seed + cfg.seeds)]
-    results = [
-        SeedResult(**r)
-        for r in run_cached(
-            _run_seed, jobs, out / "seeds", lambda job: f"seed_{job['seed']}", workers, "table1"
-        )
-    ]
+    resolved = resolved_table1(cfg)
+    done = run_cached(
+        _run_seed,
+        jobs,
+        out / "seeds",
+        lambda job: f"seed_{job['seed']}",
+        workers,
+        "table1",
+        config=lambda job: resolved,
+    )
+    results = [SeedResult(**r) for r in done]
     rows = summarise(cfg, results)
     summary = {
         "schema_version": SCHEMA_VERSION,
@@ -138,7 +154,15 @@ def run_table1(
         "rows": rows,
     }
     title = "Table I reproduced: distance to a landmark, conventional fusion vs STSF"
-    write_report(out, summary, title, _markdown(rows, cfg), markdown_name="table1.md")
+    write_report(
+        out,
+        summary,
+        title,
+        _markdown(rows, cfg),
+        markdown_name="table1.md",
+        config=resolved,
+        seeds=range(seed, seed + cfg.seeds),
+    )
     summary["figure"] = str(plot_table1(rows, out / "table1.png"))
     return summary
 
