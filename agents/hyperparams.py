@@ -75,8 +75,11 @@ def update_size(hp: Hyperparams, n_envs: int) -> tuple[int, str]:
     """Env steps (summed over the envs) between two points where a run can stop, and what
     makes them: PPO stops only after a whole rollout (``n_steps`` per env), SAC after
     ``train_freq`` steps per env (an integer: the hyper-parameter check takes no episodes)."""
-    defaults = inspect.signature(algorithm_class(hp.algo).__init__).parameters
-    key = "n_steps" if "n_steps" in defaults else "train_freq"
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+
+    cls = algorithm_class(hp.algo)
+    defaults = inspect.signature(cls.__init__).parameters
+    key = "n_steps" if issubclass(cls, OnPolicyAlgorithm) else "train_freq"
     return int(hp.algo_kwargs.get(key, defaults[key].default)) * n_envs, f"{key} x n_envs"
 
 
