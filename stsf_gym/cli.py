@@ -12,6 +12,7 @@ from pathlib import Path
 
 from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.envs.quiet import VERBOSE_ENV
+from stsf_gym.io import remove_partial_writes
 from stsf_gym.results.provenance import set_command
 
 
@@ -466,6 +467,7 @@ def main(argv: list[str] | None = None) -> int:
         if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
             folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
             _check_writable(folder.absolute())
+            remove_partial_writes(args.out)  # left by a run killed mid-write: nothing to resume
         if args.verbose:
             os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
         else:
