@@ -12,10 +12,13 @@ it, the full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
+
+import numpy as np
 
 from stsf_gym.envs.fault_spec import FaultSpec
 from stsf_gym.envs.worlds.checks import check_clearance, check_world
@@ -162,6 +165,18 @@ class LensConfig:
     defocus_px: NonNegative  # std (px) of the lens's Gaussian point spread; 0 in focus
 
 
+def radial_reach(distortion: tuple[float, ...], limit: float = 10.0) -> float:
+    """The largest distorted radius (normalised image coordinates) that the radial part of
+    ``distortion`` (OpenCV k1 k2 p1 p2 k3) reaches while it still grows with the ray's
+    radius: the image is invertible up to there. ``limit`` for a lens that never stops."""
+    k1, k2, _, _, k3 = distortion
+    r = np.linspace(0.0, limit, 20001)
+    slope = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6
+    stop = int(np.argmax(slope <= 0)) if (slope <= 0).any() else r.size - 1
+    radius = r[: stop + 1]
+    return float(np.max(radius * (1 + k1 * radius**2 + k2 * radius**4 + k3 * radius**6)))
+
+
 @dataclass(frozen=True)
 class SensorConfig:
     """The image sensor (:mod:`stsf_gym.envs.sensors.image_sensor`): exposure and noise."""
@@ -204,6 +219,16 @@ class CameraConfig:
 
     def __post_init__(self) -> None:
         require(self.far > self.near, "far", f"must be > near ({self.near}), got {self.far}")
+        corner = math.hypot(self.width, self.height) / self.height  # normalised corner radius
+        corner *= math.tan(math.radians(self.vfov_deg) / 2)
+        reach = radial_reach(self.lens.distortion)
+        require(
+            reach > corner,
+            "lens.distortion",
+            f"{list(self.lens.distortion)} folds the image over: its radial mapping "
+            f"r(1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at distorted radius {reach:.3g}, "
+            f"inside the image corner at {corner:.3g} (a lens maps each ray to one pixel)",
+        )
 
 
 @dataclass(frozen=True)
@@ -266,6 +291,12 @@ class EnvConfig:
         check_clearance(self.world, self.robot.body_radius)
         map_ids = sorted(lm.id for lm in self.world.landmarks)
         for i, fault in enumerate(self.faults):
+            require(
+                fault.start < self.sim.max_episode_seconds,
+                f"faults[{i}].start",
+                f"must be before the episode ends (sim.max_episode_seconds "
+                f"{self.sim.max_episode_seconds:g} s), got {fault.start:g}: it would never act",
+            )
             require(
                 fault.landmark_id is None or fault.landmark_id in map_ids,
                 f"faults[{i}].landmark_id",

@@ -47,6 +47,11 @@ def _demo(args: argparse.Namespace) -> dict:
     if args.seconds is not None:
         if args.seconds <= 0:
             raise ConfigError(f"--seconds must be positive, got {args.seconds}")
+        if "max_episode_seconds" in env.get("sim", {}):
+            raise ConfigError(
+                "--seconds and sim.max_episode_seconds (from --config or --set) both set the "
+                "episode length; give one"
+            )
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
     if args.video_seconds is not None and args.video_seconds < 0:
         raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from stsf_gym.envs.config import EnvConfig, WorldConfig, build
+from stsf_gym.envs.config import ConfigError, EnvConfig, WorldConfig, build
 from stsf_gym.envs.worlds.checks import obstacle_distance
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig
 from stsf_gym.envs.worlds.layout import DIRECTIONS, Rect, boundary_walls
@@ -36,8 +36,9 @@ from stsf_gym.envs.worlds.visibility import CameraView, choose_landmarks, path_s
 CAP = 3  # decimals of every coordinate in a generated world (millimetres)
 
 
-class GenerationError(RuntimeError):
-    """No valid world was found within ``attempts`` layouts."""
+class GenerationError(ConfigError):
+    """No valid world was found within ``attempts`` layouts: the generator's settings (bad
+    input, named by the CLI like any other) leave too little room."""
 
 
 def generate_world(seed: int, gen: GeneratorConfig, env: EnvConfig) -> WorldConfig:
@@ -49,11 +50,20 @@ def world_tree(seed: int, gen: GeneratorConfig, env: EnvConfig) -> dict:
     """The world of ``seed`` as the mapping a world YAML file holds."""
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"world seed must be a non-negative integer, got {seed!r}")
+    clear = 2 * (env.robot.body_radius + gen.clutter.path_clearance)
+    if gen.width[1] < clear:
+        raise ConfigError(
+            f"generator.width {list(gen.width)} m: every corridor would be narrower than the "
+            f"robot needs (2 x (robot.body_radius + clutter.path_clearance) = {clear:g} m)",
+            "generator.width",
+        )
     rng = np.random.default_rng(int(seed))
     view = CameraView.from_env_config(env)
+    no_path = 0  # attempts whose main path did not fit (the rest: no landmark placement)
     for _ in range(gen.attempts):
         layout = _main_path(rng, gen)
         if layout is None:
+            no_path += 1
             continue
         points, widths, rects = layout
         rects = rects + _branches(rng, gen, points, widths, rects)
@@ -63,9 +73,16 @@ def world_tree(seed: int, gen: GeneratorConfig, env: EnvConfig) -> dict:
         if landmarks is None:
             continue
         return _tree(seed, gen, points, walls, landmarks, obstacles)
+    if no_path == gen.attempts:
+        raise GenerationError(
+            f"world seed {seed}: no main path of at least min_path_length "
+            f"{gen.min_path_length:g} m fitted in {gen.attempts} attempts (segments, "
+            "segment_length, width, end_margin and min_gap leave no room); widen those ranges"
+        )
     raise GenerationError(
         f"world seed {seed}: no layout with a landmark in view along the whole path in "
-        f"{gen.attempts} attempts; widen the generator's ranges"
+        f"{gen.attempts} attempts ({no_path} main paths did not fit, the other layouts had a "
+        "stretch no board covers); widen the visibility ranges or the corridors' lengths"
     )
 
 

@@ -79,6 +79,13 @@ class GeneratorConfig:
     def __post_init__(self) -> None:
         for name in ("segments", "segment_length", "width", "branches", "branch_length"):
             _ordered(getattr(self, name), name)
+        longest = self.segments[1] * self.segment_length[1]
+        require(
+            self.min_path_length <= longest,
+            "min_path_length",
+            f"can never be reached: at most segments[1] x segment_length[1] = {longest:g} m, "
+            f"got {self.min_path_length:g}",
+        )
         require(
             isinstance(self.splits, Mapping) and sorted(self.splits) == sorted(SPLITS),
             "splits",
