@@ -1,0 +1,164 @@
+"""An episode as an MCAP file of standard ROS 2 messages (:mod:`.topics`), written without ROS.
+
+Foxglove, ``ros2 bag`` (with the MCAP storage plugin) and evo (``evo_ape bag2 FILE.mcap
+/ground_truth/pose /estimate/stsf/pose``) open it. It holds all an estimator needs, so
+``stsf-gym replay`` reruns any pose source on it: with lossless frames (PNG, the default, or
+raw) bit for bit; JPEG frames are smaller and for looking at.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+from mcap.writer import CompressionType, Writer
+
+from stsf_gym.camera_model import rot_z
+from stsf_gym.recording import ros_messages as ros
+from stsf_gym.recording import topics
+from stsf_gym.recording.records import EpisodeStart, StepRecord, nanoseconds
+from stsf_gym.recording.sensor_model_json import sensor_model_json
+
+JPEG_QUALITY = 90
+PNG_COMPRESSION = 1  # zlib level: fast, and still about half the raw size
+
+
+class McapRecorder:
+    """Writes one episode to ``path`` (atomically: a temporary file renamed at :meth:`close`);
+    camera frames as ``frames``: ``"png"`` (lossless), ``"raw"`` (``sensor_msgs/Image``)
+    or ``"jpeg"``."""
+
+    def __init__(self, path: str | Path, frames: str = "png") -> None:
+        if frames not in topics.FRAME_FORMATS:
+            raise ValueError(
+                f"frames must be one of {sorted(topics.FRAME_FORMATS)}, got {frames!r}"
+            )
+        self.path, self.frames = Path(path), frames
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd, self._tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.name}.")
+        self._file = os.fdopen(fd, "wb")
+        self._writer = Writer(self._file, compression=CompressionType.ZSTD)
+        self._writer.start(profile="ros2", library="stsf-gym")
+        self._channels: dict[str, int] = {}
+        self._schemas: dict[str, int] = {}
+        self._ticks = np.zeros(2, np.int64)
+        self._layout = None
+
+    def _write(self, topic: str, stamp: int, message) -> None:
+        if topic not in self._channels:
+            msgtype = topics.type_of(topic)
+            if msgtype not in self._schemas:
+                definition = ros.message_definition(msgtype).encode()
+                self._schemas[msgtype] = self._writer.register_schema(
+                    msgtype, "ros2msg", definition
+                )
+            self._channels[topic] = self._writer.register_channel(
+                topic, "cdr", self._schemas[msgtype]
+            )
+        data = ros.serialize(message, topics.type_of(topic))
+        self._writer.add_message(self._channels[topic], stamp, data, stamp)
+
+    def start(self, start: EpisodeStart) -> None:
+        self._layout, self._model = start.layout, start.model
+        lossless = topics.FRAME_FORMATS[self.frames]
+        episode = {
+            **start.meta,
+            "control_dt": start.control_dt,
+            "frames": self.frames,
+            "lossless": lossless,
+        }
+        self._write(topics.SENSOR_MODEL, 0, ros.string(sensor_model_json(start.model)))
+        self._write(topics.EPISODE, 0, ros.string(json.dumps(episode)))
+        initial = ros.pose_with_covariance(0, "map", start.initial_pose, start.initial_cov)
+        self._write(topics.INITIAL_POSE, 0, initial)
+        layout = start.layout
+        sonars = []
+        for i, axis in enumerate(layout.sonar_axes):
+            matrix = np.eye(4)
+            matrix[:3, :3] = rot_z(axis)
+            matrix[:3, 3] = [
+                layout.body_radius * np.cos(axis),
+                layout.body_radius * np.sin(axis),
+                layout.sonar_height,
+            ]
+            sonars.append(ros.transform(0, "base_link", f"sonar_{i:02d}", matrix))
+        self._write(topics.TF_STATIC, 0, ros.tf_message(sonars))
+
+    def step(self, record: StepRecord) -> None:
+        stamp, obs = nanoseconds(record.time), record.obs
+        self._ticks = self._ticks + np.asarray(obs["encoders"], np.int64)
+        self._write(topics.WHEEL_TICKS, stamp, ros.joint_state(stamp, topics.WHEELS, self._ticks))
+        if obs["image_new"]:
+            self._frame(stamp, record)
+        layout = self._layout
+        for i, value in enumerate(obs["sonar"]):
+            message = ros.sonar_range(
+                stamp, f"sonar_{i:02d}", value, layout.sonar_fov, layout.sonar_limits
+            )
+            self._write(topics.SONAR, stamp, message)
+        truth_cov = np.zeros((3, 3))
+        self._write(
+            topics.TRUTH, stamp, ros.pose_with_covariance(stamp, "map", record.true_pose, truth_cov)
+        )
+        for name, (mean, cov) in record.estimates.items():
+            message = ros.pose_with_covariance(stamp, "map", mean, cov)
+            self._write(topics.estimate_topic(name), stamp, message)
+        base = np.eye(4)
+        base[:3, :3] = rot_z(record.true_pose[2])
+        base[:2, 3] = record.true_pose[:2]
+        self._write(
+            topics.TF, stamp, ros.tf_message([ros.transform(stamp, "map", "base_link", base)])
+        )
+        if record.action is not None:
+            v, w = np.clip(np.asarray(record.action, float).ravel()[:2], -1, 1)
+            message = ros.twist(stamp, v * layout.max_speed, w * layout.max_yaw_rate)
+            self._write(topics.CMD_VEL, stamp, message)
+
+    def _frame(self, stamp: int, record: StepRecord) -> None:
+        obs, model = record.obs, self._model
+        pan_tilt = np.asarray(obs["camera_pan_tilt"], np.float64)
+        self._write(topics.PAN_TILT, stamp, ros.joint_state(stamp, topics.MOUNT_JOINTS, pan_tilt))
+        mount = model.robot_from_camera(*pan_tilt)
+        transform = ros.transform(stamp, "base_link", "camera_optical", mount)
+        self._write(topics.TF, stamp, ros.tf_message([transform]))
+        calibration = model.camera_calibration
+        info = ros.camera_info(stamp, calibration.K, calibration.dist, model.image_size)
+        self._write(topics.CAMERA_INFO, stamp, info)
+        if "image" in obs:
+            self._image(stamp, obs["image"])
+        else:
+            ids = np.asarray(obs["landmark_ids"])
+            points = np.asarray(obs["landmark_points"], np.float32).reshape(-1, 2)
+            per_slot = len(points) // len(ids)
+            channels = {  # each point's detection slot and that slot's landmark id (-1: empty)
+                "slot": np.repeat(np.arange(len(ids)), per_slot),
+                "landmark_id": np.repeat(ids, per_slot),
+            }
+            self._write(topics.DETECTIONS, stamp, ros.point_cloud(stamp, points, channels))
+
+    def _image(self, stamp: int, rgb: np.ndarray) -> None:
+        if self.frames == "raw":
+            self._write(topics.IMAGE_RAW, stamp, ros.raw_image(stamp, rgb))
+            return
+        bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+        if self.frames == "png":
+            ok, data = cv2.imencode(".png", bgr, [cv2.IMWRITE_PNG_COMPRESSION, PNG_COMPRESSION])
+        else:
+            ok, data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+        if not ok:
+            raise RuntimeError(f"could not encode a camera frame as {self.frames}")
+        self._write(
+            topics.IMAGE_COMPRESSED, stamp, ros.compressed_image(stamp, data.tobytes(), self.frames)
+        )
+
+    def close(self) -> None:
+        if self._file.closed:
+            return
+        self._writer.finish()
+        self._file.close()
+        os.chmod(self._tmp, 0o644)
+        os.replace(self._tmp, self.path)

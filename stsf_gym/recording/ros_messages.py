@@ -1,0 +1,185 @@
+"""Standard ROS 2 messages built and read in plain Python, without a ROS install.
+
+``rosbags`` supplies the message types (:data:`TYPESTORE`, ROS 2 Humble's definitions) and
+their CDR serialization, so a log holds what ``ros2 bag``, Foxglove and evo expect. Poses are
+planar: ``[x, y, yaw]`` is a pose at ``z = 0`` rotated by ``yaw`` about z, its 3x3 covariance
+the ``x, y, yaw`` block of ROS's 6x6 (``x, y, z, roll, pitch, yaw``) covariance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from rosbags.typesys import Stores, get_typestore
+
+TYPESTORE = get_typestore(Stores.ROS2_HUMBLE)
+_T = TYPESTORE.types
+#: Indices of the x, y, yaw block in ROS's row-major 6x6 pose covariance.
+PLANAR = np.ix_([0, 1, 5], [0, 1, 5])
+
+
+def serialize(message, msgtype: str) -> bytes:
+    return bytes(TYPESTORE.serialize_cdr(message, msgtype))
+
+
+def deserialize(data: bytes, msgtype: str):
+    return TYPESTORE.deserialize_cdr(data, msgtype)
+
+
+def message_definition(msgtype: str) -> str:
+    """The ``ros2msg`` schema text of ``msgtype`` with its dependencies (MCAP's schema)."""
+    return TYPESTORE.generate_msgdef(msgtype, ros_version=2)[0]
+
+
+def header(stamp_ns: int, frame_id: str):
+    sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
+    return _T["std_msgs/msg/Header"](
+        stamp=_T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec), frame_id=frame_id
+    )
+
+
+def stamp_ns(message) -> int:
+    """The header stamp of ``message`` in nanoseconds."""
+    return message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+
+
+def string(text: str):
+    return _T["std_msgs/msg/String"](data=text)
+
+
+def _quaternion(yaw: float):
+    return _T["geometry_msgs/msg/Quaternion"](
+        x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)
+    )
+
+
+def _yaw(q) -> float:
+    return 2.0 * math.atan2(q.z, q.w)
+
+
+def pose_with_covariance(stamp: int, frame_id: str, pose, cov):
+    """``geometry_msgs/PoseWithCovarianceStamped`` of a planar pose and its 3x3 covariance."""
+    x, y, yaw = (float(v) for v in pose)
+    full = np.zeros((6, 6))
+    full[PLANAR] = cov
+    point = _T["geometry_msgs/msg/Point"](x=x, y=y, z=0.0)
+    return _T["geometry_msgs/msg/PoseWithCovarianceStamped"](
+        header=header(stamp, frame_id),
+        pose=_T["geometry_msgs/msg/PoseWithCovariance"](
+            pose=_T["geometry_msgs/msg/Pose"](position=point, orientation=_quaternion(yaw)),
+            covariance=full.ravel(),
+        ),
+    )
+
+
+def planar_pose(message) -> tuple[np.ndarray, np.ndarray]:
+    """``([x, y, yaw], 3x3 covariance)`` of a ``PoseWithCovarianceStamped``."""
+    pose = message.pose.pose
+    mean = np.array([pose.position.x, pose.position.y, _yaw(pose.orientation)])
+    return mean, np.asarray(message.pose.covariance, float).reshape(6, 6)[PLANAR]
+
+
+def transform(stamp: int, parent: str, child: str, matrix: np.ndarray):
+    """``geometry_msgs/TransformStamped`` of a 4x4 ``parent``-from-``child`` pose."""
+    from scipy.spatial.transform import Rotation
+
+    x, y, z, w = Rotation.from_matrix(np.asarray(matrix)[:3, :3]).as_quat()
+    t = np.asarray(matrix)[:3, 3]
+    return _T["geometry_msgs/msg/TransformStamped"](
+        header=header(stamp, parent),
+        child_frame_id=child,
+        transform=_T["geometry_msgs/msg/Transform"](
+            translation=_T["geometry_msgs/msg/Vector3"](x=t[0], y=t[1], z=t[2]),
+            rotation=_T["geometry_msgs/msg/Quaternion"](x=x, y=y, z=z, w=w),
+        ),
+    )
+
+
+def tf_message(transforms: list):
+    return _T["tf2_msgs/msg/TFMessage"](transforms=transforms)
+
+
+def joint_state(stamp: int, names: list[str], positions) -> object:
+    positions = np.asarray(positions, dtype=np.float64)
+    empty = np.zeros(0, np.float64)
+    return _T["sensor_msgs/msg/JointState"](
+        header=header(stamp, ""), name=list(names), position=positions, velocity=empty, effort=empty
+    )
+
+
+def sonar_range(stamp: int, frame_id: str, value: float, fov: float, limits) -> object:
+    return _T["sensor_msgs/msg/Range"](
+        header=header(stamp, frame_id),
+        radiation_type=_T["sensor_msgs/msg/Range"].ULTRASOUND,
+        field_of_view=float(fov),
+        min_range=float(limits[0]),
+        max_range=float(limits[1]),
+        range=float(value),
+    )
+
+
+def camera_info(stamp: int, K: np.ndarray, dist: np.ndarray, size: tuple[int, int]) -> object:
+    """``sensor_msgs/CameraInfo`` of a pinhole camera with OpenCV's (plumb bob) distortion."""
+    K = np.asarray(K, dtype=np.float64)
+    projection = np.hstack([K, np.zeros((3, 1))])
+    return _T["sensor_msgs/msg/CameraInfo"](
+        header=header(stamp, "camera_optical"),
+        height=int(size[1]),
+        width=int(size[0]),
+        distortion_model="plumb_bob",
+        d=np.asarray(dist, dtype=np.float64),
+        k=K.ravel(),
+        r=np.eye(3).ravel(),
+        p=projection.ravel(),
+        binning_x=0,
+        binning_y=0,
+        roi=_T["sensor_msgs/msg/RegionOfInterest"](
+            x_offset=0, y_offset=0, height=0, width=0, do_rectify=False
+        ),
+    )
+
+
+def compressed_image(stamp: int, data: bytes, image_format: str) -> object:
+    return _T["sensor_msgs/msg/CompressedImage"](
+        header=header(stamp, "camera_optical"),
+        format=image_format,
+        data=np.frombuffer(data, np.uint8),
+    )
+
+
+def raw_image(stamp: int, rgb: np.ndarray) -> object:
+    height, width = rgb.shape[:2]
+    return _T["sensor_msgs/msg/Image"](
+        header=header(stamp, "camera_optical"),
+        height=height,
+        width=width,
+        encoding="rgb8",
+        is_bigendian=0,
+        step=3 * width,
+        data=np.ascontiguousarray(rgb, np.uint8).ravel(),
+    )
+
+
+def point_cloud(stamp: int, uv: np.ndarray, channels: dict[str, np.ndarray]) -> object:
+    """``sensor_msgs/PointCloud`` of image points ``(N, 2)`` (pixels as x, y; z = 0) with
+    named per-point ``channels``: float32, so float32 pixels pass unchanged."""
+    point = _T["geometry_msgs/msg/Point32"]
+    points = [point(x=float(u), y=float(v), z=0.0) for u, v in np.asarray(uv, np.float32)]
+    channel = _T["sensor_msgs/msg/ChannelFloat32"]
+    return _T["sensor_msgs/msg/PointCloud"](
+        header=header(stamp, "camera_image"),
+        points=points,
+        channels=[channel(name=k, values=np.asarray(v, np.float32)) for k, v in channels.items()],
+    )
+
+
+def twist(stamp: int, linear: float, angular: float) -> object:
+    vector = _T["geometry_msgs/msg/Vector3"]
+    return _T["geometry_msgs/msg/TwistStamped"](
+        header=header(stamp, "base_link"),
+        twist=_T["geometry_msgs/msg/Twist"](
+            linear=vector(x=float(linear), y=0.0, z=0.0),
+            angular=vector(x=0.0, y=0.0, z=float(angular)),
+        ),
+    )
