@@ -44,6 +44,7 @@ class RecordedLog:
     sonar: list[tuple[int, np.ndarray]]
     truth: np.ndarray | None  # (N, 3) true poses at the steps, when recorded
     estimates: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    end: dict = field(default_factory=dict)  # the episode's ending ("outcome"), if recorded
 
     @property
     def times(self) -> np.ndarray:
@@ -143,6 +144,9 @@ def read_log(path: str | Path) -> RecordedLog:
         pan_tilt=sorted(pan_tilt, key=lambda p: p[0]),
         sonar=_sonar(by_topic.get(topics.SONAR, [])),
         truth=_poses_at(by_topic.get(topics.TRUTH, []), stamps),
+        end=json.loads(by_topic[topics.EPISODE_END][0].data)
+        if by_topic[topics.EPISODE_END]
+        else {},
         estimates={
             topic.split("/")[2]: _poses_and_covs(messages)
             for topic, messages in by_topic.items()

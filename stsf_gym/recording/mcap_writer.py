@@ -46,7 +46,7 @@ class McapRecorder:
         self._channels: dict[str, int] = {}
         self._schemas: dict[str, int] = {}
         self._ticks = np.zeros(2, np.int64)
-        self._layout = None
+        self._layout, self._last_stamp = None, 0
 
     def _write(self, topic: str, stamp: int, message) -> None:
         if topic not in self._channels:
@@ -90,6 +90,7 @@ class McapRecorder:
 
     def step(self, record: StepRecord) -> None:
         stamp, obs = nanoseconds(record.time), record.obs
+        self._last_stamp = stamp
         self._ticks = self._ticks + np.asarray(obs["encoders"], np.int64)
         self._write(topics.WHEEL_TICKS, stamp, ros.joint_state(stamp, topics.WHEELS, self._ticks))
         if obs["image_new"]:
@@ -155,9 +156,11 @@ class McapRecorder:
             topics.IMAGE_COMPRESSED, stamp, ros.compressed_image(stamp, data.tobytes(), self.frames)
         )
 
-    def close(self) -> None:
+    def close(self, end: dict | None = None) -> None:
         if self._file.closed:
             return
+        if end is not None:
+            self._write(topics.EPISODE_END, self._last_stamp, ros.string(json.dumps(end)))
         self._writer.finish()
         self._file.close()
         os.chmod(self._tmp, 0o644)

@@ -74,7 +74,8 @@ class Recorder(Protocol):
 
     def step(self, record: StepRecord) -> None: ...
 
-    def close(self) -> None: ...
+    def close(self, end: dict | None = None) -> None:
+        """Finish the file; ``end`` is the episode's ending (``outcome``), when it ended."""
 
 
 def nanoseconds(seconds: float) -> int:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 SENSOR_MODEL = "/robot/sensor_model"  # std_msgs/String: the SensorModel as JSON, once
 EPISODE = "/robot/episode"  # std_msgs/String: JSON {"control_dt", "frames", ...}, once
+EPISODE_END = "/robot/episode_end"  # std_msgs/String: JSON {"outcome"}, at the end
 INITIAL_POSE = "/initialpose"  # geometry_msgs/PoseWithCovarianceStamped: the start, once
 WHEEL_TICKS = "/wheel_ticks"  # sensor_msgs/JointState: cumulative encoder ticks, every step
 PAN_TILT = "/camera/pan_tilt"  # sensor_msgs/JointState: mount angles (rad) of each frame
@@ -30,6 +31,7 @@ def estimate_topic(name: str) -> str:
 TYPES: dict[str, str] = {
     SENSOR_MODEL: "std_msgs/msg/String",
     EPISODE: "std_msgs/msg/String",
+    EPISODE_END: "std_msgs/msg/String",
     INITIAL_POSE: "geometry_msgs/msg/PoseWithCovarianceStamped",
     WHEEL_TICKS: "sensor_msgs/msg/JointState",
     PAN_TILT: "sensor_msgs/msg/JointState",

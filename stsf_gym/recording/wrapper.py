@@ -94,16 +94,18 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if self._recorder is not None:
             self._recorder.step(self._record(obs, info, action))
             if terminated or truncated:
-                self._finish()
+                collision = bool(info.get("collision", False))
+                outcome = "collision" if collision else "goal" if terminated else "time"
+                self._finish({"outcome": outcome})
         return obs, reward, terminated, truncated, info
 
     def close(self):
         self._finish()
         return super().close()
 
-    def _finish(self) -> None:
+    def _finish(self, end: dict | None = None) -> None:
         if self._recorder is not None:
-            self._recorder.close()
+            self._recorder.close(end)
             self._recorder = None
 
     def _episode_start(self, seed, options) -> EpisodeStart:
