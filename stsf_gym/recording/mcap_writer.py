@@ -27,17 +27,14 @@ JPEG_QUALITY = 90
 PNG_COMPRESSION = 1  # zlib level: fast, and still about half the raw size
 
 
-class McapRecorder:
-    """Writes one episode to ``path`` (atomically: a temporary file renamed at :meth:`close`);
-    camera frames as ``frames``: ``"png"`` (lossless), ``"raw"`` (``sensor_msgs/Image``)
-    or ``"jpeg"``."""
+class McapLogWriter:
+    """An MCAP file of ROS 2 messages on the log's topics (:mod:`.topics`), written atomically
+    (a temporary file renamed at :meth:`close`): ``write(topic, stamp_ns, message)`` with a
+    message from :mod:`.ros_messages`. What a plain script uses to write a log of its own
+    robot (``examples/own_robot_log.py``)."""
 
-    def __init__(self, path: str | Path, frames: str = "png") -> None:
-        if frames not in topics.FRAME_FORMATS:
-            raise ValueError(
-                f"frames must be one of {sorted(topics.FRAME_FORMATS)}, got {frames!r}"
-            )
-        self.path, self.frames = Path(path), frames
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd, self._tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.name}.")
         self._file = os.fdopen(fd, "wb")
@@ -45,10 +42,8 @@ class McapRecorder:
         self._writer.start(profile="ros2", library="stsf-gym")
         self._channels: dict[str, int] = {}
         self._schemas: dict[str, int] = {}
-        self._ticks = np.zeros(2, np.int64)
-        self._layout, self._last_stamp = None, 0
 
-    def _write(self, topic: str, stamp: int, message) -> None:
+    def write(self, topic: str, stamp: int, message) -> None:
         if topic not in self._channels:
             msgtype = topics.type_of(topic)
             if msgtype not in self._schemas:
@@ -61,6 +56,35 @@ class McapRecorder:
             )
         data = ros.serialize(message, topics.type_of(topic))
         self._writer.add_message(self._channels[topic], stamp, data, stamp)
+
+    @property
+    def closed(self) -> bool:
+        return self._file.closed
+
+    def close(self) -> None:
+        if self._file.closed:
+            return
+        self._writer.finish()
+        self._file.close()
+        os.chmod(self._tmp, 0o644)
+        os.replace(self._tmp, self.path)
+
+
+class McapRecorder:
+    """Writes one episode to ``path`` (:class:`McapLogWriter`); camera frames as ``frames``:
+    ``"png"`` (lossless), ``"raw"`` (``sensor_msgs/Image``) or ``"jpeg"``."""
+
+    def __init__(self, path: str | Path, frames: str = "png") -> None:
+        if frames not in topics.FRAME_FORMATS:
+            raise ValueError(
+                f"frames must be one of {sorted(topics.FRAME_FORMATS)}, got {frames!r}"
+            )
+        self.frames = frames
+        self.log = McapLogWriter(path)
+        self.path = self.log.path
+        self._write = self.log.write
+        self._ticks = np.zeros(2, np.int64)
+        self._layout, self._last_stamp = None, 0
 
     def start(self, start: EpisodeStart) -> None:
         self._layout, self._model = start.layout, start.model
@@ -157,11 +181,8 @@ class McapRecorder:
         )
 
     def close(self, end: dict | None = None) -> None:
-        if self._file.closed:
+        if self.log.closed:
             return
         if end is not None:
             self._write(topics.EPISODE_END, self._last_stamp, ros.string(json.dumps(end)))
-        self._writer.finish()
-        self._file.close()
-        os.chmod(self._tmp, 0o644)
-        os.replace(self._tmp, self.path)
+        self.log.close()
