@@ -3,7 +3,8 @@
 Each log (:mod:`stsf_gym.recording`, or a log of your own robot: docs/log_format.md) is read
 once and every pose source runs over its observations, with no simulator. Writes
 ``results.json`` (results schema, one row per pose source over the logs), ``results.md`` and
-each run's TUM trajectories (``trajectories/<log>-<source>/{truth,estimate}.txt``). Success
+each run's TUM trajectories (``trajectories/<log>-<source>/{truth,estimate}.txt``; a log
+without ``/ground_truth/pose`` at every step gets its estimates only, and no row). Success
 and collision are the recorded run's (its agent drove on the recorded estimate). A row is
 ``approximate`` when a log's camera frames were stored lossy (JPEG): the replay then differs
 from what ran live. ``recorded_difference`` is the largest position difference (m) from the
@@ -35,9 +36,6 @@ def replay_logs(logs: list[str | Path], estimators: list[str], out: str | Path) 
     """Run ``estimators`` over every log; write the report to ``out``; return the summary."""
     out = Path(out)
     read = [read_log(path) for path in logs]  # a bad log fails before any work
-    unscored = [str(log.path) for log in read if log.truth is None]
-    if unscored:
-        raise ValueError(f"{unscored[0]}: no /ground_truth/pose at every step, nothing to score")
     episodes: dict[str, list[EpisodeResult]] = {name: [] for name in estimators}
     differences: dict[str, list[float]] = {name: [] for name in estimators}
     walls: dict[str, list[float]] = {name: [] for name in estimators}
@@ -45,17 +43,20 @@ def replay_logs(logs: list[str | Path], estimators: list[str], out: str | Path) 
         observations = list(log.observations())
         for name in estimators:
             run = replay(log, name, observations)
-            episode = episode_result(log, run)
-            episodes[name].append(episode)
             walls[name].append(run.wall_s)
             target = out / "trajectories" / f"{log.path.stem}-{name}"
-            write_tum(target / "truth.txt", episode.times, episode.true_poses)
-            write_tum(target / "estimate.txt", episode.times, run.means)
+            write_tum(target / "estimate.txt", log.times, run.means)
+            if log.truth is None:  # nothing to score it against
+                continue
+            episodes[name].append(episode_result(log, run))
+            write_tum(target / "truth.txt", log.times, log.truth)
             if name in log.estimates:
                 recorded = log.estimates[name][0]
                 differences[name].append(float(np.abs(recorded[:, :2] - run.means[:, :2]).max()))
     rows = []
     for name, runs in episodes.items():
+        if not runs:
+            continue
         row = summarise(name, runs, AGENT)
         row["approximate"] = any(not log.lossless for log in read)
         row["recorded_difference_m"] = max(differences[name]) if differences[name] else None
@@ -64,9 +65,10 @@ def replay_logs(logs: list[str | Path], estimators: list[str], out: str | Path) 
     summary = {
         "schema_version": SCHEMA_VERSION,
         "logs": [str(log.path) for log in read],
+        "unscored": [str(log.path) for log in read if log.truth is None],
         "rows": rows,
     }
-    table = markdown_table([rendered(row) for row in rows])
+    table = markdown_table([rendered(row) for row in rows]) if rows else "No log has a truth.\n"
     config = {str(log.path): log.episode for log in read}
     seeds = [log.episode.get("seed") or 0 for log in read]
     write_report(out, summary, f"Replay of {len(read)} log(s)", table, config=config, seeds=seeds)
