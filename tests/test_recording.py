@@ -137,16 +137,17 @@ def test_the_rerun_recording_reads_back(tmp_path):
     env, _, _, history = record(tmp_path, "stsf", 4.0, FAST, fmt="rerun")
     (path,) = env.paths
     assert path.suffix == ".rrd"
-    rows, timelines = Counter(), set()
+    rows, static, timelines = Counter(), Counter(), set()
     for chunk in RrdReader(path).stream():
-        rows[chunk.entity_path] += chunk.num_rows
+        (static if chunk.is_static else rows)[chunk.entity_path] += chunk.num_rows
         timelines.update(chunk.timeline_names)
     steps = len(history)
     assert "sim_time" in timelines
     for entity in ("world/truth", "world/estimate/stsf", "world/sonar", "metrics/nees/stsf"):
         assert rows[f"/{entity}"] == steps, entity
     assert rows["/agent/action/v"] == steps - 1
-    assert rows["/world/walls"] == rows["/world/landmarks"] == 1
+    assert static["/world/walls"] == static["/world/landmarks"] == 1
+    assert static["/world/trajectory/truth"] == static["/world/trajectory/stsf"] == 1
     assert rows["/camera/detections"] == sum(int(obs["image_new"]) for obs, _ in history)
 
 

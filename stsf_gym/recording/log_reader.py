@@ -66,20 +66,25 @@ class RecordedLog:
         for index, (_, message) in zip(frame_at, self.frames, strict=True):
             new_frames[index].append(message)
         camera: dict = {}
+        pan_tilt_at = [stamp for stamp, _ in self.pan_tilt]
+        sonar_at = [stamp for stamp, _ in self.sonar]
         for k, stamp in enumerate(self.stamps):
             if new_frames.get(k):
                 camera = decode_frame(new_frames[k][-1])
             yield {
                 **camera,
                 "image_new": int(bool(new_frames.get(k))),
-                "camera_pan_tilt": _latest(self.pan_tilt, stamp, np.zeros(2, np.float32)),
-                "sonar": _latest(self.sonar, stamp, np.zeros(0, np.float32)),
+                "camera_pan_tilt": _latest(
+                    self.pan_tilt, pan_tilt_at, stamp, np.zeros(2, np.float32)
+                ),
+                "sonar": _latest(self.sonar, sonar_at, stamp, np.zeros(0, np.float32)),
                 "encoders": self.ticks[k].copy(),
             }
 
 
-def _latest(series: list[tuple[int, np.ndarray]], stamp: int, default: np.ndarray) -> np.ndarray:
-    i = bisect.bisect_right([s for s, _ in series], stamp) - 1
+def _latest(series: list[tuple[int, np.ndarray]], stamps: list[int], stamp: int, default):
+    """The value of ``series`` (stamps ``stamps``) at or before ``stamp``, else ``default``."""
+    i = bisect.bisect_right(stamps, stamp) - 1
     return (series[i][1] if i >= 0 else default).copy()
 
 

@@ -19,6 +19,7 @@ Entity paths (open the file with ``rerun FILE.rrd``):
 from __future__ import annotations
 
 import math
+from collections import defaultdict
 from pathlib import Path
 
 import cv2
@@ -42,7 +43,8 @@ class RerunRecorder:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.rec = rr.RecordingStream("stsf-gym", recording_id=self.path.stem)
         self.rec.save(str(self.path))
-        self.trajectories: dict[str, list] = {}
+        self.steps: dict[str, list] = defaultdict(list)
+        self.frames: dict[str, list] = defaultdict(list)
 
     def start(self, start: EpisodeStart) -> None:
         self.layout, model = start.layout, start.model
@@ -90,120 +92,180 @@ class RerunRecorder:
             self.rec.log("world/path", rr.LineStrips3D([strip], colors=[90, 160, 90]), static=True)
 
     def step(self, record: StepRecord) -> None:
-        self.rec.set_time(TIMELINE, duration=record.time)
-        truth = record.true_pose
-        self._pose("world/truth", truth, [40, 200, 40])
-        self.trajectories.setdefault("truth", []).append(truth)
+        """Buffer the step; everything is sent by entity, as columns, at :meth:`close`."""
+        steps = self.steps
+        steps["time"].append(record.time)
+        steps["truth"].append(np.asarray(record.true_pose, float))
+        steps["sonar"].append(np.asarray(record.obs["sonar"], float))
         for name, (mean, cov) in record.estimates.items():
-            self._pose(f"world/estimate/{name}", mean, [220, 60, 60])
-            self.rec.log(f"world/estimate/{name}/ellipse", rr.LineStrips3D([_ellipse(mean, cov)]))
-            self.trajectories.setdefault(name, []).append(mean)
-            error = pose_error(mean, truth)
-            self.rec.log(f"metrics/position_error/{name}", rr.Scalars(float(np.hypot(*error[:2]))))
-            self.rec.log(f"metrics/nees/{name}", rr.Scalars(float(nees(error[None], cov[None])[0])))
-            matched = record.counters.get("frames_matched", 0)
-            self.rec.log(f"metrics/frames_matched/{name}", rr.Scalars(float(matched)))
+            steps.setdefault(f"estimate/{name}", []).append((mean, cov))
+            steps.setdefault(f"matched/{name}", []).append(record.counters.get("frames_matched", 0))
         if record.action is not None:
-            v, w = np.clip(np.asarray(record.action, float).ravel()[:2], -1, 1)
-            self.rec.log("agent/action/v", rr.Scalars(v * self.layout.max_speed))
-            self.rec.log("agent/action/w", rr.Scalars(w * self.layout.max_yaw_rate))
-        self._sonar(truth, record.obs["sonar"])
+            steps["action_time"].append(record.time)
+            steps["action"].append(np.clip(np.asarray(record.action, float).ravel()[:2], -1, 1))
         if record.obs["image_new"]:
-            self._camera(record)
+            self._frame(record)
 
-    def _pose(self, entity: str, pose, color) -> None:
-        x, y, yaw = pose
-        self.rec.log(
-            entity,
-            rr.Arrows3D(
-                origins=[[x, y, ROBOT_Z]],
-                vectors=[[0.3 * math.cos(yaw), 0.3 * math.sin(yaw), 0.0]],
-                colors=[color],
-            ),
-        )
-
-    def _sonar(self, pose, ranges) -> None:
-        layout, (x, y, yaw) = self.layout, pose
-        cones = []
-        for axis, r in zip(layout.sonar_axes, ranges, strict=True):
-            heading = yaw + axis
-            apex = np.array([x, y]) + layout.body_radius * np.array(
-                [np.cos(heading), np.sin(heading)]
-            )
-            edges = [heading - layout.sonar_fov / 2, heading + layout.sonar_fov / 2]
-            ends = [apex + r * np.array([np.cos(a), np.sin(a)]) for a in edges]
-            ring = np.array([apex, ends[0], ends[1], apex])
-            cones.append(np.column_stack([ring, np.full(4, layout.sonar_height)]))
-        self.rec.log("world/sonar", rr.LineStrips3D(cones, colors=[80, 140, 230]))
-
-    def _camera(self, record: StepRecord) -> None:
-        obs = record.obs
+    def _frame(self, record: StepRecord) -> None:
+        obs, frames = record.obs, self.frames
+        frames["time"].append(record.time)
         if "image" in obs:
-            ok, jpeg = cv2.imencode(
-                ".jpg",
-                cv2.cvtColor(obs["image"], cv2.COLOR_RGB2BGR),
-                [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY],
-            )
-            if ok:
-                self.rec.log(
-                    "camera/image",
-                    rr.EncodedImage(contents=jpeg.tobytes(), media_type="image/jpeg"),
-                )
-        found = record.detections.found if record.detections else None
-        if found is None and "landmark_ids" in obs:  # the fast mode's detections, drawn
+            bgr = cv2.cvtColor(obs["image"], cv2.COLOR_RGB2BGR)
+            ok, jpeg = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+            frames["image"].append(jpeg.tobytes() if ok else b"")
+        if record.detections is None and "landmark_ids" in obs:  # the fast mode's detections
             ids = np.asarray(obs["landmark_ids"])
             slots = np.asarray(obs["landmark_points"]).reshape(len(ids), -1, 2)
-            found = [
-                (i, s[np.isfinite(s).all(axis=1)])
-                for i, s in zip(ids, slots, strict=True)
-                if i >= 0
-            ]
+            found = [(i, s[np.isfinite(s).all(axis=1)]) for i, s in zip(ids, slots, strict=True)]
+            found = [(i, s) for i, s in found if i >= 0]
+            aided, predictions = [], []
         else:
-            found = [(d.landmark_id, d.image_points) for d in found or []]
-        self._boards("camera/detections", found, [60, 220, 60])
-        if record.detections is not None:
-            aided = [(d.landmark_id, d.image_points) for d in record.detections.aided]
-            self._boards("camera/aided", aided, [240, 160, 40])
-            self.rec.log(
-                "camera/predictions",
-                rr.LineStrips2D(
-                    [np.vstack([p.corners, p.corners[:1]]) for p in record.detections.predictions],
-                    labels=[f"{p.landmark_id}?" for p in record.detections.predictions],
-                    colors=[240, 240, 60],
-                ),
+            detections = record.detections
+            found = (
+                [(d.landmark_id, d.image_points) for d in detections.found] if detections else []
             )
-
-    def _boards(self, entity: str, boards: list, color) -> None:
-        points = [np.asarray(p, float) for _, p in boards]
-        self.rec.log(
-            entity,
-            rr.Points2D(
-                np.vstack(points) if points else np.zeros((0, 2)),
-                colors=[color],
-                radii=2.0,
-            ),
-        )
-        self.rec.log(
-            f"{entity}/ids",
-            rr.Points2D(
-                [p.mean(axis=0) for p in points] if points else np.zeros((0, 2)),
-                labels=[str(int(i)) for i, _ in boards],
-                colors=[color],
-                radii=0.5,
-            ),
+            aided = (
+                [(d.landmark_id, d.image_points) for d in detections.aided] if detections else []
+            )
+            predictions = detections.predictions if detections else []
+        frames["detections"].append(found)
+        frames["aided"].append(aided)
+        frames["predictions"].append(
+            [(p.landmark_id, np.vstack([p.corners, p.corners[:1]])) for p in predictions]
         )
 
     def close(self, end: dict | None = None) -> None:
-        for name, poses in self.trajectories.items():
-            xy = np.asarray(poses)[:, :2]
-            strip = np.column_stack([xy, np.full(len(xy), ROBOT_Z)])
-            color = [40, 200, 40] if name == "truth" else [220, 60, 60]
-            self.rec.log(
-                f"world/trajectory/{name}", rr.LineStrips3D([strip], colors=[color]), static=True
-            )
-        self.trajectories = {}
+        if self.steps["time"]:
+            self._send_steps()
+        if self.frames["time"]:
+            self._send_frames()
         self.rec.flush()
         self.rec.disconnect()
+
+    def _send(self, entity: str, times, columns) -> None:
+        self.rec.send_columns(
+            entity, indexes=[rr.TimeColumn(TIMELINE, duration=times)], columns=columns
+        )
+
+    def _send_steps(self) -> None:
+        steps, layout = self.steps, self.layout
+        times, truth = np.array(steps["time"]), np.array(steps["truth"])
+        self._poses("truth", times, truth, [40, 200, 40])
+        for key in [k for k in steps if k.startswith("estimate/")]:
+            name = key.split("/", 1)[1]
+            means = np.array([m for m, _ in steps[key]])
+            covs = np.array([c for _, c in steps[key]])
+            self._poses(f"estimate/{name}", times, means, [220, 60, 60])
+            ellipses = np.array([_ellipse(m, c) for m, c in zip(means, covs, strict=True)])
+            self._send(
+                f"world/estimate/{name}/ellipse", times, rr.LineStrips3D.columns(strips=ellipses)
+            )
+            error = pose_error(means, truth)
+            scalars = {
+                "position_error": np.hypot(error[:, 0], error[:, 1]),
+                "nees": nees(error, covs),
+                "frames_matched": np.array(steps[f"matched/{name}"], float),
+            }
+            for metric, values in scalars.items():
+                self._send(f"metrics/{metric}/{name}", times, rr.Scalars.columns(scalars=values))
+        if steps["action"]:
+            action_times, action = np.array(steps["action_time"]), np.array(steps["action"])
+            self._send(
+                "agent/action/v",
+                action_times,
+                rr.Scalars.columns(scalars=action[:, 0] * layout.max_speed),
+            )
+            self._send(
+                "agent/action/w",
+                action_times,
+                rr.Scalars.columns(scalars=action[:, 1] * layout.max_yaw_rate),
+            )
+        cones = _sonar_cones(truth, np.array(steps["sonar"]), layout)
+        self.rec.log(
+            "world/sonar", rr.LineStrips3D.from_fields(colors=[[80, 140, 230]]), static=True
+        )
+        self._send(
+            "world/sonar",
+            times,
+            rr.LineStrips3D.columns(strips=cones.reshape(-1, 4, 3)).partition(
+                [cones.shape[1]] * len(times)
+            ),
+        )
+
+    def _poses(self, name: str, times, poses: np.ndarray, color) -> None:
+        """The pose at each step as an arrow, and the whole trajectory (static)."""
+        origins = np.column_stack([poses[:, :2], np.full(len(poses), ROBOT_Z)])
+        heading = 0.3 * np.column_stack(
+            [np.cos(poses[:, 2]), np.sin(poses[:, 2]), np.zeros(len(poses))]
+        )
+        self.rec.log(f"world/{name}", rr.Arrows3D.from_fields(colors=[color]), static=True)
+        self._send(f"world/{name}", times, rr.Arrows3D.columns(origins=origins, vectors=heading))
+        label = name.split("/")[-1]
+        self.rec.log(
+            f"world/trajectory/{label}", rr.LineStrips3D([origins], colors=[color]), static=True
+        )
+
+    def _send_frames(self) -> None:
+        frames = self.frames
+        times = np.array(frames["time"])
+        if frames["image"]:
+            blobs = frames["image"]
+            self._send(
+                "camera/image",
+                times,
+                rr.EncodedImage.columns(blob=blobs, media_type=["image/jpeg"] * len(blobs)),
+            )
+        for entity, color in (("detections", [60, 220, 60]), ("aided", [240, 160, 40])):
+            boards = frames[entity]
+            points = [p for frame in boards for _, p in frame]
+            counts = [sum(len(p) for _, p in frame) for frame in boards]
+            self.rec.log(
+                f"camera/{entity}", rr.Points2D.from_fields(colors=[color], radii=2.0), static=True
+            )
+            positions = np.vstack(points) if points else np.zeros((0, 2))
+            self._send(
+                f"camera/{entity}",
+                times,
+                rr.Points2D.columns(positions=positions).partition(counts),
+            )
+            centres = [p.mean(axis=0) for frame in boards for _, p in frame]
+            labels = [str(int(i)) for frame in boards for i, _ in frame]
+            self._send(
+                f"camera/{entity}/ids",
+                times,
+                rr.Points2D.columns(
+                    positions=np.array(centres).reshape(-1, 2), labels=labels
+                ).partition([len(f) for f in boards]),
+            )
+        predicted = frames["predictions"]
+        strips = [s for frame in predicted for _, s in frame]
+        labels = [f"{i}?" for frame in predicted for i, _ in frame]
+        self.rec.log(
+            "camera/predictions", rr.LineStrips2D.from_fields(colors=[[240, 240, 60]]), static=True
+        )
+        self._send(
+            "camera/predictions",
+            times,
+            rr.LineStrips2D.columns(strips=strips, labels=labels).partition(
+                [len(f) for f in predicted]
+            ),
+        )
+
+
+def _sonar_cones(poses: np.ndarray, ranges: np.ndarray, layout) -> np.ndarray:
+    """Each transducer's beam as a closed triangle (apex, two edges at the range): (N, K, 4, 3)."""
+    heading = poses[:, 2:3] + layout.sonar_axes[None, :]  # (N, K)
+    apex = poses[:, None, :2] + layout.body_radius * np.stack(
+        [np.cos(heading), np.sin(heading)], -1
+    )
+    half = layout.sonar_fov / 2
+    edges = [
+        apex
+        + ranges[..., None] * np.stack([np.cos(heading + s * half), np.sin(heading + s * half)], -1)
+        for s in (-1, 1)
+    ]
+    ring = np.stack([apex, edges[0], edges[1], apex], axis=2)  # (N, K, 4, 2)
+    return np.concatenate([ring, np.full((*ring.shape[:3], 1), layout.sonar_height)], axis=-1)
 
 
 def _ellipse(mean, cov) -> np.ndarray:

@@ -80,12 +80,26 @@ def planar_pose(message) -> tuple[np.ndarray, np.ndarray]:
     return mean, np.asarray(message.pose.covariance, float).reshape(6, 6)[PLANAR]
 
 
+def quaternion_of(rotation: np.ndarray) -> tuple[float, float, float, float]:
+    """``(x, y, z, w)`` of a 3x3 rotation matrix (Shepperd's method: the largest of the four
+    squares first, so every rotation is well conditioned)."""
+    r = np.asarray(rotation, float)
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    i = int(np.argmax([r[0, 0], r[1, 1], r[2, 2], trace]))
+    if i == 3:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        return ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, s / 4)
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = 2.0 * math.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k])
+    q = [0.0, 0.0, 0.0]
+    q[i], q[j], q[k] = s / 4, (r[j, i] + r[i, j]) / s, (r[k, i] + r[i, k]) / s
+    return q[0], q[1], q[2], (r[k, j] - r[j, k]) / s
+
+
 def transform(stamp: int, parent: str, child: str, matrix: np.ndarray):
     """``geometry_msgs/TransformStamped`` of a 4x4 ``parent``-from-``child`` pose."""
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = Rotation.from_matrix(np.asarray(matrix)[:3, :3]).as_quat()
-    t = np.asarray(matrix)[:3, 3]
+    x, y, z, w = quaternion_of(np.asarray(matrix)[:3, :3])
+    t = np.asarray(matrix, float)[:3, 3]
     return _T["geometry_msgs/msg/TransformStamped"](
         header=header(stamp, parent),
         child_frame_id=child,

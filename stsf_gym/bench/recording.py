@@ -1,0 +1,95 @@
+"""What recording costs, and how fast a replay is: the follower drives the whole IRL corridor
+(about 24 m) on STSF in the fast and the rendered sensor mode, once unrecorded and once per
+recording format, in one process pinned to one core.
+
+The overhead is the wall time spent in the recorder (:attr:`RecordEpisode.wall_s`: building
+the messages, encoding frames, writing) over the unrecorded episode's wall time; the sizes are
+the files'. The replay reads the rendered episode's lossless MCAP and reruns STSF on it (decoding
+every frame, running the detector) with no simulator; its speed-up is the live episode's wall
+time over the replay's, reading included.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+from pathlib import Path
+
+#: (format, frames) recorded per sensor mode; the fast mode has no frames to store.
+RECORDINGS = {
+    "fast": [("mcap", "png"), ("rerun", "png")],
+    "rendered": [("mcap", "png"), ("mcap", "jpeg"), ("mcap", "raw"), ("rerun", "png")],
+}
+ESTIMATOR, WORLD = "stsf", "irl_corridor"
+
+
+def recording_costs(seed: int = 0, cpu: int | None = 0) -> dict:
+    """Measure every recording case in a fresh process (pinned to ``cpu`` when given)."""
+    with ProcessPoolExecutor(1, mp_context=get_context("spawn")) as pool:
+        return pool.submit(_measure, seed, cpu).result()
+
+
+def _episode(mode: str, seed: int, record: tuple[str, str] | None, folder: Path) -> dict:
+    from stsf_gym.episode_env import make_episode_env
+    from stsf_gym.experiments.episodes import make_agent
+    from stsf_gym.recording.wrapper import RecordEpisode
+
+    env = make_episode_env(WORLD, ESTIMATOR, {"camera": {"mode": mode}})
+    if record is not None:
+        env = RecordEpisode(env, folder, record[0], record[1], f"{mode}-{record[0]}-{record[1]}")
+    obs, info = env.reset(seed=seed)
+    act = make_agent("follower", env)
+    start, done = time.perf_counter(), False
+    while not done:
+        obs, _, terminated, truncated, info = env.step(act(obs))
+        done = terminated or truncated
+    wall = time.perf_counter() - start
+    env.close()
+    row = {"wall_s": wall, "distance_m": float(info["distance_travelled"])}
+    if record is not None:
+        (path,) = env.paths
+        row.update(recording_s=env.wall_s, path=path, size_mb=path.stat().st_size / 1e6)
+    return row
+
+
+def _measure(seed: int, cpu: int | None) -> dict:
+    if cpu is not None and hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {cpu % os.cpu_count()})
+    from stsf_gym.recording.log_reader import read_log
+    from stsf_gym.recording.replay import replay
+
+    rows, replays = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for mode, recordings in RECORDINGS.items():
+            live = _episode(mode, seed, None, Path(tmp))
+            for fmt, frames in recordings:
+                recorded = _episode(mode, seed, (fmt, frames), Path(tmp))
+                rows.append(
+                    {
+                        "mode": mode,
+                        "format": fmt,
+                        "frames": frames if fmt == "mcap" and mode == "rendered" else "-",
+                        "distance_m": recorded["distance_m"],
+                        "episode_s": live["wall_s"],
+                        "recording_s": recorded["recording_s"],
+                        "overhead": recorded["recording_s"] / live["wall_s"],
+                        "size_mb": recorded["size_mb"],
+                    }
+                )
+                if fmt == "mcap" and frames == "png":
+                    start = time.perf_counter()
+                    run = replay(read_log(recorded["path"]), ESTIMATOR)
+                    total = time.perf_counter() - start
+                    replays.append(
+                        {
+                            "mode": mode,
+                            "episode_s": live["wall_s"],
+                            "replay_s": total,
+                            "estimator_s": run.wall_s,
+                            "speed_up": live["wall_s"] / total,
+                        }
+                    )
+    return {"recordings": rows, "replays": replays}
