@@ -80,10 +80,11 @@ def _record_args(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--record-frames",
-        choices=["png", "raw", "jpeg"],
-        default="png",
-        help="camera frames in an MCAP recording: png or raw (lossless: a replay gives the "
-        "live estimates bit for bit) or jpeg (smaller; its replay is approximate). Default png",
+        choices=["raw", "png", "jpeg"],
+        default="raw",
+        help="camera frames in an MCAP recording: raw or png (lossless: a replay gives the "
+        "live estimates bit for bit; png is a little smaller and slow to encode) or jpeg "
+        "(about 8x smaller; its replay is approximate). Default raw",
     )
 
 

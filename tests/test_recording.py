@@ -87,12 +87,12 @@ def test_the_mcap_log_reads_back_with_the_mcap_reader(fast_log):
     steps = len(history)
     frames = sum(int(obs["image_new"]) for obs, _ in history)
     assert counts[topics.WHEEL_TICKS] == counts[topics.TRUTH] == steps
-    assert counts[topics.SONAR] == 16 * steps
+    assert counts[topics.SONAR] == steps
     assert counts[topics.DETECTIONS] == counts[topics.CAMERA_INFO] == frames > 0
     assert counts[topics.CMD_VEL] == steps - 1
     assert counts[topics.estimate_topic("stsf")] == steps
     assert types[topics.TRUTH] == "geometry_msgs/msg/PoseWithCovarianceStamped"
-    assert types[topics.SONAR] == "sensor_msgs/msg/Range"
+    assert types[topics.SONAR] == "sensor_msgs/msg/LaserScan"
     assert types[topics.TF] == "tf2_msgs/msg/TFMessage"
     assert types[topics.CAMERA_INFO] == "sensor_msgs/msg/CameraInfo"
     times = [round(info["sim_time"] * 1e9) for _, info in history]
@@ -102,17 +102,23 @@ def test_the_mcap_log_reads_back_with_the_mcap_reader(fast_log):
 
 
 def test_a_recorded_episode_replays_bit_for_bit(fast_log):
-    env, means, covs, _ = fast_log
+    env, means, covs, history = fast_log
     log = read_log(env.paths[0])
     assert log.lossless
+    for replayed, (live, _) in zip(log.observations(), history, strict=True):
+        for key in ("encoders", "image_new", "camera_pan_tilt", "sonar", "landmark_ids"):
+            assert np.array_equal(replayed[key], live[key]), key
+            assert np.asarray(replayed[key]).dtype == np.asarray(live[key]).dtype, key
+        assert np.array_equal(replayed["landmark_points"], live["landmark_points"], equal_nan=True)
     run = replay(log, "stsf")
     assert np.array_equal(run.means, means)
     assert np.array_equal(run.covs, covs)
     assert run.counters["frames"] > 0
 
 
-def test_rendered_frames_png_exact_and_jpeg_approximate(tmp_path):
-    env, means, _, history = record(tmp_path, "ekf", 3.0, {})
+@pytest.mark.parametrize("frames", ["raw", "png"])
+def test_rendered_frames_lossless_exact_and_jpeg_approximate(tmp_path, frames):
+    env, means, _, history = record(tmp_path, "ekf", 3.0, {}, frames=frames)
     log = read_log(env.paths[0])
     first_frame = next(obs for obs, _ in history[1:] if obs["image_new"])
     replayed = next(obs for obs in list(log.observations())[1:] if obs["image_new"])
@@ -131,16 +137,28 @@ def test_rendered_frames_png_exact_and_jpeg_approximate(tmp_path):
     assert decoded.shape == first_frame["image"].shape
 
 
+def test_quaternions_of_rotation_matrices():
+    from scipy.spatial.transform import Rotation
+
+    for rotation in Rotation.random(200, random_state=1):
+        ours, theirs = np.array(ros.quaternion_of(rotation.as_matrix())), rotation.as_quat()
+        assert min(abs(ours - theirs).max(), abs(ours + theirs).max()) < 1e-12
+
+
 def test_the_rerun_recording_reads_back(tmp_path):
     from rerun.chunk import RrdReader
 
-    env, _, _, history = record(tmp_path, "stsf", 4.0, FAST, fmt="rerun")
+    env, means, _, history = record(tmp_path, "stsf", 4.0, FAST, fmt="rerun")
     (path,) = env.paths
     assert path.suffix == ".rrd"
-    rows, static, timelines = Counter(), Counter(), set()
+    rows, static, timelines, errors = Counter(), Counter(), set(), {}
     for chunk in RrdReader(path).stream():
         (static if chunk.is_static else rows)[chunk.entity_path] += chunk.num_rows
         timelines.update(chunk.timeline_names)
+        if chunk.entity_path == "/metrics/position_error/stsf":
+            batch = chunk.to_record_batch().to_pydict()
+            for t, value in zip(batch["sim_time"], batch["Scalars:scalars"], strict=True):
+                errors[t] = value[0]
     steps = len(history)
     assert "sim_time" in timelines
     for entity in ("world/truth", "world/estimate/stsf", "world/sonar", "metrics/nees/stsf"):
@@ -149,6 +167,9 @@ def test_the_rerun_recording_reads_back(tmp_path):
     assert static["/world/walls"] == static["/world/landmarks"] == 1
     assert static["/world/trajectory/truth"] == static["/world/trajectory/stsf"] == 1
     assert rows["/camera/detections"] == sum(int(obs["image_new"]) for obs, _ in history)
+    truth = np.array([info["true_pose"] for _, info in history])
+    expected = np.hypot(*(means[:, :2] - truth[:, :2]).T)
+    assert np.allclose([errors[t] for t in sorted(errors)], expected, rtol=1e-12, atol=1e-15)
 
 
 def test_the_wrapper_records_its_arguments_and_changes_nothing(make_env, tmp_path):

@@ -4,7 +4,7 @@ recording format, in one process pinned to one core.
 
 The overhead is the wall time spent in the recorder (:attr:`RecordEpisode.wall_s`: building
 the messages, encoding frames, writing) over the unrecorded episode's wall time; the sizes are
-the files'. The replay reads the rendered episode's lossless MCAP and reruns STSF on it (decoding
+the files'. The replay reads each mode's lossless (raw) MCAP and reruns STSF on it (decoding
 every frame, running the detector) with no simulator; its speed-up is the live episode's wall
 time over the replay's, reading included.
 """
@@ -20,8 +20,8 @@ from pathlib import Path
 
 #: (format, frames) recorded per sensor mode; the fast mode has no frames to store.
 RECORDINGS = {
-    "fast": [("mcap", "png"), ("rerun", "png")],
-    "rendered": [("mcap", "png"), ("mcap", "jpeg"), ("mcap", "raw"), ("rerun", "png")],
+    "fast": [("mcap", "raw"), ("rerun", "-")],
+    "rendered": [("mcap", "raw"), ("mcap", "jpeg"), ("mcap", "png"), ("rerun", "-")],
 }
 ESTIMATOR, WORLD = "stsf", "irl_corridor"
 
@@ -71,7 +71,7 @@ def _measure(seed: int, cpu: int | None) -> dict:
                     {
                         "mode": mode,
                         "format": fmt,
-                        "frames": frames if fmt == "mcap" and mode == "rendered" else "-",
+                        "frames": frames if mode == "rendered" else "-",
                         "distance_m": recorded["distance_m"],
                         "episode_s": live["wall_s"],
                         "recording_s": recorded["recording_s"],
@@ -79,7 +79,7 @@ def _measure(seed: int, cpu: int | None) -> dict:
                         "size_mb": recorded["size_mb"],
                     }
                 )
-                if fmt == "mcap" and frames == "png":
+                if fmt == "mcap" and frames == "raw":
                     start = time.perf_counter()
                     run = replay(read_log(recorded["path"]), ESTIMATOR)
                     total = time.perf_counter() - start

@@ -164,7 +164,7 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             env,
             record["folder"],
             record["format"],
-            record.get("frames", "png"),
+            record.get("frames", "raw"),
             spec.key,
             meta={"spec": asdict(spec)},
         )

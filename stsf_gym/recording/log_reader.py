@@ -166,14 +166,9 @@ def read_log(path: str | Path) -> RecordedLog:
 
 
 def _sonar(messages: list) -> list[tuple[int, np.ndarray]]:
-    """One array of ranges (ordered by frame id) per stamp."""
-    grouped: dict[int, dict[str, float]] = defaultdict(dict)
-    for m in messages:
-        grouped[ros.stamp_ns(m)][m.header.frame_id] = m.range
-    return [
-        (stamp, np.array([r[k] for k in sorted(r)], np.float32))
-        for stamp, r in sorted(grouped.items())
-    ]
+    """The ranges of each sonar scan, by stamp."""
+    scans = [(ros.stamp_ns(m), np.asarray(m.ranges, np.float32)) for m in messages]
+    return sorted(scans, key=lambda scan: scan[0])
 
 
 def _poses_at(messages: list, stamps: np.ndarray) -> np.ndarray | None:

@@ -2,8 +2,8 @@
 
 Foxglove, ``ros2 bag`` (with the MCAP storage plugin) and evo (``evo_ape bag2 FILE.mcap
 /ground_truth/pose /estimate/stsf/pose``) open it. It holds all an estimator needs, so
-``stsf-gym replay`` reruns any pose source on it: with lossless frames (PNG, the default, or
-raw) bit for bit; JPEG frames are smaller and for looking at.
+``stsf-gym replay`` reruns any pose source on it: with lossless frames (raw, the default, or
+PNG) bit for bit; JPEG frames are smaller and for looking at.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from stsf_gym.recording.records import EpisodeStart, StepRecord, nanoseconds
 from stsf_gym.recording.sensor_model_json import sensor_model_json
 
 JPEG_QUALITY = 90
-PNG_COMPRESSION = 1  # zlib level: fast, and still about half the raw size
+PNG_COMPRESSION = 1  # zlib level: the fastest that compresses
 
 
 class McapLogWriter:
@@ -72,9 +72,10 @@ class McapLogWriter:
 
 class McapRecorder:
     """Writes one episode to ``path`` (:class:`McapLogWriter`); camera frames as ``frames``:
-    ``"png"`` (lossless), ``"raw"`` (``sensor_msgs/Image``) or ``"jpeg"``."""
+    ``"raw"`` (``sensor_msgs/Image``, lossless; the MCAP's chunks are zstd-compressed), ``"png"``
+    (lossless, a little smaller, far slower to encode) or ``"jpeg"`` (lossy, about 8x smaller)."""
 
-    def __init__(self, path: str | Path, frames: str = "png") -> None:
+    def __init__(self, path: str | Path, frames: str = "raw") -> None:
         if frames not in topics.FRAME_FORMATS:
             raise ValueError(
                 f"frames must be one of {sorted(topics.FRAME_FORMATS)}, got {frames!r}"
@@ -99,57 +100,53 @@ class McapRecorder:
         self._write(topics.EPISODE, 0, ros.string(json.dumps(episode)))
         initial = ros.pose_with_covariance(0, "map", start.initial_pose, start.initial_cov)
         self._write(topics.INITIAL_POSE, 0, initial)
-        layout = start.layout
-        sonars = []
-        for i, axis in enumerate(layout.sonar_axes):
-            matrix = np.eye(4)
-            matrix[:3, :3] = rot_z(axis)
-            matrix[:3, 3] = [
-                layout.body_radius * np.cos(axis),
-                layout.body_radius * np.sin(axis),
-                layout.sonar_height,
-            ]
-            sonars.append(ros.transform(0, "base_link", f"sonar_{i:02d}", matrix))
-        self._write(topics.TF_STATIC, 0, ros.tf_message(sonars))
+        ring = np.eye(4)
+        ring[2, 3] = start.layout.sonar_height
+        sonar = ros.transform(0, "base_link", topics.SONAR_FRAME, ring)
+        self._write(topics.TF_STATIC, 0, ros.tf_message([sonar]))
 
     def step(self, record: StepRecord) -> None:
-        stamp, obs = nanoseconds(record.time), record.obs
+        stamp, obs, layout = nanoseconds(record.time), record.obs, self._layout
         self._last_stamp = stamp
         self._ticks = self._ticks + np.asarray(obs["encoders"], np.int64)
         self._write(topics.WHEEL_TICKS, stamp, ros.joint_state(stamp, topics.WHEELS, self._ticks))
+        if obs["image_new"] or record.action is None:  # the robot's TF at frames and the start
+            self._transforms(stamp, record)
         if obs["image_new"]:
             self._frame(stamp, record)
-        layout = self._layout
-        for i, value in enumerate(obs["sonar"]):
-            message = ros.sonar_range(
-                stamp, f"sonar_{i:02d}", value, layout.sonar_fov, layout.sonar_limits
-            )
-            self._write(topics.SONAR, stamp, message)
-        truth_cov = np.zeros((3, 3))
-        self._write(
-            topics.TRUTH, stamp, ros.pose_with_covariance(stamp, "map", record.true_pose, truth_cov)
+        scan = ros.sonar_scan(
+            stamp, topics.SONAR_FRAME, obs["sonar"], layout.sonar_axes, layout.sonar_limits
         )
+        self._write(topics.SONAR, stamp, scan)
+        truth = ros.pose_with_covariance(stamp, "map", record.true_pose, np.zeros((3, 3)))
+        self._write(topics.TRUTH, stamp, truth)
         for name, (mean, cov) in record.estimates.items():
             message = ros.pose_with_covariance(stamp, "map", mean, cov)
             self._write(topics.estimate_topic(name), stamp, message)
-        base = np.eye(4)
-        base[:3, :3] = rot_z(record.true_pose[2])
-        base[:2, 3] = record.true_pose[:2]
-        self._write(
-            topics.TF, stamp, ros.tf_message([ros.transform(stamp, "map", "base_link", base)])
-        )
         if record.action is not None:
             v, w = np.clip(np.asarray(record.action, float).ravel()[:2], -1, 1)
             message = ros.twist(stamp, v * layout.max_speed, w * layout.max_yaw_rate)
             self._write(topics.CMD_VEL, stamp, message)
 
+    def _transforms(self, stamp: int, record: StepRecord) -> None:
+        """``map -> base_link`` (the true pose) and ``base_link -> camera_optical`` (the mount
+        at the frame's angles), at the camera's rate (TF consumers interpolate)."""
+        base = np.eye(4)
+        base[:3, :3] = rot_z(record.true_pose[2])
+        base[:2, 3] = record.true_pose[:2]
+        pan_tilt = np.asarray(record.obs["camera_pan_tilt"], np.float64)
+        transforms = [
+            ros.transform(stamp, "map", "base_link", base),
+            ros.transform(
+                stamp, "base_link", "camera_optical", self._model.robot_from_camera(*pan_tilt)
+            ),
+        ]
+        self._write(topics.TF, stamp, ros.tf_message(transforms))
+
     def _frame(self, stamp: int, record: StepRecord) -> None:
         obs, model = record.obs, self._model
         pan_tilt = np.asarray(obs["camera_pan_tilt"], np.float64)
         self._write(topics.PAN_TILT, stamp, ros.joint_state(stamp, topics.MOUNT_JOINTS, pan_tilt))
-        mount = model.robot_from_camera(*pan_tilt)
-        transform = ros.transform(stamp, "base_link", "camera_optical", mount)
-        self._write(topics.TF, stamp, ros.tf_message([transform]))
         calibration = model.camera_calibration
         info = ros.camera_info(stamp, calibration.K, calibration.dist, model.image_size)
         self._write(topics.CAMERA_INFO, stamp, info)

@@ -122,14 +122,21 @@ def joint_state(stamp: int, names: list[str], positions) -> object:
     )
 
 
-def sonar_range(stamp: int, frame_id: str, value: float, fov: float, limits) -> object:
-    return _T["sensor_msgs/msg/Range"](
+def sonar_scan(stamp: int, frame_id: str, ranges, axes: np.ndarray, limits) -> object:
+    """``sensor_msgs/LaserScan`` of a sonar ring: one range per transducer, at headings
+    ``axes`` (evenly spaced, counter-clockwise from the first)."""
+    axes = np.asarray(axes, float)
+    return _T["sensor_msgs/msg/LaserScan"](
         header=header(stamp, frame_id),
-        radiation_type=_T["sensor_msgs/msg/Range"].ULTRASOUND,
-        field_of_view=float(fov),
-        min_range=float(limits[0]),
-        max_range=float(limits[1]),
-        range=float(value),
+        angle_min=float(axes[0]),
+        angle_max=float(axes[-1]),
+        angle_increment=float(axes[1] - axes[0]) if len(axes) > 1 else 0.0,
+        time_increment=0.0,
+        scan_time=0.0,
+        range_min=float(limits[0]),
+        range_max=float(limits[1]),
+        ranges=np.asarray(ranges, np.float32),
+        intensities=np.zeros(0, np.float32),
     )
 
 

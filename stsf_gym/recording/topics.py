@@ -17,7 +17,7 @@ IMAGE_COMPRESSED = "/camera/image/compressed"  # sensor_msgs/CompressedImage: pn
 IMAGE_RAW = "/camera/image"  # sensor_msgs/Image: rgb8
 DETECTIONS = "/camera/detections"  # sensor_msgs/PointCloud: fast-mode detections per frame
 CAMERA_INFO = "/camera/camera_info"  # sensor_msgs/CameraInfo: the believed calibration
-SONAR = "/sonar"  # sensor_msgs/Range: one per transducer (frame sonar_NN), every step
+SONAR = "/sonar/scan"  # sensor_msgs/LaserScan: the sonar ring, one range each, every step
 TRUTH = "/ground_truth/pose"  # geometry_msgs/PoseWithCovarianceStamped: for scoring only
 CMD_VEL = "/cmd_vel"  # geometry_msgs/TwistStamped: the agent's command (m/s, rad/s)
 TF, TF_STATIC = "/tf", "/tf_static"  # tf2_msgs/TFMessage: map->base_link (truth), mounts
@@ -39,7 +39,7 @@ TYPES: dict[str, str] = {
     IMAGE_RAW: "sensor_msgs/msg/Image",
     DETECTIONS: "sensor_msgs/msg/PointCloud",
     CAMERA_INFO: "sensor_msgs/msg/CameraInfo",
-    SONAR: "sensor_msgs/msg/Range",
+    SONAR: "sensor_msgs/msg/LaserScan",
     TRUTH: "geometry_msgs/msg/PoseWithCovarianceStamped",
     CMD_VEL: "geometry_msgs/msg/TwistStamped",
     TF: "tf2_msgs/msg/TFMessage",
@@ -50,6 +50,8 @@ REQUIRED = (SENSOR_MODEL, EPISODE, INITIAL_POSE, WHEEL_TICKS)
 CAMERA = (IMAGE_COMPRESSED, IMAGE_RAW, DETECTIONS)
 #: Joint names of the wheel ticks and the mount angles.
 WHEELS, MOUNT_JOINTS = ("left_wheel", "right_wheel"), ("camera_pan", "camera_tilt")
+#: The frame of the sonar ring: on the robot's axis at the transducers' height.
+SONAR_FRAME = "sonar_ring"
 #: How camera frames are stored (``--record-frames``): lossless ones replay bit for bit.
 FRAME_FORMATS = {"png": True, "raw": True, "jpeg": False}
 

@@ -23,7 +23,7 @@ from stsf_gym.wrappers import START_STD, sensor_model
 FORMATS = {"mcap": ".mcap", "rerun": ".rrd"}
 
 
-def make_recorder(path: str | Path, fmt: str, frames: str = "png") -> Recorder:
+def make_recorder(path: str | Path, fmt: str, frames: str = "raw") -> Recorder:
     """The recorder of ``fmt`` (``mcap`` or ``rerun``) writing ``path``."""
     if fmt == "mcap":
         from stsf_gym.recording.mcap_writer import McapRecorder
@@ -50,7 +50,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """Records each episode of a stsf-gym env (any registered id or hand-built stack) to
     ``folder/<name_prefix>.<ext>`` (later episodes ``<name_prefix>-<k>.<ext>``): ``fmt="mcap"``
     (standard ROS 2 messages, replayable by ``stsf-gym replay``; camera frames as ``frames``:
-    ``png``, ``raw`` or ``jpeg``) or ``fmt="rerun"`` (a ``.rrd`` for the Rerun viewer).
+    ``raw`` (default), ``png`` or ``jpeg``) or ``fmt="rerun"`` (a ``.rrd`` for the Rerun viewer).
 
     Wrap it outermost: it records the observation the env made, the true pose from ``info``
     and the estimate of the :class:`~stsf_gym.wrappers.PoseEstimateWrapper` below it (if
@@ -64,7 +64,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         env: gym.Env,
         folder: str | Path,
         fmt: str = "mcap",
-        frames: str = "png",
+        frames: str = "raw",
         name_prefix: str = "episode",
         meta: dict | None = None,
     ) -> None:
