@@ -99,17 +99,16 @@ def decode_frame(message) -> dict:
             raise ValueError(f"camera images must be rgb8, got {message.encoding!r}")
         data = np.asarray(message.data, np.uint8)
         return {"image": data.reshape(message.height, message.width, 3).copy()}
-    channels = {c.name: np.asarray(c.values, np.float32) for c in message.channels}
-    slots = channels["slot"].astype(np.int64)
-    if not len(slots):  # nothing detected: one empty slot
+    points = ros.detection_points(message)
+    if not len(points):  # nothing detected: one empty slot
         return {
             "landmark_ids": np.full(1, -1, np.int64),
             "landmark_points": np.zeros(2, np.float32),
         }
-    ids = np.full(int(slots.max()) + 1, -1, np.int64)
-    ids[slots] = channels["landmark_id"].astype(np.int64)
-    points = np.array([[p.x, p.y] for p in message.points], np.float32).reshape(-1, 2)
-    return {"landmark_ids": ids, "landmark_points": points.ravel()}
+    ids = np.full(int(points["slot"].max()) + 1, -1, np.int64)
+    ids[points["slot"]] = points["landmark_id"]
+    uv = np.column_stack([points["x"], points["y"]])
+    return {"landmark_ids": ids, "landmark_points": uv.ravel()}
 
 
 def read_log(path: str | Path) -> RecordedLog:

@@ -154,13 +154,13 @@ class McapRecorder:
             self._image(stamp, obs["image"])
         else:
             ids = np.asarray(obs["landmark_ids"])
-            points = np.asarray(obs["landmark_points"], np.float32).reshape(-1, 2)
-            per_slot = len(points) // len(ids)
-            channels = {  # each point's detection slot and that slot's landmark id (-1: empty)
-                "slot": np.repeat(np.arange(len(ids)), per_slot),
-                "landmark_id": np.repeat(ids, per_slot),
-            }
-            self._write(topics.DETECTIONS, stamp, ros.point_cloud(stamp, points, channels))
+            uv = np.asarray(obs["landmark_points"], np.float32).reshape(-1, 2)
+            per_slot = len(uv) // len(ids)
+            points = np.zeros(len(uv), ros.DETECTION_POINT)
+            points["x"], points["y"] = uv[:, 0], uv[:, 1]
+            points["slot"] = np.repeat(np.arange(len(ids)), per_slot)
+            points["landmark_id"] = np.repeat(ids, per_slot)  # -1: an empty slot
+            self._write(topics.DETECTIONS, stamp, ros.detection_cloud(stamp, points))
 
     def _image(self, stamp: int, rgb: np.ndarray) -> None:
         if self.frames == "raw":

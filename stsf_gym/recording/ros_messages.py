@@ -182,17 +182,39 @@ def raw_image(stamp: int, rgb: np.ndarray) -> object:
     )
 
 
-def point_cloud(stamp: int, uv: np.ndarray, channels: dict[str, np.ndarray]) -> object:
-    """``sensor_msgs/PointCloud`` of image points ``(N, 2)`` (pixels as x, y; z = 0) with
-    named per-point ``channels``: float32, so float32 pixels pass unchanged."""
-    point = _T["geometry_msgs/msg/Point32"]
-    points = [point(x=float(u), y=float(v), z=0.0) for u, v in np.asarray(uv, np.float32)]
-    channel = _T["sensor_msgs/msg/ChannelFloat32"]
-    return _T["sensor_msgs/msg/PointCloud"](
+#: The fields of a detections cloud: pixel x, y (float32: the fast mode's pixels exactly), the
+#: detection slot and the landmark id (int32).
+DETECTION_POINT = np.dtype([("x", "<f4"), ("y", "<f4"), ("slot", "<i4"), ("landmark_id", "<i4")])
+_POINT_FIELD_TYPES = {"<f4": 7, "<i4": 5}  # sensor_msgs/PointField FLOAT32, INT32
+
+
+def detection_cloud(stamp: int, points: np.ndarray) -> object:
+    """``sensor_msgs/PointCloud2`` of a :data:`DETECTION_POINT` array (one row per point)."""
+    points = np.ascontiguousarray(points, DETECTION_POINT)
+    field = _T["sensor_msgs/msg/PointField"]
+    fields = [
+        field(name=name, offset=offset, datatype=_POINT_FIELD_TYPES[dtype.str], count=1)
+        for name, (dtype, offset) in DETECTION_POINT.fields.items()
+    ]
+    return _T["sensor_msgs/msg/PointCloud2"](
         header=header(stamp, "camera_image"),
-        points=points,
-        channels=[channel(name=k, values=np.asarray(v, np.float32)) for k, v in channels.items()],
+        height=1,
+        width=len(points),
+        fields=fields,
+        is_bigendian=False,
+        point_step=DETECTION_POINT.itemsize,
+        row_step=DETECTION_POINT.itemsize * len(points),
+        data=points.view(np.uint8).ravel(),
+        is_dense=False,
     )
+
+
+def detection_points(message) -> np.ndarray:
+    """The :data:`DETECTION_POINT` rows of a :func:`detection_cloud` message."""
+    names = [f.name for f in message.fields]
+    if names != list(DETECTION_POINT.names) or message.point_step != DETECTION_POINT.itemsize:
+        raise ValueError(f"detections need PointCloud2 fields {DETECTION_POINT.names}, got {names}")
+    return np.frombuffer(np.asarray(message.data, np.uint8).tobytes(), DETECTION_POINT)
 
 
 def twist(stamp: int, linear: float, angular: float) -> object:

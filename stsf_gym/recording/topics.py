@@ -15,7 +15,7 @@ WHEEL_TICKS = "/wheel_ticks"  # sensor_msgs/JointState: cumulative encoder ticks
 PAN_TILT = "/camera/pan_tilt"  # sensor_msgs/JointState: mount angles (rad) of each frame
 IMAGE_COMPRESSED = "/camera/image/compressed"  # sensor_msgs/CompressedImage: png or jpeg
 IMAGE_RAW = "/camera/image"  # sensor_msgs/Image: rgb8
-DETECTIONS = "/camera/detections"  # sensor_msgs/PointCloud: fast-mode detections per frame
+DETECTIONS = "/camera/detections"  # sensor_msgs/PointCloud2: fast-mode detections per frame
 CAMERA_INFO = "/camera/camera_info"  # sensor_msgs/CameraInfo: the believed calibration
 SONAR = "/sonar/scan"  # sensor_msgs/LaserScan: the sonar ring, one range each, every step
 TRUTH = "/ground_truth/pose"  # geometry_msgs/PoseWithCovarianceStamped: for scoring only
@@ -37,7 +37,7 @@ TYPES: dict[str, str] = {
     PAN_TILT: "sensor_msgs/msg/JointState",
     IMAGE_COMPRESSED: "sensor_msgs/msg/CompressedImage",
     IMAGE_RAW: "sensor_msgs/msg/Image",
-    DETECTIONS: "sensor_msgs/msg/PointCloud",
+    DETECTIONS: "sensor_msgs/msg/PointCloud2",
     CAMERA_INFO: "sensor_msgs/msg/CameraInfo",
     SONAR: "sensor_msgs/msg/LaserScan",
     TRUTH: "geometry_msgs/msg/PoseWithCovarianceStamped",
