@@ -191,3 +191,33 @@ def test_the_wrapper_records_its_arguments_and_changes_nothing(make_env, tmp_pat
     registered.close()
     log = read_log(registered.paths[0])
     assert len(log.stamps) == 2 and not log.estimates  # no pose source in that stack
+
+
+def test_the_packed_per_step_messages_are_rosbags_bytes():
+    from stsf_gym.recording import cdr
+
+    rng = np.random.default_rng(0)
+    axes = np.arange(16) * 2 * np.pi / 16
+    for _ in range(20):
+        stamp, pose, a = int(rng.integers(0, 10**12)), rng.normal(size=3), rng.normal(size=(3, 3))
+        ticks, ranges = rng.normal(size=2) * 1e3, rng.random(16).astype(np.float32)
+        for frame in ("map", "", "sonar_ring"):
+            pairs = [
+                (
+                    cdr.pose_with_covariance(stamp, frame, pose, a @ a.T),
+                    ros.pose_with_covariance(stamp, frame, pose, a @ a.T),
+                ),
+                (
+                    cdr.sonar_scan(stamp, frame, ranges, axes, (0.1, 4.0)),
+                    ros.sonar_scan(stamp, frame, ranges, axes, (0.1, 4.0)),
+                ),
+            ]
+            for packed, message in pairs:
+                assert packed == ros.serialize(message, message.__msgtype__)
+        packed = cdr.joint_state(stamp, "", topics.WHEELS, ticks)
+        message = ros.joint_state(stamp, topics.WHEELS, ticks)
+        assert packed == ros.serialize(message, message.__msgtype__)
+        message = ros.twist(stamp, 0.3, -0.2)
+        assert cdr.twist(stamp, "base_link", 0.3, -0.2) == ros.serialize(
+            message, message.__msgtype__
+        )

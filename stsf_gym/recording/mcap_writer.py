@@ -18,8 +18,8 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from stsf_gym.camera_model import rot_z
+from stsf_gym.recording import cdr, topics
 from stsf_gym.recording import ros_messages as ros
-from stsf_gym.recording import topics
 from stsf_gym.recording.records import EpisodeStart, StepRecord, nanoseconds
 from stsf_gym.recording.sensor_model_json import sensor_model_json
 
@@ -44,6 +44,10 @@ class McapLogWriter:
         self._schemas: dict[str, int] = {}
 
     def write(self, topic: str, stamp: int, message) -> None:
+        self.write_cdr(topic, stamp, ros.serialize(message, topics.type_of(topic)))
+
+    def write_cdr(self, topic: str, stamp: int, data: bytes) -> None:
+        """Write a message already serialized (:mod:`.cdr`)."""
         if topic not in self._channels:
             msgtype = topics.type_of(topic)
             if msgtype not in self._schemas:
@@ -54,7 +58,6 @@ class McapLogWriter:
             self._channels[topic] = self._writer.register_channel(
                 topic, "cdr", self._schemas[msgtype]
             )
-        data = ros.serialize(message, topics.type_of(topic))
         self._writer.add_message(self._channels[topic], stamp, data, stamp)
 
     @property
@@ -109,24 +112,28 @@ class McapRecorder:
         stamp, obs, layout = nanoseconds(record.time), record.obs, self._layout
         self._last_stamp = stamp
         self._ticks = self._ticks + np.asarray(obs["encoders"], np.int64)
-        self._write(topics.WHEEL_TICKS, stamp, ros.joint_state(stamp, topics.WHEELS, self._ticks))
+        write = self.log.write_cdr
+        write(topics.WHEEL_TICKS, stamp, cdr.joint_state(stamp, "", topics.WHEELS, self._ticks))
         if obs["image_new"] or record.action is None:  # the robot's TF at frames and the start
             self._transforms(stamp, record)
         if obs["image_new"]:
             self._frame(stamp, record)
-        scan = ros.sonar_scan(
+        scan = cdr.sonar_scan(
             stamp, topics.SONAR_FRAME, obs["sonar"], layout.sonar_axes, layout.sonar_limits
         )
-        self._write(topics.SONAR, stamp, scan)
-        truth = ros.pose_with_covariance(stamp, "map", record.true_pose, np.zeros((3, 3)))
-        self._write(topics.TRUTH, stamp, truth)
+        write(topics.SONAR, stamp, scan)
+        truth = cdr.pose_with_covariance(stamp, "map", record.true_pose, np.zeros((3, 3)))
+        write(topics.TRUTH, stamp, truth)
         for name, (mean, cov) in record.estimates.items():
-            message = ros.pose_with_covariance(stamp, "map", mean, cov)
-            self._write(topics.estimate_topic(name), stamp, message)
+            write(
+                topics.estimate_topic(name),
+                stamp,
+                cdr.pose_with_covariance(stamp, "map", mean, cov),
+            )
         if record.action is not None:
             v, w = np.clip(np.asarray(record.action, float).ravel()[:2], -1, 1)
-            message = ros.twist(stamp, v * layout.max_speed, w * layout.max_yaw_rate)
-            self._write(topics.CMD_VEL, stamp, message)
+            command = cdr.twist(stamp, "base_link", v * layout.max_speed, w * layout.max_yaw_rate)
+            write(topics.CMD_VEL, stamp, command)
 
     def _transforms(self, stamp: int, record: StepRecord) -> None:
         """``map -> base_link`` (the true pose) and ``base_link -> camera_optical`` (the mount
