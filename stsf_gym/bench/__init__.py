@@ -221,11 +221,11 @@ def to_markdown(summary: dict) -> str:
         parts.append(f"## Where the time goes ({PROFILED_CASE})\n\n" + markdown_table(rows))
     if "recording" in summary:
         parts.append(
-            "## Recording (IRL corridor, follower on STSF; overhead: recorder wall time / "
-            "unrecorded episode wall time)\n\n"
+            "## Recording (IRL corridor, follower on STSF; overhead: the CPU time recording "
+            "adds to the episode's)\n\n"
             + markdown_table(summary["recording"]["recordings"])
-            + "\nReplay of the lossless MCAP (reading and decoding included):\n\n"
-            + markdown_table(summary["recording"]["replays"])
+            + "\nReplay of the lossless MCAP (reading and decoding included; speed-up in CPU "
+            "time):\n\n" + markdown_table(summary["recording"]["replays"])
         )
     parts.append("## Targets\n\n" + markdown_table(summary["targets"]))
     return "\n".join(parts)
