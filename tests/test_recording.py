@@ -4,6 +4,8 @@ on a recorded log exactly as they ran live."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from collections import Counter
 from pathlib import Path
 
@@ -170,6 +172,10 @@ def test_the_rerun_recording_reads_back(tmp_path):
     truth = np.array([info["true_pose"] for _, info in history])
     expected = np.hypot(*(means[:, :2] - truth[:, :2]).T)
     assert np.allclose([errors[t] for t in sorted(errors)], expected, rtol=1e-12, atol=1e-15)
+    script = Path(__file__).resolve().parent.parent / "examples" / "plot_recording.py"
+    picture = tmp_path / "recording.png"
+    subprocess.run([sys.executable, str(script), str(path), "--out", str(picture)], check=True)
+    assert picture.stat().st_size > 10_000
 
 
 def test_the_wrapper_records_its_arguments_and_changes_nothing(make_env, tmp_path):
