@@ -200,6 +200,8 @@ def test_the_wrapper_records_its_arguments_and_changes_nothing(make_env, tmp_pat
 
 
 def test_the_packed_per_step_messages_are_rosbags_bytes():
+    from scipy.spatial.transform import Rotation
+
     from stsf_gym.recording import cdr
 
     rng = np.random.default_rng(0)
@@ -227,3 +229,18 @@ def test_the_packed_per_step_messages_are_rosbags_bytes():
         assert cdr.twist(stamp, "base_link", 0.3, -0.2) == ros.serialize(
             message, message.__msgtype__
         )
+        matrix = np.eye(4)
+        matrix[:3, :3] = Rotation.random(random_state=int(rng.integers(1000))).as_matrix()
+        matrix[:3, 3] = rng.normal(size=3)
+        message = ros.tf_message([ros.transform(stamp, "map", "camera", matrix)])
+        packed = cdr.tf_message(stamp, [("map", "camera", matrix)])
+        assert packed == ros.serialize(message, message.__msgtype__)
+        points = np.zeros(int(rng.integers(0, 60)), ros.DETECTION_POINT)
+        points["x"], points["landmark_id"] = rng.normal(size=len(points)), 7
+        message = ros.detection_cloud(stamp, points)
+        packed = cdr.detection_cloud(stamp, "camera_image", points)
+        assert packed == ros.serialize(message, message.__msgtype__)
+        info = ros.camera_info(0, np.diag([300.0, 300.0, 1.0]), rng.normal(size=5), (320, 240))
+        serialized = ros.serialize(info, info.__msgtype__)
+        info.header = ros.header(stamp, info.header.frame_id)
+        assert cdr.restamped(serialized, stamp) == ros.serialize(info, info.__msgtype__)

@@ -14,7 +14,12 @@ import struct
 
 import numpy as np
 
-from stsf_gym.recording.ros_messages import PLANAR
+from stsf_gym.recording.ros_messages import (
+    DETECTION_POINT,
+    PLANAR,
+    POINT_FIELD_TYPES,
+    quaternion_of,
+)
 
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little-endian
 
@@ -95,3 +100,40 @@ def twist(stamp: int, frame_id: str, linear: float, angular: float) -> bytes:
     b.header(stamp, frame_id)
     b.put(struct.pack("<6d", linear, 0.0, 0.0, 0.0, 0.0, angular), 8)
     return b.bytes()
+
+
+def tf_message(stamp: int, transforms: list[tuple[str, str, np.ndarray]]) -> bytes:
+    """``tf2_msgs/TFMessage`` of ``(parent, child, 4x4 parent-from-child)`` transforms."""
+    b = _Buffer()
+    b.put(struct.pack("<I", len(transforms)), 4)
+    for parent, child, matrix in transforms:
+        b.header(stamp, parent)
+        b.string(child)
+        matrix = np.asarray(matrix, float)
+        b.put(struct.pack("<7d", *matrix[:3, 3], *quaternion_of(matrix[:3, :3])), 8)
+    return b.bytes()
+
+
+def detection_cloud(stamp: int, frame_id: str, points: np.ndarray) -> bytes:
+    """``sensor_msgs/PointCloud2`` of :data:`.ros_messages.DETECTION_POINT` rows."""
+    points = np.ascontiguousarray(points, DETECTION_POINT)
+    b = _Buffer()
+    b.header(stamp, frame_id)
+    b.put(struct.pack("<III", 1, len(points), len(DETECTION_POINT.names)), 4)
+    for name in DETECTION_POINT.names:
+        dtype, offset = DETECTION_POINT.fields[name]
+        b.string(name)
+        b.put(struct.pack("<I", offset), 4)
+        b.put(struct.pack("<B", POINT_FIELD_TYPES[dtype.str]))
+        b.put(struct.pack("<I", 1), 4)
+    b.put(struct.pack("<B", 0))  # is_bigendian
+    b.put(struct.pack("<II", points.itemsize, points.itemsize * len(points)), 4)
+    b.sequence(points.view(np.uint8).ravel(), "<u1")
+    b.put(struct.pack("<B", 0))  # is_dense: NaN padding
+    return b.bytes()
+
+
+def restamped(data: bytes, stamp: int) -> bytes:
+    """A serialized message that starts with its header, with that header's stamp set."""
+    sec, nanosec = divmod(int(stamp), 1_000_000_000)
+    return data[:4] + struct.pack("<iI", sec, nanosec) + data[12:]

@@ -92,6 +92,9 @@ class McapRecorder:
 
     def start(self, start: EpisodeStart) -> None:
         self._layout, self._model = start.layout, start.model
+        calibration = start.model.camera_calibration
+        info = ros.camera_info(0, calibration.K, calibration.dist, start.model.image_size)
+        self._camera_info = ros.serialize(info, topics.type_of(topics.CAMERA_INFO))
         lossless = topics.FRAME_FORMATS[self.frames]
         episode = {
             **start.meta,
@@ -142,21 +145,15 @@ class McapRecorder:
         base[:3, :3] = rot_z(record.true_pose[2])
         base[:2, 3] = record.true_pose[:2]
         pan_tilt = np.asarray(record.obs["camera_pan_tilt"], np.float64)
-        transforms = [
-            ros.transform(stamp, "map", "base_link", base),
-            ros.transform(
-                stamp, "base_link", "camera_optical", self._model.robot_from_camera(*pan_tilt)
-            ),
-        ]
-        self._write(topics.TF, stamp, ros.tf_message(transforms))
+        mount = self._model.robot_from_camera(*pan_tilt)
+        transforms = [("map", "base_link", base), ("base_link", "camera_optical", mount)]
+        self.log.write_cdr(topics.TF, stamp, cdr.tf_message(stamp, transforms))
 
     def _frame(self, stamp: int, record: StepRecord) -> None:
-        obs, model = record.obs, self._model
+        obs, write = record.obs, self.log.write_cdr
         pan_tilt = np.asarray(obs["camera_pan_tilt"], np.float64)
-        self._write(topics.PAN_TILT, stamp, ros.joint_state(stamp, topics.MOUNT_JOINTS, pan_tilt))
-        calibration = model.camera_calibration
-        info = ros.camera_info(stamp, calibration.K, calibration.dist, model.image_size)
-        self._write(topics.CAMERA_INFO, stamp, info)
+        write(topics.PAN_TILT, stamp, cdr.joint_state(stamp, "", topics.MOUNT_JOINTS, pan_tilt))
+        write(topics.CAMERA_INFO, stamp, cdr.restamped(self._camera_info, stamp))
         if "image" in obs:
             self._image(stamp, obs["image"])
         else:
@@ -167,7 +164,7 @@ class McapRecorder:
             points["x"], points["y"] = uv[:, 0], uv[:, 1]
             points["slot"] = np.repeat(np.arange(len(ids)), per_slot)
             points["landmark_id"] = np.repeat(ids, per_slot)  # -1: an empty slot
-            self._write(topics.DETECTIONS, stamp, ros.detection_cloud(stamp, points))
+            write(topics.DETECTIONS, stamp, cdr.detection_cloud(stamp, "camera_image", points))
 
     def _image(self, stamp: int, rgb: np.ndarray) -> None:
         if self.frames == "raw":

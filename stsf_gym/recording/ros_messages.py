@@ -185,7 +185,7 @@ def raw_image(stamp: int, rgb: np.ndarray) -> object:
 #: The fields of a detections cloud: pixel x, y (float32: the fast mode's pixels exactly), the
 #: detection slot and the landmark id (int32).
 DETECTION_POINT = np.dtype([("x", "<f4"), ("y", "<f4"), ("slot", "<i4"), ("landmark_id", "<i4")])
-_POINT_FIELD_TYPES = {"<f4": 7, "<i4": 5}  # sensor_msgs/PointField FLOAT32, INT32
+POINT_FIELD_TYPES = {"<f4": 7, "<i4": 5}  # sensor_msgs/PointField FLOAT32, INT32
 
 
 def detection_cloud(stamp: int, points: np.ndarray) -> object:
@@ -193,7 +193,7 @@ def detection_cloud(stamp: int, points: np.ndarray) -> object:
     points = np.ascontiguousarray(points, DETECTION_POINT)
     field = _T["sensor_msgs/msg/PointField"]
     fields = [
-        field(name=name, offset=offset, datatype=_POINT_FIELD_TYPES[dtype.str], count=1)
+        field(name=name, offset=offset, datatype=POINT_FIELD_TYPES[dtype.str], count=1)
         for name, (dtype, offset) in DETECTION_POINT.fields.items()
     ]
     return _T["sensor_msgs/msg/PointCloud2"](
