@@ -156,7 +156,7 @@ class RerunRecorder:
             means = np.array([m for m, _ in steps[key]])
             covs = np.array([c for _, c in steps[key]])
             self._poses(f"estimate/{name}", times, means, [220, 60, 60])
-            ellipses = np.array([_ellipse(m, c) for m, c in zip(means, covs, strict=True)])
+            ellipses = _ellipses(means, covs)
             self._send(
                 f"world/estimate/{name}/ellipse", times, rr.LineStrips3D.columns(strips=ellipses)
             )
@@ -268,10 +268,11 @@ def _sonar_cones(poses: np.ndarray, ranges: np.ndarray, layout) -> np.ndarray:
     return np.concatenate([ring, np.full((*ring.shape[:3], 1), layout.sonar_height)], axis=-1)
 
 
-def _ellipse(mean, cov) -> np.ndarray:
-    """The ``ELLIPSE_SIGMA`` ellipse of the position covariance around ``mean`` (3-D points)."""
-    values, vectors = np.linalg.eigh(np.asarray(cov)[:2, :2])
+def _ellipses(means: np.ndarray, covs: np.ndarray) -> np.ndarray:
+    """The ``ELLIPSE_SIGMA`` ellipse of each position covariance around its mean: (N, M, 3)."""
+    values, vectors = np.linalg.eigh(covs[:, :2, :2])
     angles = np.linspace(0, 2 * np.pi, ELLIPSE_POINTS)
-    circle = np.stack([np.cos(angles), np.sin(angles)])
-    xy = (vectors @ (ELLIPSE_SIGMA * np.sqrt(np.maximum(values, 0))[:, None] * circle)).T + mean[:2]
-    return np.column_stack([xy, np.full(len(xy), ROBOT_Z)])
+    circle = np.stack([np.cos(angles), np.sin(angles)])  # (2, M)
+    radii = ELLIPSE_SIGMA * np.sqrt(np.maximum(values, 0))[:, :, None]  # (N, 2, 1)
+    xy = np.swapaxes(vectors @ (radii * circle), 1, 2) + means[:, None, :2]
+    return np.concatenate([xy, np.full((*xy.shape[:2], 1), ROBOT_Z)], axis=-1)
