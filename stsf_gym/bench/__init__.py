@@ -221,8 +221,8 @@ def to_markdown(summary: dict) -> str:
         parts.append(f"## Where the time goes ({PROFILED_CASE})\n\n" + markdown_table(rows))
     if "recording" in summary:
         parts.append(
-            "## Recording (IRL corridor, follower on STSF; overhead: the CPU time recording "
-            "adds to the episode's)\n\n"
+            "## Recording (IRL corridor, follower on STSF; overhead: the recorder's CPU time "
+            "over the unrecorded episode's)\n\n"
             + markdown_table(summary["recording"]["recordings"])
             + "\nReplay of the lossless MCAP (reading and decoding included; speed-up in CPU "
             "time):\n\n" + markdown_table(summary["recording"]["replays"])

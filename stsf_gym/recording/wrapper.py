@@ -46,6 +46,10 @@ def find_estimator(env: gym.Env) -> PoseEstimator | None:
     return None
 
 
+def _clocks() -> tuple[float, float]:
+    return time.perf_counter(), time.thread_time()
+
+
 class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """Records each episode of a stsf-gym env (any registered id or hand-built stack) to
     ``folder/<name_prefix>.<ext>`` (later episodes ``<name_prefix>-<k>.<ext>``): ``fmt="mcap"``
@@ -55,8 +59,8 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
     Wrap it outermost: it records the observation the env made, the true pose from ``info``
     and the estimate of the :class:`~stsf_gym.wrappers.PoseEstimateWrapper` below it (if
     any). It changes nothing it passes on. A file is complete when its episode ends or the
-    env closes. :attr:`paths` lists the files written, :attr:`wall_s` the wall time spent
-    recording (what recording adds to an episode).
+    env closes. :attr:`paths` lists the files written; :attr:`wall_s` and :attr:`cpu_s` the
+    wall and CPU time (this thread's) spent recording: what recording adds to an episode.
     """
 
     def __init__(
@@ -77,13 +81,13 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.folder, self.fmt, self.frames = Path(folder), fmt, frames
         self.name_prefix, self.meta = name_prefix, dict(meta or {})
         self.paths: list[Path] = []
-        self.wall_s = 0.0
+        self.wall_s = self.cpu_s = 0.0
         self._recorder: Recorder | None = None
 
     def reset(self, *, seed=None, options=None):
         self._finish()
         obs, info = self.env.reset(seed=seed, options=options)
-        started = time.perf_counter()
+        started = _clocks()
         k = len(self.paths)
         stem = self.name_prefix if k == 0 else f"{self.name_prefix}-{k}"
         path = self.folder / f"{stem}{FORMATS[self.fmt]}"
@@ -91,15 +95,15 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.paths.append(path)
         self._recorder.start(self._episode_start(seed, options))
         self._recorder.step(self._record(obs, info, None))
-        self.wall_s += time.perf_counter() - started
+        self._add(started)
         return obs, info
 
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
         if self._recorder is not None:
-            started = time.perf_counter()
+            started = _clocks()
             self._recorder.step(self._record(obs, info, action))
-            self.wall_s += time.perf_counter() - started
+            self._add(started)
             if terminated or truncated:
                 collision = bool(info.get("collision", False))
                 outcome = "collision" if collision else "goal" if terminated else "time"
@@ -112,10 +116,15 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def _finish(self, end: dict | None = None) -> None:
         if self._recorder is not None:
-            started = time.perf_counter()
+            started = _clocks()
             self._recorder.close(end)
             self._recorder = None
-            self.wall_s += time.perf_counter() - started
+            self._add(started)
+
+    def _add(self, started: tuple[float, float]) -> None:
+        wall, cpu = _clocks()
+        self.wall_s += wall - started[0]
+        self.cpu_s += cpu - started[1]
 
     def _episode_start(self, seed, options) -> EpisodeStart:
         u = self.env.unwrapped
