@@ -7,6 +7,8 @@ messages, encoding frames, writing) over the unrecorded episode's CPU time; CPU 
 on a shared machine wall time measures the neighbours. Beside it: the recorder's wall time, and
 what the recorded episode's process CPU time (all threads: the Rerun SDK encodes and writes in
 its own) exceeds the unrecorded one's, which is noisier (two runs differ by a few per cent).
+The process is warm: the writers' libraries are imported before any episode (their import, paid
+once per process by its first recording, is reported as ``import_cpu_s``).
 The replay reads each mode's lossless (raw) MCAP and reruns STSF on it (decoding every frame,
 running the detector) with no simulator; its speed-up is the live episode's CPU time over the
 replay's, reading included.
@@ -14,6 +16,7 @@ replay's, reading included.
 
 from __future__ import annotations
 
+import importlib
 import os
 import tempfile
 import time
@@ -69,6 +72,11 @@ def _episode(mode: str, seed: int, record: tuple[str, str] | None, folder: Path)
 def _measure(seed: int, cpu: int | None) -> dict:
     if cpu is not None and hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {cpu % os.cpu_count()})
+    imports = {}
+    for name in ("mcap_writer", "rerun_writer"):
+        cpu = time.process_time()
+        importlib.import_module(f"stsf_gym.recording.{name}")
+        imports[name] = time.process_time() - cpu
     from stsf_gym.recording.log_reader import read_log
     from stsf_gym.recording.replay import replay
 
@@ -106,4 +114,4 @@ def _measure(seed: int, cpu: int | None) -> dict:
                             "speed_up": live["cpu_s"] / total,
                         }
                     )
-    return {"recordings": rows, "replays": replays}
+    return {"recordings": rows, "replays": replays, "import_cpu_s": imports}

@@ -239,7 +239,8 @@ def _spec(job: dict) -> EpisodeSpec:
 
 
 def _run(job: dict) -> EpisodeResult:
-    return run_episode(_spec(job), job.get("record"))
+    record = job.get("record")
+    return run_episode(_spec(job), record) if record else run_episode(_spec(job))
 
 
 def _name(job: dict) -> str:
