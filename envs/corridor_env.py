@@ -10,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from stsf_gym.camera_model import CameraCalibration
+from stsf_gym.camera_model import CameraCalibration, PanTiltMount
 from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
 from stsf_gym.envs.faults import FaultInjector
 from stsf_gym.envs.rendering.map_view import MapView, detections_frame
@@ -229,6 +229,12 @@ class CorridorEnv(gym.Env):
     def robot_from_camera(self, pan: float, tilt: float) -> np.ndarray:
         """Nominal robot-from-camera 4x4 (OpenCV axes) for mount angles (rad)."""
         return self.robot.robot_from_camera(pan, tilt)
+
+    @property
+    def camera_mount(self) -> PanTiltMount:
+        """The nominal pan-tilt head of the camera (``camera_mount(pan, tilt)`` is
+        :meth:`robot_from_camera`)."""
+        return self.robot.mount
 
     def landmarks_in_view(self, camera_pose: np.ndarray | None = None) -> list[int]:
         """Ids of landmarks wholly inside the frame, facing the camera, present (a fault may

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from stsf_gym.camera_model import LINK_FROM_OPTICAL, PanTiltMount, pose_matrix, rot_z
 from stsf_gym.envs.config import RobotConfig
 from stsf_gym.envs.simulator import Simulator, cache_file
 
@@ -146,27 +147,6 @@ def robot_urdf(cfg: RobotConfig) -> str:
     return "\n".join(parts)
 
 
-def pose_matrix(x: float, y: float, z: float, rotation: np.ndarray) -> np.ndarray:
-    pose = np.eye(4)
-    pose[:3, :3] = rotation
-    pose[:3, 3] = (x, y, z)
-    return pose
-
-
-def rot_z(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def rot_y(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-#: Rotation from the camera link (x forward, y left, z up) to OpenCV camera axes.
-LINK_FROM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
-
-
 class DiffDriveRobot:
     """The robot in one simulator: drive, pan/tilt, pose, wheel angles, contacts."""
 
@@ -282,8 +262,12 @@ class DiffDriveRobot:
 
         The robot frame is on the floor below the axle midpoint, x forward, z up.
         """
-        rotation = rot_z(pan) @ rot_y(-tilt) @ LINK_FROM_OPTICAL
-        return pose_matrix(self.cfg.camera_forward, 0.0, self.cfg.camera_height, rotation)
+        return self.mount(pan, tilt)
+
+    @property
+    def mount(self) -> PanTiltMount:
+        """The camera's pan-tilt head on the robot (nominal kinematics)."""
+        return PanTiltMount(self.cfg.camera_forward, 0.0, self.cfg.camera_height)
 
     def in_collision(self, ignore: set[int]) -> bool:
         """Whether the robot touches any body other than those in ``ignore`` (the floor)."""

@@ -11,7 +11,6 @@ import sys
 from pathlib import Path
 
 from stsf_gym.config import ConfigError, parse_overrides
-from stsf_gym.envs.quiet import VERBOSE_ENV
 from stsf_gym.io import remove_partial_writes
 from stsf_gym.results.provenance import set_command
 
@@ -55,7 +54,9 @@ def _demo(args: argparse.Namespace) -> dict:
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
     if args.video_seconds is not None and args.video_seconds < 0:
         raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")
-    summary = run_demo(args.out, args.seed, args.workers, env, args.video_seconds, args.seeds)
+    summary = run_demo(
+        args.out, args.seed, args.workers, env, args.video_seconds, args.seeds, _recording(args)
+    )
     if not args.json:
         from rich.console import Console
 
@@ -72,6 +73,49 @@ def _demo(args: argparse.Namespace) -> dict:
             f"Wrote {args.out}/results.md, results.json, {', '.join(summary['figures'])}"
             + (f" and {', '.join(videos)}" if videos else "")
         )
+    return summary
+
+
+def _record_args(parser: argparse.ArgumentParser) -> None:
+    """``--record`` and ``--record-frames``: each episode as an MCAP log or Rerun recording."""
+    parser.add_argument(
+        "--record",
+        choices=["mcap", "rerun"],
+        help="record each episode to OUT/recordings/: mcap (replayable by stsf-gym replay; "
+        "Foxglove, ros2 bag, evo) or rerun (.rrd for the Rerun viewer)",
+    )
+    parser.add_argument(
+        "--record-frames",
+        choices=["raw", "png", "jpeg"],
+        default="raw",
+        help="camera frames in an MCAP recording: raw or png (lossless: a replay gives the "
+        "live estimates bit for bit; png is a little smaller and slow to encode) or jpeg "
+        "(about 8x smaller; its replay is approximate). Default raw",
+    )
+
+
+def _recording(args: argparse.Namespace) -> dict | None:
+    """The ``record`` setting of the episode runners, from ``--record``/``--record-frames``."""
+    if args.record is None:
+        return None
+    folder = str((args.out / "recordings").absolute())
+    return {"format": args.record, "frames": args.record_frames, "folder": folder}
+
+
+def _replay(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.replay import replay_logs
+    from stsf_gym.wrappers import POSE_SOURCES
+
+    if args.config or args.overrides:
+        raise ConfigError("replay runs the logs as recorded: it takes no --config or --set")
+    estimators = _names(args.estimators)
+    for name in estimators:
+        if name not in POSE_SOURCES:
+            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    if not estimators:
+        raise ConfigError("--estimators names no pose source")
+    summary = replay_logs(args.files, estimators, args.out)
+    _print_markdown(args, args.out / "results.md")
     return summary
 
 
@@ -159,6 +203,8 @@ def _evaluate(args: argparse.Namespace) -> dict:
     if len(agents) > 1 or "{estimator}" in args.agent:
         from stsf_gym.experiments.compare import compare
 
+        if args.record:
+            raise ConfigError("--record records one agent's episodes, not a comparison")
         summary = compare(
             args.out,
             agents,
@@ -181,6 +227,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
         args.workers,
         _env_overrides(args, args.world),
         args.faults,
+        record=_recording(args),
     )
     _print_markdown(args, args.out / "results.md")
     return summary
@@ -344,6 +391,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         help="simulated seconds of each estimator's episode in its video (40; 0: no videos)",
     )
+    _record_args(demo)
     demo.set_defaults(run=_demo)
     reproduce = commands.add_parser("reproduce", help="the paper's experiments")
     reproduce.add_argument("experiment", choices=["table1", "fig10", "fig11"])
@@ -375,7 +423,19 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="fault files (e.g. configs/faults/*.yaml): each fault set x each estimator",
     )
+    _record_args(evaluate)
     evaluate.set_defaults(run=_evaluate)
+    replay = commands.add_parser(
+        "replay", help="pose sources rerun on recorded MCAP logs (no simulator)"
+    )
+    replay.add_argument("files", nargs="+", type=Path, metavar="FILE.mcap", help="MCAP logs")
+    _common(replay, "out/replay")
+    replay.add_argument(
+        "--estimators",
+        default="odometry,conventional,stsf,ekf",
+        help="comma-separated pose sources (as evaluate's)",
+    )
+    replay.set_defaults(run=_replay)
     train = commands.add_parser("train", help="a PPO or SAC agent on one pose source")
     _common(train, "out/train", "hyper-parameter YAML (default configs/agents/ALGO.yaml)")
     train.add_argument("--algo", choices=["ppo", "sac"], default="ppo", help="algorithm (ppo)")
@@ -474,6 +534,8 @@ def main(argv: list[str] | None = None) -> int:
             _check_writable(folder.absolute())
             remove_partial_writes(args.out)  # left by a run killed mid-write: nothing to resume
         if args.verbose:
+            from stsf_gym.envs.quiet import VERBOSE_ENV
+
             os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
         else:
             _silence_c_stdout()

@@ -6,6 +6,7 @@ then any violation, and exits with status 1 when there is one. The rules (:data:
 
     stsf_gym.cli, stsf_gym.experiments -> stsf_gym.agents -> stsf_gym.wrappers
         -> stsf_gym.estimators -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
+    stsf_gym.experiments, stsf_gym.bench -> stsf_gym.recording -> stsf_gym.wrappers (no envs);
     stsf_gym.envs (and its folders .worlds, .rendering) -> stsf_gym.vision.landmarks / geometry;
     stsf_gym.envs.rendering never imports PyBullet
 
@@ -58,8 +59,11 @@ ANY = "*"
 #: Each layer and the layers it may import, top to bottom.
 ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.cli": ANY,
-    "stsf_gym.experiments": (*EPISODE, "stsf_gym.agents", "stsf_gym.config"),
-    "stsf_gym.bench": (*EPISODE, "stsf_gym.agents", "stsf_gym.experiments"),
+    "stsf_gym.experiments": (*EPISODE, "stsf_gym.agents", "stsf_gym.config", "stsf_gym.recording"),
+    "stsf_gym.bench": (*EPISODE, "stsf_gym.agents", "stsf_gym.experiments", "stsf_gym.recording"),
+    # recording: episode logs written from an env stack (duck-typed, never the simulator's
+    # modules) and read back for replays, so a replay runs with no simulator
+    "stsf_gym.recording": (*ESTIMATION, "stsf_gym.wrappers"),
     "stsf_gym.agents": EPISODE,
     "stsf_gym.config": ("stsf_gym.envs", "stsf_gym.validation", "stsf_gym.yaml_layers"),
     "stsf_gym.episode_env": (

@@ -58,7 +58,7 @@ def sensor_model(env: gym.Env) -> SensorModel:
         ),
         camera_matrix=u.camera_calibration.K,
         image_size=(cfg.camera.width, cfg.camera.height),
-        robot_from_camera=u.robot_from_camera,
+        robot_from_camera=u.camera_mount,
         landmarks={
             lm.id: MapLandmark(lm.id, lm.centre, lm.normal, lm.square_centres) for lm in u.landmarks
         },

@@ -48,6 +48,8 @@ def test_the_import_graph_points_one_way():
             "stsf_gym.wrappers",
         }, core
     assert "pybullet" not in graph["stsf_gym.envs.rendering"]
+    # recordings are written from any env stack and replayed with no simulator
+    assert not graph["stsf_gym.recording"] & {"stsf_gym.envs", *layers.ENV_FOLDERS, "pybullet"}
     assert graph["stsf_gym.envs"] - {"pybullet", "pybullet_utils", *layers.ENV_FOLDERS} <= {
         "stsf_gym.geometry",
         "stsf_gym.vision.landmarks",

@@ -46,9 +46,13 @@ class FrameDetector:
         self.calibration, self.matcher = calibration, matcher
         #: Detections of the last call that only the predicted search found.
         self.aided: list[Detection] = []
+        #: The last call's detections in the image's own (distorted) pixels, and the boards it
+        #: was told to expect (for recordings: :mod:`stsf_gym.recording`).
+        self.found: list[Detection] = []
+        self.predictions: list[BoardPrediction] = []
 
     def __call__(self, obs: dict, predictions: list[BoardPrediction] = ()) -> list[Detection]:
-        self.aided = []
+        self.aided, self.predictions = [], list(predictions)
         if "landmark_ids" in obs:
             found = self._unpack(obs["landmark_ids"], obs["landmark_points"])
         else:
@@ -56,6 +60,7 @@ class FrameDetector:
             if self.matcher is not None and predictions:
                 self.aided = self._search(obs["image"], predictions, found)
                 found = found + self.aided
+        self.found = found
         if self.calibration is None or not self.calibration.distorted:
             return found
         return [self._undistorted(d) for d in found]

@@ -38,10 +38,12 @@ def run_demo(
     env: dict | None = None,
     video_seconds: float | None = None,
     seeds: int = 1,
+    record: dict | None = None,
 ) -> dict:
     """``seeds`` episodes per estimator on the IRL corridor; results.md/json, trajectories.png,
     errors.png, nees.png and, unless ``video_seconds`` is 0, a video of each estimator's first
-    episode's first ``video_seconds`` (default :data:`VIDEO_SECONDS`) in ``videos/``."""
+    episode's first ``video_seconds`` (default :data:`VIDEO_SECONDS`) in ``videos/``; with
+    ``record`` each episode recorded (:func:`~stsf_gym.experiments.episodes.run_episode`)."""
     video_seconds = VIDEO_SECONDS if video_seconds is None else video_seconds
     summary, _ = evaluate(
         out,
@@ -52,6 +54,7 @@ def run_demo(
         workers=workers,
         env=env,
         agent_options=PATH_ONLY,
+        record=record,
     )
     if video_seconds > 0:
         specs = [

@@ -151,9 +151,23 @@ def make_agent(name: str, env, options: dict | None = None):
     raise ValueError(f"unknown agent {name!r}; known: follower or a saved model (.zip)")
 
 
-def run_episode(spec: EpisodeSpec) -> EpisodeResult:
-    """Drive one episode to its end; record the estimate and the true pose at every step."""
-    env = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
+def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
+    """Drive one episode to its end; record the estimate and the true pose at every step.
+    With ``record`` (``{"format": "mcap" | "rerun", "frames": ..., "folder": ...}``) the
+    episode is also written as ``folder/<episode>.mcap`` (or ``.rrd``,
+    :class:`~stsf_gym.recording.wrapper.RecordEpisode`); it runs the same either way."""
+    env = estimating = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
+    if record:
+        from stsf_gym.recording.wrapper import RecordEpisode
+
+        env = RecordEpisode(
+            env,
+            record["folder"],
+            record["format"],
+            record.get("frames", "raw"),
+            spec.key,
+            meta={"spec": asdict(spec)},
+        )
     try:
         obs, info = env.reset(seed=spec.seed)  # first: a generated world is drawn here
         act = make_agent(spec.agent, env, spec.agent_options)
@@ -179,7 +193,7 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             if obs["image_new"]:
                 frames += 1
                 in_view += bool(env.unwrapped.landmarks_in_view())
-        counters = env.estimator.counters
+        counters = estimating.estimator.counters
         outcome = "collision" if info["collision"] else "goal" if terminated else "time"
         return EpisodeResult(
             spec=asdict(spec),
@@ -192,7 +206,7 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             true_poses=record["true"],
             estimates=record["est"],
             covariances=record["cov"],
-            nis=[list(value) for value in env.estimator.innovations()],
+            nis=[list(value) for value in estimating.estimator.innovations()],
             path_errors=distance_to_path(np.array(record["true"])[:, :2], path).tolist(),
             frames=counters.get("frames", 0),
             camera_frames=frames,
@@ -203,7 +217,9 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             relocalised=counters.get("relocalised", 0),
             finite=finite,
             min_cov_eigenvalue=min_eig,
-            stage_ms_per_step={k: 1000 * v / steps for k, v in env.estimator.timings.items()},
+            stage_ms_per_step={
+                k: 1000 * v / steps for k, v in estimating.estimator.timings.items()
+            },
         )
     finally:
         env.close()
@@ -219,11 +235,12 @@ def write_trajectories(episode: EpisodeResult, folder: Path) -> Path:
 
 
 def _spec(job: dict) -> EpisodeSpec:
-    return EpisodeSpec(**{k: v for k, v in job.items() if k != "version"})
+    return EpisodeSpec(**{k: v for k, v in job.items() if k not in ("version", "record")})
 
 
 def _run(job: dict) -> EpisodeResult:
-    return run_episode(_spec(job))
+    record = job.get("record")
+    return run_episode(_spec(job), record) if record else run_episode(_spec(job))
 
 
 def _name(job: dict) -> str:
@@ -246,11 +263,18 @@ def specs_config(specs: list[EpisodeSpec]) -> dict:
 
 
 def run_episodes(
-    specs: list[EpisodeSpec], folder: Path, workers: int = 1, desc: str = "episodes"
+    specs: list[EpisodeSpec],
+    folder: Path,
+    workers: int = 1,
+    desc: str = "episodes",
+    record: dict | None = None,
 ) -> list[EpisodeResult]:
     """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``; the
-    TUM trajectories of each go to ``folder/trajectories/<episode>/``."""
-    jobs = [{"version": RESULT_VERSION, **asdict(spec)} for spec in specs]
+    TUM trajectories of each go to ``folder/trajectories/<episode>/``. With ``record`` (see
+    :func:`run_episode`) each episode is recorded too: a saved episode without that recording
+    is run again."""
+    extra = {"record": record} if record else {}
+    jobs = [{"version": RESULT_VERSION, **asdict(spec), **extra} for spec in specs]
     done = run_cached(_run, jobs, folder, _name, workers, desc, config=_resolved)
     results = [EpisodeResult(**r) for r in done]
     for episode in results:

@@ -41,13 +41,17 @@ def evaluate(
     env: dict | None = None,
     faults: list[str | Path] | None = None,
     agent_options: dict | None = None,
+    record: dict | None = None,
 ) -> tuple[dict, dict[str, list[EpisodeResult]]]:
     """Run ``seeds`` episodes per estimator; write the table and figures to ``out``.
 
     Returns the summary (as written to results.json) and the episodes per estimator. With
-    ``faults`` (fault files), the episodes run per fault set and estimator instead.
+    ``faults`` (fault files), the episodes run per fault set and estimator instead. With
+    ``record`` (:func:`~stsf_gym.experiments.episodes.run_episode`) every episode is recorded.
     """
     if faults:
+        if record:
+            raise ValueError("recording (--record) is not available with --faults")
         return evaluate_faults(
             out, estimators, seeds, seed, world, agent, workers, env or {}, faults
         )
@@ -59,7 +63,7 @@ def evaluate(
         for estimator in estimators
         for s in range(seed, seed + seeds)
     ]
-    results = run_episodes(specs, out / "episodes", workers, desc=f"evaluate {world}")
+    results = run_episodes(specs, out / "episodes", workers, f"evaluate {world}", record)
     by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
     rows = [summarise(name, episodes, agent) for name, episodes in by_estimator.items()]
     summary = {
