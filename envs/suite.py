@@ -16,9 +16,8 @@ from pathlib import Path
 from stsf_gym.envs.config import load_config
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import CONFIG_DIR, read_yaml, shown
+from stsf_gym.yaml_layers import SUITE_DIR, read_yaml, shown
 
-SUITE_DIR = CONFIG_DIR / "suites"
 SUITE_KEYS = ("generator", "env")
 
 

@@ -65,16 +65,17 @@ def suite_id(name: str) -> str:
 
 def _register_suites() -> None:
     """The ids of every suite in ``configs/suites/``: the world env and one per pose source."""
-    from stsf_gym.envs.suite import load_suite, suite_names
+    from stsf_gym.yaml_layers import SUITE_DIR, read_yaml
 
-    for name in suite_names():
-        suite = load_suite(name, check=False)
-        env_id = suite_id(name)
+    for path in sorted(SUITE_DIR.glob("*.yaml")):
+        suite = read_yaml(path)  # checked when an env is made (stsf_gym.envs.suite)
+        generator, env = suite.get("generator") or {}, suite.get("env") or {}
+        env_id = suite_id(path.stem)
         if env_id not in registry:
             register(
                 id=env_id,
                 entry_point="stsf_gym.envs.generated_env:GeneratedCorridorEnv",
-                kwargs={"generator": suite.generator, **suite.env},
+                kwargs={"generator": generator, **env},
             )
         for suffix, estimator in ESTIMATOR_IDS.items():
             estimating_id = env_id.replace("-v0", f"-{suffix}-v0")
@@ -82,7 +83,11 @@ def _register_suites() -> None:
                 register(
                     id=estimating_id,
                     entry_point="stsf_gym.episode_env:make_episode_env",
-                    kwargs={"world": "generated", "estimator": estimator, "env": suite.episode_env},
+                    kwargs={
+                        "world": "generated",
+                        "estimator": estimator,
+                        "env": {**env, "generator": generator},
+                    },
                 )
 
 
