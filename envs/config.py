@@ -155,6 +155,8 @@ class FastCameraConfig:
     detect_size_px: Positive  # square pitch (px) at which half of the boards are detected
     detect_size_scale: Positive  # logistic width of the detection rate in square pitch (px)
     false_detection_rate: NonNegative  # wrong-id detections per frame
+    aided_size_px: Positive  # size (px) at which a track-aided search finds half the missed boards
+    aided_size_scale: Positive  # logistic width of that rate (px)
     max_detections: Count  # detection slots in the observation
 
 
