@@ -39,9 +39,10 @@ DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf",
 
 
 def benchmark_cells(suite: Suite, agents: list[str], estimators: list[str], seeds: list[int]):
-    """One evaluate cell per agent, pose source and episode seed."""
+    """One evaluate cell per agent, pose source and episode seed; seed by seed, so a run cut
+    short has every pose source on the same worlds (``--worlds`` fewer then resumes)."""
     cells = []
-    for agent, estimator, seed in itertools.product(agents, estimators, seeds):
+    for agent, seed, estimator in itertools.product(agents, seeds, estimators):
         agent = str(Path(agent).resolve()) if agent.endswith(".zip") else agent
         cells.append(
             {
