@@ -21,7 +21,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 
 from stsf_gym.envs.fault_spec import FaultSpec
-from stsf_gym.envs.worlds.checks import check_clearance, check_world
+from stsf_gym.envs.worlds.checks import check_clearance, check_route, check_world
 from stsf_gym.validation import (
     ConfigError,
     Count,
@@ -85,15 +85,23 @@ class WorldConfig:
     landmark_pattern: LandmarkPattern
     landmarks: tuple[LandmarkSpec, ...]
     obstacles: tuple[ObstacleSpec, ...] = ()
+    #: goals visited in order, each on the path (the last one its end); empty: the path's end
+    route: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         require(len(self.walls) > 0, "walls", "must list at least one wall segment")
         require(len(self.path) >= 2, "path", f"must have at least 2 points, got {len(self.path)}")
         check_world(self)
+        check_route(self)
 
     @property
     def goal(self) -> tuple[float, float]:
         return self.path[-1]
+
+    @property
+    def goals(self) -> tuple[tuple[float, float], ...]:
+        """The goals in visiting order: the route, or the path's end alone."""
+        return self.route or (self.path[-1],)
 
 
 @dataclass(frozen=True)
@@ -150,6 +158,8 @@ class FastCameraConfig:
     detect_size_px: Positive  # square pitch (px) at which half of the boards are detected
     detect_size_scale: Positive  # logistic width of the detection rate in square pitch (px)
     false_detection_rate: NonNegative  # wrong-id detections per frame
+    aided_size_px: Positive  # size (px) at which a track-aided search finds half the missed boards
+    aided_size_scale: Positive  # logistic width of that rate (px)
     max_detections: Count  # detection slots in the observation
 
 
@@ -269,6 +279,18 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class TaskConfig:
+    """When an episode succeeds (:mod:`stsf_gym.envs.task`): ``reach`` (the paper's protocol) or
+    ``declare`` (the agent stops to declare arrival at each goal of the route)."""
+
+    protocol: Literal["reach", "declare"]
+    goal_radius: Positive  # declare: success radius around each goal at the declared stop (m)
+    stop_speed: Positive  # declare: a commanded |forward speed| below this (m/s) ...
+    stop_yaw_rate: Positive  # ... and |yaw rate| below this (rad/s) is standing still
+    stop_seconds: Positive  # declare: standing still this long declares arrival
+
+
+@dataclass(frozen=True)
 class RenderConfig:
     view: Literal["map", "chase", "top"]
     width: Pixels
@@ -285,6 +307,7 @@ class EnvConfig:
     encoders: EncoderConfig
     reward: RewardConfig
     render: RenderConfig
+    task: TaskConfig
     faults: tuple[FaultSpec, ...] = ()  # timed faults (envs/fault_spec.py); none by default
 
     def __post_init__(self) -> None:
