@@ -125,6 +125,8 @@ class RobotConfig:
     wheel_max_torque: Positive
     max_speed: Positive
     max_yaw_rate: Positive
+    max_acceleration: Positive  # m/s^2, the wheel velocity controller's linear limit
+    max_yaw_acceleration: Positive  # rad/s^2, its angular limit
     nominal_speed: Positive
     camera_height: Positive
     camera_forward: float

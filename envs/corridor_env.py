@@ -12,7 +12,9 @@ from gymnasium import spaces
 
 from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
+from stsf_gym.envs.drive_controller import VelocityController
 from stsf_gym.envs.faults import FaultInjector
+from stsf_gym.envs.random_streams import RandomStreams
 from stsf_gym.envs.rendering.map_view import MapView, detections_frame
 from stsf_gym.envs.rendering.window import HumanWindow, display_available
 from stsf_gym.envs.robot import DiffDriveRobot
@@ -89,8 +91,15 @@ class CorridorEnv(gym.Env):
     ## Camera
     ``camera_matrix`` (K) and ``dist_coeffs`` (OpenCV ``k1 k2 p1 p2 k3``) are the TRUE camera of
     ``image``, for evaluation; ``camera_calibration`` is what the robot believes (K and
-    distortion with this episode's calibration error, drawn at reset from ``np_random``), the
-    only calibration an estimator may use. ``renderer`` names the renderer in use.
+    distortion with this episode's calibration error, drawn at reset), the only calibration an
+    estimator may use. ``renderer`` names the renderer in use.
+
+    ## Randomness
+    Every draw comes from :attr:`streams` (:mod:`stsf_gym.envs.random_streams`): one generator
+    per subsystem (encoders, sonar, camera sensor, detector simulation, calibration, faults,
+    world generation, timing), spawned at each reset from a seed drawn from ``np_random``. So
+    ``reset(seed=s)`` fixes everything, and the camera's mode, rate or absence leaves the other
+    subsystems' draws unchanged (common random numbers for paired comparisons).
 
     ## Arguments
     - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
@@ -148,6 +157,7 @@ class CorridorEnv(gym.Env):
         self.camera_sensor = self._camera_sensor()
         self.sonar = SonarRing(cfg.sonar, cfg.robot.body_radius)
         self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
+        self.controller = VelocityController(cfg.robot)
         self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
         self.observation_space = self._observation_space()
         self._initial_state: int | None = None
@@ -263,6 +273,11 @@ class CorridorEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
+        self.streams = RandomStreams.draw(self.np_random)
+        return self._start_episode(options)
+
+    def _start_episode(self, options: dict | None):
+        """Everything of :meth:`reset` after the seed and the episode's :attr:`streams`."""
         options = dict(options or {})
         start = options.pop("start_pose", self.config.world.start)
         if options:
@@ -274,19 +289,21 @@ class CorridorEnv(gym.Env):
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
         self.robot.reset(tuple(start), *self._mount_target)
         self.faults.reset()
-        self.encoders.reset(self.robot.wheel_angles(), self.np_random)
+        self.controller.reset()
+        streams = self.streams
+        self.encoders.reset(self.robot.wheel_angles(), streams.calibration)
         self.camera_calibration = believed_calibration(
-            self.camera.calibration, self.config.camera.calibration_error, self.np_random
+            self.camera.calibration, self.config.camera.calibration_error, streams.calibration
         )
         if self.config.camera.enabled:
-            self.camera_sensor.reset(self.np_random)
+            self.camera_sensor.reset(self._camera_stream())
         self._time = 0.0
         self._yaw_command = 0.0
         self._distance = 0.0
         self._pose = self.robot.floor_pose()
         self._progress = self.task.progress(self._pose)
         self._next_frame = 0.0
-        obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, self.np_random)
+        obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, streams.faults)
         self._last_obs = obs
         if self.view is not None:
             self.view.clear()
@@ -305,18 +322,20 @@ class CorridorEnv(gym.Env):
             raise ValueError(f"action contains NaN or infinite values: {a.tolist()}")
         a = np.clip(a, -1.0, 1.0)
         robot = self.config.robot
-        self.robot.drive(a[0] * robot.max_speed, a[1] * robot.max_yaw_rate)
+        target = np.array([a[0] * robot.max_speed, a[1] * robot.max_yaw_rate])
         if len(a) > 2:
             self._mount_target[: len(a) - 2] = a[2:] * self.robot.pan_tilt_limits[: len(a) - 2]
             self.robot.point_camera(*self._mount_target)
         if self.faults.before_physics(self._time + self.dt):
             self._pose = self.robot.floor_pose()  # a kidnap is no distance driven
-        self.sim.step(self._substeps)
+        for _ in range(self._substeps):  # the wheel controller runs at the physics rate
+            self.robot.drive(*self.controller.update(target, self.sim.time_step))
+            self.sim.step(1)
         self._time += self.dt
         pose = self.robot.floor_pose()
         self._distance += float(np.hypot(*(pose[:2] - self._pose[:2])))
         self._pose = pose
-        ticks = self.encoders.read(self.robot.wheel_angles(), self.np_random)
+        ticks = self.encoders.read(self.robot.wheel_angles(), self.streams.encoders)
         collision = self.robot.in_collision(ignore={self.world.floor})
         progress = self.task.progress(pose)
         reached = self.task.reached_goal(pose)
@@ -328,7 +347,7 @@ class CorridorEnv(gym.Env):
         self._progress = progress
         terminated = reached or collision
         truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9
-        obs = self.faults.observe(self._observe(ticks), self._time, self.np_random)
+        obs = self.faults.observe(self._observe(ticks), self._time, self.streams.faults)
         self._last_obs = obs
         if self._window is not None:
             self.render()
@@ -341,14 +360,22 @@ class CorridorEnv(gym.Env):
             self._frame_pose = self.robot.camera_pose()
             self._frame_pan_tilt = self.robot.mount_angles().astype(np.float32)
             if self.config.camera.enabled:
-                self.camera_sensor.capture(self._frame_pose, self.np_random)
+                self.camera_sensor.capture(self._frame_pose, self._camera_stream())
         return {
             **self.camera_sensor.observe(),
             "image_new": int(new_frame and self.config.camera.enabled),
             "camera_pan_tilt": self._frame_pan_tilt.copy(),
-            "sonar": self.sonar.read(self.sim, self._pose, self.np_random),
+            "sonar": self.sonar.read(self.sim, self._pose, self.streams.sonar),
             "encoders": np.clip(ticks, -self._max_ticks, self._max_ticks).astype(np.int64),
         }
+
+    def _camera_stream(self) -> np.random.Generator:
+        """The rendered camera's sensor noise stream, or the fast mode's detector stream."""
+        return (
+            self.streams.detector
+            if self.config.camera.mode == "fast"
+            else (self.streams.camera_sensor)
+        )
 
     def _info(self, collision: bool) -> dict:
         return {
