@@ -18,10 +18,12 @@ from stsf_gym.estimators import (
     MapLandmark,
     PoseEstimator,
     SensorModel,
+    estimator_settings,
     make_estimator,
 )
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.settings import OdometrySettings
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
@@ -35,25 +37,28 @@ TRUTH_STD = (0.001, 0.001, 0.001)
 POSE_SOURCES = (*ESTIMATORS, TRUTH, *PRIVILEGED)
 
 
-def sensor_model(env: gym.Env) -> SensorModel:
+def sensor_model(env: gym.Env, belief: OdometrySettings | None = None) -> SensorModel:
     """The model of ``env``'s robot for the current episode (call after each reset): its
-    believed odometry calibration, the encoder noise, believed camera calibration, mount and
-    landmark map (never the true camera: ``camera_matrix`` and ``dist_coeffs`` are for
-    evaluation)."""
+    believed odometry calibration, believed camera calibration, mount and landmark map (never
+    the true camera: ``camera_matrix`` and ``dist_coeffs`` are for evaluation), and the noise
+    the estimator ``belief`` assumes (default: the nominal ``configs/estimators/odometry.yaml``),
+    never the env's true noise settings."""
     u = env.unwrapped
     cfg = u.config
+    belief = belief or estimator_settings("odometry")
+    calibration = u.odometry_calibration
     return SensorModel(
-        calibration=u.odometry_calibration,
+        calibration=calibration,
         odometry_noise=OdometryNoise.from_encoders(
-            cfg.encoders.slip_std,
-            cfg.encoders.radius_error_std,
-            cfg.encoders.wheelbase_error_std,
-            cfg.robot.wheel_radius,
+            belief.slip_std,
+            belief.radius_error_std,
+            belief.wheelbase_error_std,
+            (calibration.wheel_radius_left + calibration.wheel_radius_right) / 2,
         ),
         camera_calibration=u.camera_calibration,
         camera_calibration_std=(
-            cfg.camera.calibration_error.principal_point_std_px / u.camera_calibration.K[0, 0],
-            cfg.camera.calibration_error.focal_std,
+            belief.principal_point_std_px / u.camera_calibration.K[0, 0],
+            belief.focal_std,
         ),
         camera_matrix=u.camera_calibration.K,
         image_size=(cfg.camera.width, cfg.camera.height),
@@ -146,7 +151,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def reset(self, *, seed=None, options=None):
         obs, info = self.env.reset(seed=seed, options=options)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
-        model = sensor_model(self.env)
+        settings = getattr(self.estimator, "settings", None)
+        model = sensor_model(self.env, settings if isinstance(settings, OdometrySettings) else None)
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
             self.estimator.seed(seed)
         self.estimator.reset(model, start, self.start_cov)
