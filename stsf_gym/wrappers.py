@@ -22,6 +22,7 @@ from stsf_gym.estimators import (
     make_estimator,
 )
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
+from stsf_gym.estimators.history import StateHistory
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.settings import OdometrySettings
 
@@ -99,6 +100,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
       (``obs["pose_cov"].reshape(3, 3)``; entries clipped to +-1e4). Flat, so SB3's
       multi-input policies take it as it is.
 
+    The estimator's ``dt`` is the time between the encoders' timestamps. When the camera has
+    a latency (``camera.latency``), a late frame is fused at its exposure time: the estimator
+    is rewound and the odometry since replayed (:class:`~stsf_gym.estimators.history.StateHistory`,
+    so ``wrapper.estimator`` may be a new object after a step).
+
     With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):
     privileged, for reference runs only; ``"degraded-truth"`` corrupts it with a configurable
     error model (:mod:`stsf_gym.estimators.degraded_truth`), seeded by ``reset(seed=...)``.
@@ -136,6 +142,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 {}, np.zeros((0, 4)), robot.camera_forward, math.radians(robot.pan_limit_deg)
             )
             self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        latency = env.unwrapped.config.camera.latency
+        self.history = None  # late frames fused at their exposure (estimators only)
+        if estimator not in (TRUTH, *PRIVILEGED) and latency.delay_s + latency.jitter_s > 0:
+            dt = env.unwrapped.dt
+            self.history = StateHistory(latency.delay_s + 5 * latency.jitter_s + 2 * dt)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
         lo, hi = env.unwrapped.world.bounds[0] - 50.0, env.unwrapped.world.bounds[1] + 50.0
         pose_space = spaces.Box(
@@ -156,6 +167,9 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
             self.estimator.seed(seed)
         self.estimator.reset(model, start, self.start_cov)
+        self._time = float(obs["encoders_time"][0])
+        if self.history is not None:
+            self.history.reset(self.estimator, obs)
         if hasattr(self.estimator, "see"):  # privileged: handed the true pose
             self.estimator.see(info["true_pose"])
         if self.pointer is not None:
@@ -170,7 +184,12 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         obs, reward, terminated, truncated, info = self.env.step(action)
         if hasattr(self.estimator, "see"):
             self.estimator.see(info["true_pose"])
-        mean, cov = self.estimator.update(obs, self.env.unwrapped.dt)
+        time = float(obs["encoders_time"][0])
+        dt, self._time = time - self._time, time  # from the sensors' timestamps
+        if self.history is None:
+            mean, cov = self.estimator.update(obs, dt)
+        else:
+            self.estimator, mean, cov = self.history.update(self.estimator, obs, dt)
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 
     def _with_pose(self, obs: dict, mean: np.ndarray, cov: np.ndarray) -> dict:

@@ -36,26 +36,43 @@ class SonarRing:
         )
         self._directions = np.column_stack([np.cos(ray_angles), np.sin(ray_angles)])
 
-    def true_ranges(self, sim: Simulator, pose: np.ndarray) -> np.ndarray:
-        """Noise-free nearest-hit range per transducer from the ring (metres)."""
+    def true_ranges(
+        self, sim: Simulator, pose: np.ndarray, transducers: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Noise-free nearest-hit range (metres) of each of ``transducers`` (default all)."""
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         rotation = np.array([[c, -s], [s, c]])
-        starts = self._origins @ rotation.T + (x, y)
-        ends = starts + self.cfg.max_range * self._directions @ rotation.T
+        rays = self._rays(transducers)
+        starts = self._origins[rays] @ rotation.T + (x, y)
+        ends = starts + self.cfg.max_range * self._directions[rays] @ rotation.T
         z = np.full((len(starts), 1), self.cfg.height)
         hits = sim.client.rayTestBatch(
             np.hstack([starts, z]).tolist(), np.hstack([ends, z]).tolist()
         )
         fractions = np.array([hit[2] if hit[0] >= 0 else 1.0 for hit in hits])
-        return self.cfg.max_range * fractions.reshape(self.cfg.count, -1).min(axis=1)
+        return self.cfg.max_range * fractions.reshape(-1, self.cfg.rays_per_beam).min(axis=1)
 
-    def read(self, sim: Simulator, pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Noisy float32 ranges, clipped to [min_range, max_range]."""
+    def _rays(self, transducers: np.ndarray | None) -> np.ndarray | slice:
+        if transducers is None:
+            return slice(None)
+        per_beam = self.cfg.rays_per_beam
+        return (np.asarray(transducers)[:, None] * per_beam + np.arange(per_beam)).ravel()
+
+    def read(
+        self,
+        sim: Simulator,
+        pose: np.ndarray,
+        rng: np.random.Generator,
+        transducers: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Noisy float32 ranges of ``transducers`` (default all), clipped to [min_range,
+        max_range]."""
         cfg = self.cfg
-        ranges = self.true_ranges(sim, pose)
+        ranges = self.true_ranges(sim, pose, transducers)
+        count = len(ranges)
         hit = ranges < cfg.max_range
-        noisy = ranges + rng.normal(size=cfg.count) * (cfg.noise_std + cfg.noise_std_per_m * ranges)
+        noisy = ranges + rng.normal(size=count) * (cfg.noise_std + cfg.noise_std_per_m * ranges)
         noisy = np.where(hit, noisy, cfg.max_range)
-        noisy[rng.random(cfg.count) < cfg.dropout_prob] = cfg.max_range
+        noisy[rng.random(count) < cfg.dropout_prob] = cfg.max_range
         return np.clip(noisy, cfg.min_range, cfg.max_range).astype(np.float32)
