@@ -22,9 +22,9 @@ from stsf_gym.estimators import (
     make_estimator,
 )
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
-from stsf_gym.estimators.history import StateHistory
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.settings import OdometrySettings
+from stsf_gym.state_history import StateHistory
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
@@ -102,7 +102,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     The estimator's ``dt`` is the time between the encoders' timestamps. When the camera has
     a latency (``camera.latency``), a late frame is fused at its exposure time: the estimator
-    is rewound and the odometry since replayed (:class:`~stsf_gym.estimators.history.StateHistory`,
+    is rewound and the odometry since replayed (:class:`~stsf_gym.state_history.StateHistory`,
     so ``wrapper.estimator`` may be a new object after a step).
 
     With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):

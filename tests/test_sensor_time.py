@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from stsf_gym.estimators import make_estimator
-from stsf_gym.estimators.history import FRAME_KEYS, StateHistory
+from stsf_gym.state_history import FRAME_KEYS, StateHistory
 from stsf_gym.wrappers import PoseEstimateWrapper, sensor_model
 
 STRAIGHT = "stsf_gym/Straight10m-v0"
