@@ -219,6 +219,17 @@ class CameraConfig:
 
 
 @dataclass(frozen=True)
+class SonarBeamConfig:
+    """The sonar beam model (:mod:`stsf_gym.envs.sensors.sonar_beam`), off by default."""
+
+    enabled: bool
+    critical_angle_deg: Annotated[float, Range(gt=0, le=90)]  # incidence at half detection
+    angle_width_deg: Annotated[float, Range(gt=0, le=90)]  # how sharply detection falls
+    random_prob: Probability  # a reading uniform in [min_range, max_range]
+    crosstalk_prob: Probability  # a neighbour's echo (a ring firing all together)
+
+
+@dataclass(frozen=True)
 class SonarConfig:
     count: Count
     beam_width_deg: Annotated[float, Range(gt=0, le=360)]
@@ -231,6 +242,7 @@ class SonarConfig:
     dropout_prob: Probability
     firing_order: tuple[int, ...]  # transducers in firing order; empty: all fire at each step end
     firing_interval_s: NonNegative  # s between consecutive firings of the order
+    beam: SonarBeamConfig
 
     def __post_init__(self) -> None:
         require(

@@ -7,13 +7,17 @@ import math
 import numpy as np
 
 from stsf_gym.envs.config import SonarConfig
+from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
 
 
 class SonarRing:
     """``count`` transducers evenly spaced around the body, transducer 0 facing forward and
     the rest counter-clockwise. Each reads the nearest hit among ``rays_per_beam`` rays fanned
-    across its ``beam_width_deg`` cone, plus range noise; a dropout reads ``max_range``.
+    across its ``beam_width_deg`` cone, plus range noise; a dropout reads ``max_range``. With
+    ``sonar.beam.enabled`` the beam model of :mod:`~stsf_gym.envs.sensors.sonar_beam` decides
+    which rays echo back (specular misses at shallow incidence), and adds random readings and
+    crosstalk.
     """
 
     def __init__(self, cfg: SonarConfig, body_radius: float) -> None:
@@ -40,6 +44,14 @@ class SonarRing:
         self, sim: Simulator, pose: np.ndarray, transducers: np.ndarray | None = None
     ) -> np.ndarray:
         """Noise-free nearest-hit range (metres) of each of ``transducers`` (default all)."""
+        fractions, _ = self._cast(sim, pose, transducers)
+        return self.cfg.max_range * fractions.min(axis=1)
+
+    def _cast(
+        self, sim: Simulator, pose: np.ndarray, transducers: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Hit fraction of max range (1: no hit) and angle of incidence (rad from the hit
+        surface's normal) of every ray, ``(transducers, rays_per_beam)`` each."""
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         rotation = np.array([[c, -s], [s, c]])
@@ -51,7 +63,11 @@ class SonarRing:
             np.hstack([starts, z]).tolist(), np.hstack([ends, z]).tolist()
         )
         fractions = np.array([hit[2] if hit[0] >= 0 else 1.0 for hit in hits])
-        return self.cfg.max_range * fractions.reshape(-1, self.cfg.rays_per_beam).min(axis=1)
+        normals = np.array([hit[4][:2] if hit[0] >= 0 else (0.0, 0.0) for hit in hits])
+        directions = self._directions[rays] @ rotation.T
+        incidence = np.arccos(np.clip(-np.sum(normals * directions, axis=1), -1.0, 1.0))
+        shape = (-1, self.cfg.rays_per_beam)
+        return fractions.reshape(shape), incidence.reshape(shape)
 
     def _rays(self, transducers: np.ndarray | None) -> np.ndarray | slice:
         if transducers is None:
@@ -69,7 +85,15 @@ class SonarRing:
         """Noisy float32 ranges of ``transducers`` (default all), clipped to [min_range,
         max_range]."""
         cfg = self.cfg
-        ranges = self.true_ranges(sim, pose, transducers)
+        if cfg.beam.enabled:
+            fractions, incidence = self._cast(sim, pose, transducers)
+            ranges = beam_ranges(fractions, incidence, cfg.max_range, cfg.beam, rng)
+            which = np.arange(cfg.count) if transducers is None else np.asarray(transducers)
+            limits = (cfg.min_range, cfg.max_range)
+            simultaneous = not cfg.firing_order
+            ranges = corrupt(ranges, which, cfg.count, limits, cfg.beam, simultaneous, rng)
+        else:
+            ranges = self.true_ranges(sim, pose, transducers)
         count = len(ranges)
         hit = ranges < cfg.max_range
         noisy = ranges + rng.normal(size=count) * (cfg.noise_std + cfg.noise_std_per_m * ranges)
