@@ -136,6 +136,8 @@ class RobotConfig:
     wheel_max_torque: Positive
     max_speed: Positive
     max_yaw_rate: Positive
+    max_acceleration: Positive  # m/s^2, the wheel velocity controller's linear limit
+    max_yaw_acceleration: Positive  # rad/s^2, its angular limit
     nominal_speed: Positive
     camera_height: Positive
     camera_forward: float
@@ -207,6 +209,15 @@ class CalibrationErrorConfig:
 
 
 @dataclass(frozen=True)
+class LatencyConfig:
+    """Exposure to availability of a camera frame (``configs/latency/<profile>.yaml``)."""
+
+    profile: str  # zero | paper | any file of configs/latency
+    delay_s: NonNegative  # s from a frame's exposure until the robot has its result
+    jitter_s: NonNegative  # s, std of a half-normal extra delay per frame
+
+
+@dataclass(frozen=True)
 class CameraConfig:
     enabled: bool
     width: Pixels
@@ -226,6 +237,7 @@ class CameraConfig:
     feature_rms_px: Positive  # the detector's feature error the profile is made to give
     mode: Literal["rendered", "fast"]
     fast: FastCameraConfig
+    latency: LatencyConfig
 
     def __post_init__(self) -> None:
         require(self.far > self.near, "far", f"must be > near ({self.near}), got {self.far}")
@@ -242,6 +254,17 @@ class CameraConfig:
 
 
 @dataclass(frozen=True)
+class SonarBeamConfig:
+    """The sonar beam model (:mod:`stsf_gym.envs.sensors.sonar_beam`), off by default."""
+
+    enabled: bool
+    critical_angle_deg: Annotated[float, Range(gt=0, le=90)]  # incidence at half detection
+    angle_width_deg: Annotated[float, Range(gt=0, le=90)]  # how sharply detection falls
+    random_prob: Probability  # a reading uniform in [min_range, max_range]
+    crosstalk_prob: Probability  # a neighbour's echo (a ring firing all together)
+
+
+@dataclass(frozen=True)
 class SonarConfig:
     count: Count
     beam_width_deg: Annotated[float, Range(gt=0, le=360)]
@@ -252,12 +275,26 @@ class SonarConfig:
     noise_std: NonNegative
     noise_std_per_m: NonNegative
     dropout_prob: Probability
+    firing_order: tuple[int, ...]  # transducers in firing order; empty: all fire at each step end
+    firing_interval_s: NonNegative  # s between consecutive firings of the order
+    beam: SonarBeamConfig
 
     def __post_init__(self) -> None:
         require(
             self.max_range > self.min_range,
             "max_range",
             f"must be > min_range ({self.min_range}), got {self.max_range}",
+        )
+        order = self.firing_order
+        require(
+            all(0 <= t < self.count for t in order) and len(set(order)) == len(order),
+            "firing_order",
+            f"must list distinct transducers of 0..{self.count - 1}, got {list(order)}",
+        )
+        require(
+            not order or self.firing_interval_s > 0,
+            "firing_interval_s",
+            f"must be > 0 with a firing_order, got {self.firing_interval_s}",
         )
 
 
@@ -383,17 +420,25 @@ def load_config(
 
 
 def _add_camera_profile(tree: dict, sources: KeySources) -> None:
-    """Fill the camera section from its profile file; keys a layer set stay as set."""
+    """Fill the camera section from its profile file, and its latency section from its own
+    profile; keys a layer set stay as set."""
     camera = tree.setdefault("camera", {})
-    name = camera.get("profile")
-    known = sorted(p.stem for p in (CONFIG_DIR / "cameras").glob("*.yaml"))
-    file = CONFIG_DIR / "cameras" / f"{name}.yaml"
+    tree["camera"] = _with_profile(camera, "cameras", "camera", sources)
+    latency = tree["camera"].setdefault("latency", {})
+    tree["camera"]["latency"] = _with_profile(latency, "latency", "camera.latency", sources)
+
+
+def _with_profile(section: dict, folder: str, label: str, sources: KeySources) -> dict:
+    """``section`` over the keys of ``configs/<folder>/<section['profile']>.yaml``."""
+    name = section.get("profile")
+    known = sorted(p.stem for p in (CONFIG_DIR / folder).glob("*.yaml"))
+    file = CONFIG_DIR / folder / f"{name}.yaml"
     if not isinstance(name, str) or not file.is_file():
         raise ConfigError(
-            f"camera.profile must be one of {known}, got {name!r}",
-            "camera.profile",
-            sources.file_of("camera.profile") or None,
+            f"{label}.profile must be one of {known}, got {name!r}",
+            f"{label}.profile",
+            sources.file_of(f"{label}.profile") or None,
         )
     profile = read_yaml(file)
-    tree["camera"] = deep_merge(profile, camera)
-    sources.record(profile, shown(file), "camera", keep=True)
+    sources.record(profile, shown(file), label, keep=True)
+    return deep_merge(profile, section)

@@ -20,7 +20,7 @@ frame; the injector repeats the delivered (faulted) one instead. With simulated 
 adds a copy of a real detection labelled with the fault's id. The injector reads and writes
 only the observation keys, so it works in either camera mode.
 
-Every random draw comes from the env's ``np_random`` and only while a fault acts, so a config
+Every random draw comes from the episode's fault stream and only while a fault acts, so a config
 without faults gives the same episodes as before.
 """
 

@@ -18,10 +18,13 @@ from stsf_gym.estimators import (
     MapLandmark,
     PoseEstimator,
     SensorModel,
+    estimator_settings,
     make_estimator,
 )
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.settings import OdometrySettings
+from stsf_gym.state_history import StateHistory
 from stsf_gym.validation import ConfigError
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
@@ -36,25 +39,28 @@ TRUTH_STD = (0.001, 0.001, 0.001)
 POSE_SOURCES = (*ESTIMATORS, TRUTH, *PRIVILEGED)
 
 
-def sensor_model(env: gym.Env) -> SensorModel:
+def sensor_model(env: gym.Env, belief: OdometrySettings | None = None) -> SensorModel:
     """The model of ``env``'s robot for the current episode (call after each reset): its
-    believed odometry calibration, the encoder noise, believed camera calibration, mount and
-    landmark map (never the true camera: ``camera_matrix`` and ``dist_coeffs`` are for
-    evaluation)."""
+    believed odometry calibration, believed camera calibration, mount and landmark map (never
+    the true camera: ``camera_matrix`` and ``dist_coeffs`` are for evaluation), and the noise
+    the estimator ``belief`` assumes (default: the nominal ``configs/estimators/odometry.yaml``),
+    never the env's true noise settings."""
     u = env.unwrapped
     cfg = u.config
+    belief = belief or estimator_settings("odometry")
+    calibration = u.odometry_calibration
     return SensorModel(
-        calibration=u.odometry_calibration,
+        calibration=calibration,
         odometry_noise=OdometryNoise.from_encoders(
-            cfg.encoders.slip_std,
-            cfg.encoders.radius_error_std,
-            cfg.encoders.wheelbase_error_std,
-            cfg.robot.wheel_radius,
+            belief.slip_std,
+            belief.radius_error_std,
+            belief.wheelbase_error_std,
+            (calibration.wheel_radius_left + calibration.wheel_radius_right) / 2,
         ),
         camera_calibration=u.camera_calibration,
         camera_calibration_std=(
-            cfg.camera.calibration_error.principal_point_std_px / u.camera_calibration.K[0, 0],
-            cfg.camera.calibration_error.focal_std,
+            belief.principal_point_std_px / u.camera_calibration.K[0, 0],
+            belief.focal_std,
         ),
         camera_matrix=u.camera_calibration.K,
         image_size=(cfg.camera.width, cfg.camera.height),
@@ -106,6 +112,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
       (``obs["pose_cov"].reshape(3, 3)``; entries clipped to +-1e4). Flat, so SB3's
       multi-input policies take it as it is.
 
+    The estimator's ``dt`` is the time between the encoders' timestamps. When the camera has
+    a latency (``camera.latency``), a late frame is fused at its exposure time: the estimator
+    is rewound and the odometry since replayed (:class:`~stsf_gym.state_history.StateHistory`,
+    so ``wrapper.estimator`` may be a new object after a step).
+
     With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):
     privileged, for reference runs only; ``"degraded-truth"`` corrupts it with a configurable
     error model (:mod:`stsf_gym.estimators.degraded_truth`), seeded by ``reset(seed=...)``.
@@ -144,6 +155,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 {}, np.zeros((0, 4)), robot.camera_forward, math.radians(robot.pan_limit_deg)
             )
             self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        latency = env.unwrapped.config.camera.latency
+        self.history = None  # late frames fused at their exposure (estimators only)
+        if estimator not in (TRUTH, *PRIVILEGED) and latency.delay_s + latency.jitter_s > 0:
+            dt = env.unwrapped.dt
+            self.history = StateHistory(latency.delay_s + 5 * latency.jitter_s + 2 * dt)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
         lo, hi = env.unwrapped.world.bounds[0] - 50.0, env.unwrapped.world.bounds[1] + 50.0
         pose_space = spaces.Box(
@@ -159,10 +175,14 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def reset(self, *, seed=None, options=None):
         obs, info = self.env.reset(seed=seed, options=options)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
-        model = sensor_model(self.env)
+        settings = getattr(self.estimator, "settings", None)
+        model = sensor_model(self.env, settings if isinstance(settings, OdometrySettings) else None)
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
             self.estimator.seed(seed)
         self.estimator.reset(model, start, self.start_cov)
+        self._time = float(obs["encoders_time"][0])
+        if self.history is not None:
+            self.history.reset(self.estimator, obs)
         if hasattr(self.estimator, "see"):  # privileged: handed the true pose
             self.estimator.see(info["true_pose"])
         if self.pointer is not None:
@@ -177,7 +197,12 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         obs, reward, terminated, truncated, info = self.env.step(action)
         if hasattr(self.estimator, "see"):
             self.estimator.see(info["true_pose"])
-        mean, cov = self.estimator.update(obs, self.env.unwrapped.dt)
+        time = float(obs["encoders_time"][0])
+        dt, self._time = time - self._time, time  # from the sensors' timestamps
+        if self.history is None:
+            mean, cov = self.estimator.update(obs, dt)
+        else:
+            self.estimator, mean, cov = self.history.update(self.estimator, obs, dt)
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 
     def _with_pose(self, obs: dict, mean: np.ndarray, cov: np.ndarray) -> dict:

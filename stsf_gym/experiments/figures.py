@@ -52,6 +52,9 @@ CURVE_STEP_M = 0.5  # grid of the error curves in the JSON
 #: alone, without the sonar avoidance that would steer a lost robot off the walls.
 PATH_ONLY = {"avoidance": {"enabled": False}}
 
+#: The consistency columns of both figures: the time-averaged NEES against its own bounds, and
+#: the share of steps inside the per-step bounds.
+NEES_KEYS = ("nees_time_average", "nees_time_bounds", "nees_in_bounds")
 
 HEADERS = {
     "final_x_error_m": "final x error (m)",
@@ -92,7 +95,7 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
         agent_options=PATH_ONLY,
     )
     rows = []
-    for name in ("odometry", "stsf", "ekf"):
+    for name, row in zip(("odometry", "stsf", "ekf"), summary["rows"], strict=True):
         episodes = by_estimator[name]
         axis = [_axis_errors(e) for e in episodes]
         rows.append(
@@ -103,6 +106,7 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
                 "max_x_error_m": stat(a[:, 0].max() for a in axis),
                 "max_y_error_m": stat(a[:, 1].max() for a in axis),
                 "max_error_after_5m_m": stat(_maximum(_after(e, 5.0)) for e in episodes),
+                **{key: row[key] for key in NEES_KEYS},
                 "paper": FIG10_PAPER.get(name, "-"),
             }
         )
@@ -136,8 +140,7 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
                         "rms_heading_error_deg",
                         "landmark_in_view",
                         "match_rate",
-                        "nees_mean",
-                        "nees_bounds",
+                        *NEES_KEYS,
                     )
                 },
                 "paper": FIG11_PAPER.get(name, "-"),

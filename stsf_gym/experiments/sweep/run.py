@@ -5,10 +5,13 @@ A sweep file (``configs/sweeps/<name>.yaml``) holds:
 - ``base``: what every cell starts from: ``kind`` (``evaluate``, the default, or ``train``),
   ``world`` (irl_corridor), ``agent`` (follower), ``estimator``, ``seed`` (0), ``faults``
   (a fault set: ``configs/faults/<name>.yaml`` or a fault file; ``none``), ``env`` (overrides
-  merged over ``configs/default.yaml``) and, for training cells, ``train``.
+  merged over ``configs/default.yaml``), for evaluate cells ``options`` (estimator options over
+  ``configs/estimators/``) and, for training cells, ``train``.
 - ``grid``: keys mapped to lists of values; every combination is a cell. Keys: ``estimator``,
   ``agent``, ``world``, ``faults``, ``seed`` (a list) or ``seeds`` (a count, from the base
-  seed on), and dotted ``env.<section>.<key>`` (any env config key) or ``train.<key>``.
+  seed on), and dotted ``env.<section>.<key>`` (any env config key: the TRUE noise),
+  ``options.<key>`` (an estimator option, e.g. the BELIEVED noise ``options.radius_error_std``
+  of ``configs/estimators/odometry.yaml``; evaluate cells) or ``train.<key>``.
 - ``one_at_a_time`` (optional): keys like ``grid``'s, each swept on its own while the others
   keep their base value, every value crossed with the whole grid (two one-dimensional noise
   studies instead of their full product).
@@ -50,7 +53,7 @@ BASE_DEFAULTS = {
     "faults": "none",
 }
 PLAIN_KEYS = ("estimator", "agent", "world", "seed", "faults")
-SECTIONS = {"evaluate": ("env",), "train": ("env", "train")}
+SECTIONS = {"evaluate": ("env", "options"), "train": ("env", "train")}
 
 
 @dataclass(frozen=True)
@@ -86,7 +89,12 @@ def load_sweep(path: str | Path, seed: int = 0, env: dict | None = None) -> Swee
     if shared := sorted(grid.keys() & single.keys()):
         raise ConfigError(f"{path}: {shared[0]!r} is swept in both grid and one_at_a_time")
     points = _points(grid, single)
-    cells = [_cell(base, point, sections, seed) for point in points]
+    cells = []
+    for point in points:
+        try:
+            cells.append(_cell(base, point, sections, seed))
+        except ConfigError as err:  # an estimator option swept over estimators of the grid
+            raise ConfigError(f"{path}: cell {json.dumps(point)}: {err}") from err
     check = cell_kind(kind).check
     for cell in cells if check else []:
         try:
@@ -201,6 +209,8 @@ def _checked(path: Path, label: str, base: dict, point: dict, sections: tuple[st
         if agent != "follower" and not (isinstance(agent, str) and Path(agent).is_file()):
             raise ConfigError(f"agent must be follower or a model file, got {agent!r}")
         load_config(cell["env"], world=cell["world"])
+        if cell.get("options") and estimator is not None:
+            estimator_options(estimator, **cell["options"])
     except ConfigError as err:
         raise ConfigError(f"{path}: {label}: {err}") from err
 
@@ -250,5 +260,5 @@ def _cell(base: dict, point: dict, sections: tuple[str, ...], seed_offset: int) 
     cell = _apply(base, point, sections)
     cell["seed"] += seed_offset
     values = {**point, "seed": cell["seed"]} if "seed" in point else point
-    options = estimator_options(cell["estimator"])
+    options = estimator_options(cell["estimator"], **cell.get("options", {}))
     return {**cell, "options": options, "values": values, "version": CELL_VERSION}
