@@ -18,10 +18,12 @@ from stsf_gym.estimators import (
     MapLandmark,
     PoseEstimator,
     SensorModel,
+    estimator_class,
     make_estimator,
 )
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.validation import ConfigError
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
@@ -33,6 +35,17 @@ TRUTH_STD = (0.001, 0.001, 0.001)
 #: Every pose source a wrapper accepts: the estimators, the privileged ``truth`` and the
 #: privileged ``degraded-truth`` (the accuracy curve's dial).
 POSE_SOURCES = (*ESTIMATORS, TRUTH, *PRIVILEGED)
+
+
+def check_pose_source(name: str) -> None:
+    """Fail (:class:`ConfigError`) unless ``name`` is a pose source: one of
+    :data:`POSE_SOURCES`, a registered estimator or a ``package.module:Class`` estimator."""
+    if name == TRUTH:
+        return
+    try:
+        estimator_class(name)
+    except ValueError as err:
+        raise ConfigError(str(err)) from err
 
 
 def sensor_model(env: gym.Env) -> SensorModel:
@@ -106,10 +119,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     Args:
         env: a stsf-gym env.
-        estimator: ``"odometry"``, ... (see :data:`stsf_gym.estimators.ESTIMATORS`), or
-            ``"truth"`` (privileged).
+        estimator: ``"odometry"``, ... (see :data:`stsf_gym.estimators.ESTIMATORS`), a
+            ``package.module:Class`` estimator of your own, or ``"truth"`` (privileged).
         start_std: standard deviations of the start pose (m, m, rad).
-        **options: estimator options, over ``configs/estimators/<name>.yaml``.
+        **options: estimator options, over ``configs/estimators/<name>.yaml`` (your own
+            estimator: over its settings dataclass's defaults).
 
     Its constructor arguments are recorded (``RecordConstructorArgs``), so ``env.spec``
     re-creates a hand-built stack: ``gym.make(env.spec)``.

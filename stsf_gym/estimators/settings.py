@@ -106,6 +106,14 @@ class EKFSettings(RelocalisationSettings, OdometrySettings):
 Settings = TypeVar("Settings")
 
 
+def build_settings(
+    name: str, settings_type: type[Settings], options: Mapping[str, Any]
+) -> Settings:
+    """``settings_type``'s own defaults with ``options`` over them (an estimator with no YAML
+    file: your own); errors name the key as ``<name>.<key>``."""
+    return build(settings_type, dict(options), name)
+
+
 def load_settings(name: str, settings_type: type[Settings], options: Mapping[str, Any]) -> Settings:
     """``settings_type`` from ``configs/estimators/<name>.yaml`` (and the files it extends)
     with ``options`` over them; errors name the key as ``<name>.<key>`` and its file."""
