@@ -34,6 +34,7 @@ ESTIMATORS: dict[str, str] = {
     "conventional-filter": "stsf_gym.estimators.landmark_fusion:ConventionalFilterEstimator",
     "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
+    "smoother": "stsf_gym.estimators.references.smoother:FixedLagSmoother",
 }
 #: Privileged pose sources built like estimators but handed the true pose (``see``) by the
 #: wrapper: for the accuracy curve only, never a real estimator.

@@ -103,6 +103,59 @@ class EKFSettings(RelocalisationSettings, OdometrySettings):
         )
 
 
+@dataclass(frozen=True)
+class LandmarkPoseSettings(RelocalisationSettings, OdometrySettings):
+    """The landmark pose measurement of the graph smoothers (:mod:`.references.measurements`)."""
+
+    sigma_px: Positive
+    gate_probability: OpenProbability
+    min_range: NonNegative
+    max_range: Positive
+    position_std_floor: NonNegative
+    position_std_per_m: NonNegative
+    orientation_std_floor: NonNegative
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require(
+            self.min_range < self.max_range,
+            "max_range",
+            f"must be > min_range ({self.min_range:g}), got {self.max_range:g}",
+        )
+
+
+@dataclass(frozen=True)
+class SmootherSettings(LandmarkPoseSettings):
+    """The fixed-lag factor-graph smoother (``smoother.yaml``)."""
+
+    window_s: Positive  # s of frames kept in the graph; older ones are marginalised
+    relinearize_threshold: Positive  # iSAM2: relinearise a variable whose update exceeds this
+
+
+@dataclass(frozen=True)
+class MCLSettings(OdometrySettings):
+    """Monte Carlo localization (``mcl.yaml``)."""
+
+    particles: Count  # particles at start and the KLD bound's ceiling
+    min_particles: Count
+    kld_error: Positive  # KLD-sampling: bound on the K-L divergence of the particle set
+    kld_quantile: OpenProbability  # with this probability
+    bin_size: tuple[float, float, float]  # m, m, rad: KLD-sampling's histogram
+    alpha_slow: OpenProbability  # augmented MCL: the long-term likelihood average's rate
+    alpha_fast: OpenProbability  # and the short-term one's
+    sonar_std: Positive  # m, the likelihood field's Gaussian
+    sonar_random: OpenProbability  # weight of a random sonar reading (the beam model's z_rand)
+    sonar_beams: Count  # sonar readings used per update, evenly spread over the ring
+    field_resolution: Positive  # m, the likelihood field's cell
+    sigma_px: Positive
+    landmark_std_floor: tuple[float, float]  # m, rad: added to a board's range and bearing
+    min_range: NonNegative
+    max_range: Positive
+    resample_threshold: OpenProbability  # resample when the effective sample size falls below
+    odometry_inflation: Inflation  # factor on the odometry noise the particles are spread by
+    prior: Literal["start", "free-space"]  # the start pose, or uniform over the free space
+
+
 Settings = TypeVar("Settings")
 
 
