@@ -17,12 +17,13 @@ import numpy as np
 
 from stsf_gym.episode_env import make_episode_env
 from stsf_gym.estimators import estimator_settings
+from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
-from stsf_gym.wrappers import TRUTH
+from stsf_gym.wrappers import TRUTH, sensor_model
 
-RESULT_VERSION = 5  # bumped when EpisodeResult changes, so older episode files are rerun
+RESULT_VERSION = 6  # bumped when EpisodeResult changes, so older episode files are rerun
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,16 @@ class EpisodeResult:
     finite: bool  # pose and covariance finite at every step
     min_cov_eigenvalue: float  # smallest eigenvalue of the covariance over the steps
     stage_ms_per_step: dict[str, float]
+    #: [x, y, yaw] per record of the episode's floor: the batch smoother over all of its
+    #: measurements (:mod:`stsf_gym.estimators.references.floor`); None with the camera off
+    floor_estimates: list[list[float]] | None = None
+
+    @property
+    def floor_errors(self) -> np.ndarray | None:
+        """The floor's position error per record (m), None without a floor."""
+        if self.floor_estimates is None:
+            return None
+        return np.hypot(*pose_error(self.floor_estimates, self.true_poses)[:, :2].T)
 
     @property
     def pose_errors(self) -> np.ndarray:
@@ -111,6 +122,10 @@ class EpisodeResult:
         return float(np.mean(self.nees_trace))
 
 
+#: Whose measurement model (board noise, floors, mount) the floor uses.
+FLOOR_SETTINGS = "smoother"
+
+
 def estimator_options(source: str) -> dict:
     """The settings of pose source ``source`` (``configs/estimators/<name>.yaml``) as plain
     values, recorded with every episode (part of its cache key); ``truth`` has none."""
@@ -147,6 +162,10 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
     try:
         obs, info = env.reset(seed=spec.seed)  # first: a generated world is drawn here
         act = make_agent(spec.agent, env, spec.agent_options)
+        floor = None
+        if "image_new" in obs:  # the floor needs the camera
+            floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
+            floor.reset(sensor_model(env), env.start, env.start_cov)
         path = np.asarray(env.unwrapped.config.world.path, dtype=float)
         record: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
         frames, in_view, terminated, truncated = 0, 0, False, False
@@ -166,6 +185,8 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
                 break
             obs, _, terminated, truncated, info = env.step(act(obs))
             steps += 1
+            if floor is not None:
+                floor.update(obs)
             if obs["image_new"]:
                 frames += 1
                 in_view += bool(env.unwrapped.landmarks_in_view())
@@ -194,6 +215,7 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             finite=finite,
             min_cov_eigenvalue=min_eig,
             stage_ms_per_step={k: 1000 * v / steps for k, v in env.estimator.timings.items()},
+            floor_estimates=None if floor is None else batch_floor(floor.data)[0].tolist(),
         )
     finally:
         env.close()

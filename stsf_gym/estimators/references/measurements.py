@@ -13,7 +13,8 @@ its effect as white noise, which would average a systematic error away.
 ``Delta = delta_1 (+) ... (+) delta_n``, with the first-order covariance of the slip ``Q`` and the
 Jacobian ``J_c`` by ``c``, both carried through the composition (a preintegration)::
 
-    Q <- A Q A^T + B G N G^T B^T,   J_c <- A J_c + B G_c,   (A, B) = d(Delta (+) delta)/d(Delta, delta)
+    Q <- A Q A^T + B G N G^T B^T,   J_c <- A J_c + B G_c
+    (A, B) = d(Delta (+) delta) / d(Delta, delta)
 
 so the true leg is ``Delta - J_c c`` to first order (a believed radius ``1 + c`` too large
 reports ``d c`` too much travel).
