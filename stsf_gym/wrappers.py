@@ -21,6 +21,7 @@ from stsf_gym.estimators import (
     estimator_class,
     make_estimator,
 )
+from stsf_gym.estimators.base import SonarRingModel
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.validation import ConfigError
@@ -28,6 +29,10 @@ from stsf_gym.validation import ConfigError
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
 COV_LIMIT = 1e4
+#: With an unknown start the pan camera sweeps (a sine of this period, s) until the estimate's
+#: position standard deviation first falls below ``FOUND_STD`` (m): pointed from a pose that
+#: is not known yet, it would look at walls.
+SWEEP_PERIOD_S, FOUND_STD = 4.0, 0.2
 #: The privileged pose source: the true pose from ``info``, for reference runs only.
 TRUTH = "truth"
 #: Standard deviations (m, m, rad) reported with the true pose: tiny, fixed.
@@ -76,6 +81,16 @@ def sensor_model(env: gym.Env) -> SensorModel:
         },
         pattern=cfg.world.landmark_pattern,
         walls=np.array(cfg.world.walls, dtype=float).reshape(-1, 4),
+        wall_thickness=cfg.world.wall_thickness,
+        sonar=SonarRingModel(
+            axes=np.asarray(u.sonar.axes, dtype=float),
+            ring_radius=u.sonar.origin_radius,
+            min_range=cfg.sonar.min_range,
+            max_range=cfg.sonar.max_range,
+            noise_std=cfg.sonar.noise_std,
+            noise_std_per_m=cfg.sonar.noise_std_per_m,
+        ),
+        body_radius=cfg.robot.body_radius,
     )
 
 
@@ -112,7 +127,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     error model (:mod:`stsf_gym.estimators.degraded_truth`), seeded by ``reset(seed=...)``.
     The real estimators never see ``info``: each starts an episode at the commanded start
     pose (the world's ``start`` or ``options["start_pose"]``) with standard deviations
-    ``start_std``.
+    ``start_std``; ``reset(options={"unknown_start": True})`` gives an estimator that
+    localizes globally (``mcl``) no start at all: its prior spreads over the map's free space.
     When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
     landmark from the pose estimate and the map (:class:`LandmarkPointer`) and the agent's
     action stays ``[v, w]``.
@@ -158,13 +174,19 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         )
 
     def reset(self, *, seed=None, options=None):
-        obs, info = self.env.reset(seed=seed, options=options)
+        options = dict(options or {})
+        unknown_start = bool(options.pop("unknown_start", False))  # the wrapper's, not the env's
+        obs, info = self.env.reset(seed=seed, options=options or None)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
         self.start = np.asarray(start, dtype=float)  # the commanded start (a floor starts there)
         model = sensor_model(self.env)
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
             self.estimator.seed(seed)
         self.estimator.reset(model, start, self.start_cov)
+        self.searching_since = None
+        if unknown_start:
+            self._forget_start()
+            self.searching_since = 0.0
         if hasattr(self.estimator, "see"):  # privileged: handed the true pose
             self.estimator.see(info["true_pose"])
         if self.pointer is not None:
@@ -172,8 +194,26 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             self.pointer.reset()
         return self._with_pose(obs, self.estimator.mean, self.estimator.cov), info
 
+    def _forget_start(self) -> None:
+        spread = getattr(self.estimator, "spread_prior", None)
+        if spread is None:
+            raise ValueError(
+                f"reset option unknown_start needs an estimator that localizes globally "
+                f"(mcl), not {self.estimator.name or type(self.estimator).__name__!r}"
+            )
+        spread()
+
     def step(self, action):
-        if self.pointer is not None:
+        if self.searching_since is not None:
+            cov = self.estimator.cov
+            if math.sqrt(max(cov[0, 0], cov[1, 1])) < FOUND_STD:
+                self.searching_since = None
+            else:
+                self.searching_since += self.env.unwrapped.dt
+        if self.pointer is not None and self.searching_since is not None:
+            pan = math.sin(math.tau * self.searching_since / SWEEP_PERIOD_S)
+            action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
+        elif self.pointer is not None:
             pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
             action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
         obs, reward, terminated, truncated, info = self.env.step(action)

@@ -35,6 +35,7 @@ ESTIMATORS: dict[str, str] = {
     "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
     "smoother": "stsf_gym.estimators.references.smoother:FixedLagSmoother",
+    "mcl": "stsf_gym.estimators.references.mcl:MonteCarloLocalization",
 }
 #: Privileged pose sources built like estimators but handed the true pose (``see``) by the
 #: wrapper: for the accuracy curve only, never a real estimator.

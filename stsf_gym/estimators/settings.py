@@ -136,24 +136,38 @@ class SmootherSettings(LandmarkPoseSettings):
 class MCLSettings(OdometrySettings):
     """Monte Carlo localization (``mcl.yaml``)."""
 
-    particles: Count  # particles at start and the KLD bound's ceiling
+    particles: Count  # the most particles (KLD-sampling's ceiling), and the start's count
     min_particles: Count
     kld_error: Positive  # KLD-sampling: bound on the K-L divergence of the particle set
     kld_quantile: OpenProbability  # with this probability
-    bin_size: tuple[float, float, float]  # m, m, rad: KLD-sampling's histogram
+    bin_size: tuple[Positive, Positive, Positive]  # m, m, rad: KLD-sampling's histogram bins
     alpha_slow: OpenProbability  # augmented MCL: the long-term likelihood average's rate
     alpha_fast: OpenProbability  # and the short-term one's
+    update_min_d: NonNegative  # m driven between measurement updates (AMCL's update_min_d)
+    update_min_a: NonNegative  # rad turned between them (update_min_a)
+    resample_threshold: OpenProbability  # resample when the effective sample size falls below
+    odometry_inflation: Inflation  # factor on the wheel slip the particles are spread by
     sonar_std: Positive  # m, the likelihood field's Gaussian
-    sonar_random: OpenProbability  # weight of a random sonar reading (the beam model's z_rand)
-    sonar_beams: Count  # sonar readings used per update, evenly spread over the ring
+    sonar_random: OpenProbability  # weight of a random sonar reading (z_rand)
     field_resolution: Positive  # m, the likelihood field's cell
     sigma_px: Positive
-    landmark_std_floor: tuple[float, float]  # m, rad: added to a board's range and bearing
+    landmark_std_floor: tuple[NonNegative, NonNegative]  # m, rad: added to a board's pose
+    landmark_outlier: OpenProbability  # likelihood floor of a board (a misread id)
     min_range: NonNegative
     max_range: Positive
-    resample_threshold: OpenProbability  # resample when the effective sample size falls below
-    odometry_inflation: Inflation  # factor on the odometry noise the particles are spread by
     prior: Literal["start", "free-space"]  # the start pose, or uniform over the free space
+
+    def __post_init__(self) -> None:
+        require(
+            self.min_particles <= self.particles,
+            "min_particles",
+            f"must be <= particles ({self.particles}), got {self.min_particles}",
+        )
+        require(
+            self.alpha_slow < self.alpha_fast,
+            "alpha_fast",
+            f"must be > alpha_slow ({self.alpha_slow:g}), got {self.alpha_fast:g}",
+        )
 
 
 Settings = TypeVar("Settings")
