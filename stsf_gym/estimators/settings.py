@@ -145,13 +145,17 @@ class MCLSettings(OdometrySettings):
     alpha_fast: OpenProbability  # and the short-term one's
     update_min_d: NonNegative  # m driven between measurement updates (AMCL's update_min_d)
     update_min_a: NonNegative  # rad turned between them (update_min_a)
+    boards_every_frame: bool  # weigh by the boards of every frame, not only at those updates
     resample_threshold: OpenProbability  # resample when the effective sample size falls below
     odometry_inflation: Inflation  # factor on the wheel slip the particles are spread by
     sonar_std: Positive  # m, the likelihood field's Gaussian
     sonar_random: OpenProbability  # weight of a random sonar reading (z_rand)
+    sonar_beams: Count  # readings used per update, evenly spread over the ring (max_beams)
     field_resolution: Positive  # m, the likelihood field's cell
     sigma_px: Positive
-    landmark_std_floor: tuple[NonNegative, NonNegative]  # m, rad: added to a board's pose
+    position_std_floor: NonNegative  # m, std added to a board's x and y (the smoother's)
+    position_std_per_m: NonNegative  # and this fraction of its range
+    orientation_std_floor: NonNegative  # rad, std added to its orientation
     landmark_outlier: OpenProbability  # likelihood floor of a board (a misread id)
     min_range: NonNegative
     max_range: Positive

@@ -1,24 +1,27 @@
 """Monte Carlo localization as ROS's AMCL does it (Thrun, Burgard and Fox, *Probabilistic
 Robotics*, ch. 8; Fox 2003, KLD-sampling).
 
-**Particles** ``x^(i) = [x, y, yaw]``, each with its own wheel calibration ``c^(i)`` (relative
-left and right radius and wheelbase errors, drawn from the calibration's prior at the start):
-the calibration's drift is a per-episode constant, so a particle carries one hypothesis of it
-instead of the filter spreading a systematic error as white noise.
+**Particles** ``x^(i) = [x, y, yaw]``, each with its own considered parameters ``k^(i)``
+(:mod:`.measurements`: wheel radii and wheelbase ``c``, camera mount, camera heading and focal
+scale; drawn from their prior ``N(0, Sigma_k)``): these errors are per-episode constants, so a
+particle carries one hypothesis of them instead of the filter spreading a systematic error as
+white noise, and the particles whose hypothesis fits survive.
 
 **Motion** (every step, :func:`sample_motion`): each particle's wheels roll the reported travel
 corrected by its calibration, ``d (1 - c)``, plus slip ``N(0, (odometry_inflation)^2 var(d))``
 (the wheel noise model, inflated), then the mid-point model.
 
 **Measurement** (when the robot has moved ``update_min_d`` or turned ``update_min_a`` since the
-last one, AMCL's rule against counting one view many times), particle weights multiply by
+last one, AMCL's rule against counting one view many times; with ``boards_every_frame`` the
+boards of every frame in between too), particle weights multiply by
 
-- the sonar ring's likelihood field (:mod:`.likelihood_field`), every reading below its
-  maximum range;
+- the sonar ring's likelihood field (:mod:`.likelihood_field`): ``sonar_beams`` readings
+  evenly spread over the ring (AMCL's ``max_beams``: neighbouring cones overlap and share
+  their errors), those below the maximum range;
 - every map board seen in this step's camera frame: its PnP pose ``z`` in the robot frame
-  against ``h(x) = (-) x (+) L``, ``p = exp(-0.5 e^T R^-1 e) + landmark_outlier`` with ``R`` the
-  PnP covariance plus ``landmark_std_floor`` (m, rad); ``landmark_outlier`` keeps a misread
-  id from killing the right particles.
+  (:class:`~.measurements.LandmarkPose`, the smoother's measurement, floors included) against
+  ``h(x) + M k``: ``p = exp(-0.5 e^T R^-1 e) + landmark_outlier``, ``e = h(x) + M k - z``;
+  ``landmark_outlier`` keeps a misread id from killing the right particles.
 
 **Augmented MCL** (Probabilistic Robotics, table 8.3), driven by the boards: with ``w_avg``
 the particles' mean likelihood per board seen in the frame,
@@ -33,7 +36,8 @@ weighs the particles but does not drive the injection: in a corridor it fits a r
 carried along the corridor as well.
 
 **Resampling** when the effective sample size ``1 / sum w^2`` falls below
-``resample_threshold`` times the count: low-variance (systematic) draws, in random order, kept
+``resample_threshold`` times the count, or particles are to be injected: low-variance
+(systematic) draws, in random order, kept
 until their number reaches the KLD bound for the number ``k`` of occupied ``bin_size`` bins::
 
     n = (k - 1) / (2 eps) (1 - 2 / (9 (k - 1)) + sqrt(2 / (9 (k - 1))) z)^3
@@ -58,12 +62,14 @@ from scipy.special import ndtri
 
 from stsf_gym.estimators.base import PoseEstimator, SensorModel
 from stsf_gym.estimators.frame_detector import FrameDetector
-from stsf_gym.estimators.landmark_observation import (
-    landmark_world_pose,
-    observe,
-    robot_pose_from_landmark,
-)
+from stsf_gym.estimators.landmark_observation import observe, robot_pose_from_landmark
 from stsf_gym.estimators.references.likelihood_field import LikelihoodField
+from stsf_gym.estimators.references.measurements import (
+    CONSIDERED,
+    LandmarkPose,
+    considered_cov,
+    landmark_pose,
+)
 from stsf_gym.estimators.settings import MCLSettings
 from stsf_gym.geometry import compose, inverse, wrap_angle
 
@@ -74,11 +80,10 @@ COV_FLOOR = 1e-8  # added to the reported covariance's diagonal (one particle le
 
 
 class Board(NamedTuple):
-    """A map board seen in a frame: its map pose, its pose ``z`` seen from the robot, the
-    information ``R^-1`` of ``z``, and the robot pose it gives with that pose's covariance."""
+    """A map board seen in a frame: the measurement, the information ``R^-1`` of its ``z``,
+    and the robot pose it gives with that pose's covariance."""
 
-    landmark: np.ndarray
-    z: np.ndarray
+    measurement: LandmarkPose
     information: np.ndarray
     pose: np.ndarray
     cov: np.ndarray
@@ -113,6 +118,7 @@ class MonteCarloLocalization(PoseEstimator):
             self.field = LikelihoodField(model, s.field_resolution, self.mean)
             self._field_key = key
         self.detector = FrameDetector(model.pattern, set(model.landmarks), model.camera_calibration)
+        self.considered_cov = considered_cov(model, s.mount_std)
         self.w_slow = self.w_fast = EXPECTED_BOARD_LIKELIHOOD
         self.moved = np.zeros(2)
         if s.prior == "free-space":
@@ -128,13 +134,12 @@ class MonteCarloLocalization(PoseEstimator):
         n = len(poses)
         self.poses = poses
         self.poses[:, 2] = wrap_angle(self.poses[:, 2])
-        self.calibration = self._draw_calibration(n)
+        self.considered = self._draw_considered(n)
         self.log_w = np.full(n, -math.log(n))
         self._estimate()
 
-    def _draw_calibration(self, count: int) -> np.ndarray:
-        std = np.sqrt(np.diag(self.model.odometry_noise.calibration_cov))
-        return self.rng.normal(size=(count, 3)) * std
+    def _draw_considered(self, count: int) -> np.ndarray:
+        return self.rng.multivariate_normal(np.zeros(CONSIDERED), self.considered_cov, count)
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
@@ -147,21 +152,26 @@ class MonteCarloLocalization(PoseEstimator):
             with self.timed("detect"):
                 boards = self._boards(obs)
         s = self.settings
+        sonar = obs.get("sonar")
         if self.moved[0] >= s.update_min_d or self.moved[1] >= s.update_min_a:
-            with self.timed("update"):
-                self.moved[:] = 0.0
-                self.weigh(obs.get("sonar"), boards)
+            self.moved[:] = 0.0
+        elif s.boards_every_frame and boards:
+            sonar = None  # the boards' update alone
+        else:
+            return self.mean, self.cov
+        with self.timed("update"):
+            self.weigh(sonar, boards)
         return self.mean, self.cov
 
     def sample_motion(self, d_left: float, d_right: float) -> None:
         """Each particle's wheels: the travel its calibration corrects, plus inflated slip."""
         n = len(self.poses)
         std = np.sqrt(self.model.odometry_noise.slip_variances(d_left, d_right))
-        wheels = np.array([d_left, d_right]) * (1 - self.calibration[:, :2])
+        wheels = np.array([d_left, d_right]) * (1 - self.considered[:, :2])
         wheels = wheels + self.rng.normal(size=(n, 2)) * std * self.settings.odometry_inflation
         distance = wheels.mean(axis=1)
         turn = (wheels[:, 1] - wheels[:, 0]) / self.model.calibration.wheelbase
-        turn = turn * (1 + self.calibration[:, 2])
+        turn = turn * (1 + self.considered[:, 2])
         mid = self.poses[:, 2] + turn / 2
         self.poses[:, 0] += distance * np.cos(mid)
         self.poses[:, 1] += distance * np.sin(mid)
@@ -175,18 +185,18 @@ class MonteCarloLocalization(PoseEstimator):
         detections = self.detector(obs)
         self.counters["frames"] += 1
         self.counters["frames_matched"] += bool(detections)
-        floor = np.diag([s.landmark_std_floor[0] ** 2] * 2 + [s.landmark_std_floor[1] ** 2])
         for detection in detections:
             seen = observe(detection, self.model, pan, tilt, s.sigma_px)
             if seen is None or not s.min_range <= math.hypot(*seen.z[:2]) <= s.max_range:
                 continue
-            cov = seen.cov + floor
+            measurement = landmark_pose(
+                seen, s.position_std_floor, s.position_std_per_m, s.orientation_std_floor
+            )
             found.append(
                 Board(
-                    landmark_world_pose(seen.landmark),
-                    seen.z,
-                    np.linalg.inv(cov),
-                    *robot_pose_from_landmark(seen.landmark, seen.z, cov),
+                    measurement,
+                    np.linalg.inv(measurement.noise),
+                    *robot_pose_from_landmark(seen.landmark, seen.z, measurement.noise),
                 )
             )
         return found
@@ -199,7 +209,9 @@ class MonteCarloLocalization(PoseEstimator):
         if boards:
             board_log_l = np.zeros(len(self.poses))
             for board in boards:
-                error = compose(inverse(self.poses), board.landmark) - board.z
+                seen = board.measurement
+                error = compose(inverse(self.poses), seen.landmark_pose) - seen.z
+                error += self.considered @ seen.by_considered.T
                 error[:, 2] = wrap_angle(error[:, 2])
                 d2 = np.einsum("ni,ij,nj->n", error, board.information, error)
                 board_log_l += np.log(np.exp(-0.5 * d2) + s.landmark_outlier)
@@ -211,14 +223,17 @@ class MonteCarloLocalization(PoseEstimator):
         self.counters["updates"] += 1
         self.log_w = self.log_w + log_l
         self.log_w -= np.logaddexp.reduce(self.log_w)
-        if 1.0 / np.exp(2 * self.log_w).sum() < s.resample_threshold * len(self.poses):
+        depleted = 1.0 / np.exp(2 * self.log_w).sum() < s.resample_threshold * len(self.poses)
+        if depleted or (boards and self.w_fast < self.w_slow):  # or particles to inject
             self.resample(boards)
         self._estimate()
 
     def _sonar_log_likelihood(self, ranges: np.ndarray) -> np.ndarray:
         """Log likelihood (particles x readings) of the readings that echoed."""
         sonar, s = self.model.sonar, self.settings
-        echoed = ranges < sonar.max_range - 1e-6
+        used = np.zeros(len(ranges), dtype=bool)
+        used[np.linspace(0, len(ranges), s.sonar_beams, endpoint=False).astype(int)] = True
+        echoed = used & (ranges < sonar.max_range - 1e-6)
         axes, reach = sonar.axes[echoed], sonar.ring_radius + ranges[echoed]
         heading = self.poses[:, 2:3] + axes
         ends = self.poses[:, None, :2] + reach[:, None] * np.stack(
@@ -236,15 +251,15 @@ class MonteCarloLocalization(PoseEstimator):
         positions = (self.rng.random() + np.arange(ceiling)) / ceiling
         drawn = np.minimum(np.searchsorted(np.cumsum(weights), positions), len(weights) - 1)
         drawn = self.rng.permutation(drawn)
-        poses, calibration = self.poses[drawn], self.calibration[drawn]
+        poses, considered = self.poses[drawn], self.considered[drawn]
         inject = max(0.0, 1.0 - self.w_fast / self.w_slow) if boards else 0.0
         random = self.rng.random(ceiling) < inject
         poses[random] = self._sample_boards(boards, int(random.sum()))
-        calibration[random] = self._draw_calibration(int(random.sum()))
+        considered[random] = self._draw_considered(int(random.sum()))
         count = self._kld_count(poses)
         self.counters["resampled"] += 1
         self.counters["injected"] += int(random[:count].sum())
-        self.poses, self.calibration = poses[:count], calibration[:count]
+        self.poses, self.considered = poses[:count], considered[:count]
         self.log_w = np.full(count, -math.log(count))
 
     def _sample_boards(self, boards: list[Board], count: int) -> np.ndarray:
