@@ -10,6 +10,9 @@ the odometry motion since the previous place with its covariance. Places ``0..n`
   the odometry between the places (eq. 3, its uncertainty propagated) and fused (eq. 2) in
   inverse range with the significance weights of eq. 4-5 (and, for comparison, generalised
   least squares). Row 1 has one measurement, so both methods give the same distance.
+- STSF with the joint covariance (``stsf_joint``): the same carried distances, fused by
+  generalised least squares with the covariance the shared wheel calibration gives them
+  (:mod:`~stsf_gym.experiments.table1.joint`): the best linear unbiased distance.
 
 Distances are to the landmark's plane (eq. 10), from the camera of the place.
 """
@@ -39,6 +42,8 @@ class Place:
     heading: float  # odometry heading (rad)
     motion: np.ndarray  # odometry motion [x, y, yaw] since the previous place, in its robot frame
     motion_cov: np.ndarray  # its 3x3 covariance
+    pose: np.ndarray | None = None  # the odometry pose [x, y, yaw] (None: not kept)
+    motion_by_calibration: np.ndarray | None = None  # d motion / d wheel calibration (3x3)
 
 
 def average_features(frames: list[dict[int, np.ndarray]]) -> dict[int, np.ndarray]:
@@ -101,11 +106,19 @@ def measure_rows(
     normal: np.ndarray,
     sigma_px: float,
     camera_forward: float,
+    calibration_cov: np.ndarray | None = None,
 ) -> dict[str, list[float]]:
     """Per row ``k = 1..len(places)-1``: ``conventional`` (pair k-1, k), its ``variance``,
     ``stsf`` and ``stsf_gls`` (rows 1..k fused); NaN where a pair gave no distance (STSF then
-    fuses the rows that did)."""
+    fuses the rows that did). With ``calibration_cov`` (the wheel calibration's) and places
+    that keep their pose and calibration Jacobian, also ``stsf_joint``: rows 1..k fused with
+    their joint covariance, the shared calibration included (:mod:`.joint`)."""
+    from stsf_gym.experiments.table1.joint import gls_distance, joint_track
+
     rows: dict[str, list[float]] = {"conventional": [], "variance": [], "stsf": [], "stsf_gls": []}
+    joint = calibration_cov is not None and all(p.pose is not None for p in places)
+    if joint:
+        rows["stsf_joint"] = []
     track: list[tuple[float, float, int]] = []  # (distance, variance, place) per measurement
     for k in range(1, len(places)):
         measured = pair_distance(places[k - 1], places[k], camera_matrix, normal, sigma_px)
@@ -128,6 +141,23 @@ def measure_rows(
             fused = {m: d + rest for m, d in fused.items()}  # carried on to place k
         rows["stsf"].append(fused["significance"])
         rows["stsf_gls"].append(fused["gls"])
+        if joint:
+            measured = [j for *_, j in track]
+            t, sigma = (
+                joint_track(
+                    places,
+                    k,
+                    measured,
+                    camera_matrix,
+                    normal,
+                    sigma_px,
+                    camera_forward,
+                    calibration_cov,
+                )
+                if measured
+                else (np.zeros(0), np.zeros((0, 0)))
+            )
+            rows["stsf_joint"].append(gls_distance(t, sigma) if measured else math.nan)
     return rows
 
 
