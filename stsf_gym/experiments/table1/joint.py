@@ -14,9 +14,10 @@ distance of pair ``(j-1, j)`` carried by odometry to place ``k``, eq. 3) are fun
 features and of every motion ``u`` (each place's believed pose is the start composed with
 the motions up to it). Their joint covariance::
 
-    Sigma = diag(var_px(D_j)) + G C_u G^T,   G = dt/du (central differences)
+    Sigma = sum_p G_p (sigma_px^2 / frames_p) G_p^T + G C_u G^T,   G = dt/du,  G_p = dt/dq_p
 
-with ``var_px`` the pixel noise alone (eq. 20 with no motion covariance). In inverse range
+(central differences; ``q_p`` the averaged square centres of place ``p``, which enter both
+pair ``(p-1, p)`` and pair ``(p, p+1)``: consecutive rows share them). In inverse range
 ``rho_j = 1 / t_j`` (where the motion-stereo errors are nearly Gaussian, as STSF fuses), the
 generalised least squares weights ``w = Sigma_rho^-1 1 / (1^T Sigma_rho^-1 1)`` give the best
 linear unbiased ``w^T rho`` from rows ``1..k`` (Aitken 1935): no weighting of these
@@ -33,6 +34,7 @@ from stsf_gym.experiments.table1.measure import Place, pair_distance, range_step
 from stsf_gym.geometry import compose, inverse, to_se3
 
 STEP = 1e-6  # m and rad: central-difference step on a motion
+PIXEL_STEP = 1e-3  # px: central-difference step on a feature
 
 
 def carried(
@@ -113,12 +115,50 @@ def joint_track(
             with_motions(places, motions - step.reshape(motions.shape)), k, measured, *args
         )
         G[:, i] = (ahead - behind) / (2 * STEP)
-    pixel = []
-    for j in measured:  # the features' noise alone: no motion covariance
-        still = replace(places[j], motion_cov=np.zeros((3, 3)))
-        pixel.append(pair_distance(places[j - 1], still, camera_matrix, normal, sigma_px)[1])
-    sigma = np.diag(pixel) + G @ motion_covariance(places, calibration_cov) @ G.T
+    sigma = pixel_covariance(places, k, measured, *args)
+    sigma += G @ motion_covariance(places, calibration_cov) @ G.T
     return t, 0.5 * (sigma + sigma.T)
+
+
+def pixel_covariance(
+    places: list[Place],
+    k: int,
+    measured: list[int],
+    camera_matrix: np.ndarray,
+    normal: np.ndarray,
+    sigma_px: float,
+    camera_forward: float,
+) -> np.ndarray:
+    """The features' share of ``Sigma``: each place's averaged square centres (std
+    ``sigma_px / sqrt(frames)`` per coordinate) enter the pair before it and the pair after it,
+    so consecutive rows share them. (Odometry steps do not depend on features: ``dt_j/dq`` is
+    pair ``j``'s ``dD_j/dq``.)"""
+    gradients = []  # per measured pair: {(place, square, axis): dD/dq}
+    for j in measured:
+        pair, gradient = [places[j - 1], places[j]], {}
+        for side, place in enumerate(pair):
+            for index, pixel in place.points.items():
+                for axis in range(2):
+                    shifted = []
+                    for sign in (1, -1):
+                        moved = pixel.copy()
+                        moved[axis] += sign * PIXEL_STEP
+                        changed = [*pair]
+                        changed[side] = replace(place, points={**place.points, index: moved})
+                        found = pair_distance(*changed, camera_matrix, normal, sigma_px)
+                        shifted.append(np.nan if found is None else found[0])
+                    key = (j - 1 + side, index, axis)
+                    gradient[key] = (shifted[0] - shifted[1]) / (2 * PIXEL_STEP)
+        gradients.append(gradient)
+    sigma = np.zeros((len(measured), len(measured)))
+    for a, first in enumerate(gradients):
+        for b, second in enumerate(gradients):
+            sigma[a, b] = sum(
+                sigma_px**2 / max(places[key[0]].frames, 1) * value * second[key]
+                for key, value in first.items()
+                if key in second
+            )
+    return sigma
 
 
 def inverse_range(t: np.ndarray, sigma: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
