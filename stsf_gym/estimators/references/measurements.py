@@ -42,6 +42,7 @@ from stsf_gym.estimators.odometry import odometry_step
 from stsf_gym.geometry import compose, compose_jacobians, inverse, wrap_angle
 
 CONSIDERED = 7  # wheel radii and wheelbase (3), mount (2), camera heading and focal scale (2)
+LEG_VARIANCE_FLOOR = 1e-8  # m^2 and rad^2 added to every leg's slip covariance (0.1 mm, mrad)
 
 
 def considered_cov(model: SensorModel, mount_std: float) -> np.ndarray:
@@ -71,9 +72,11 @@ class OdometryLeg:
         self.cov = A @ self.cov @ A.T + B @ G @ slip @ G.T @ B.T
         self.by_calibration = A @ self.by_calibration + B @ G_c
 
-    def noise(self, floor: float = 1e-10) -> np.ndarray:
-        """The slip covariance, kept invertible for a leg the wheels did not turn in."""
-        return self.cov + np.eye(3) * floor
+    def noise(self) -> np.ndarray:
+        """The slip covariance plus :data:`LEG_VARIANCE_FLOOR`: the mid-point model puts almost
+        no sideways error in a short leg (1e-10 m^2 in 2.4 cm), which would make a leg a
+        million times stiffer than a weak prior beside it and its elimination ill-posed."""
+        return self.cov + np.eye(3) * LEG_VARIANCE_FLOOR
 
 
 @dataclass(frozen=True)

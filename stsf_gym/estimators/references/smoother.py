@@ -52,6 +52,9 @@ from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import LandmarkPoseSettings, SmootherSettings
 
 
+K_VARIANCE_FLOOR = 1e-12  # smallest variance of k's prior after a restart
+
+
 class LandmarkPoses:
     """The boards of a camera frame as the graph's measurements (shared with the floor)."""
 
@@ -127,7 +130,11 @@ class FixedLagSmoother(OdometryEstimator):
 
     def restart(self, mean: np.ndarray, cov: np.ndarray) -> None:
         super().restart(mean, cov)
-        self.start_graph(self.mean, self.cov, self.k, self.k_cov)
+        # k's marginal as its new prior, kept positive definite (round-off can leave a
+        # direction the boards pinned down with a tiny negative eigenvalue)
+        values, vectors = np.linalg.eigh(0.5 * (self.k_cov + self.k_cov.T))
+        k_cov = (vectors * np.maximum(values, K_VARIANCE_FLOOR)) @ vectors.T
+        self.start_graph(self.mean, self.cov, self.k, k_cov)
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
         with self.timed("odometry"):
