@@ -51,7 +51,6 @@ from stsf_gym.estimators.references.measurements import (
 from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import LandmarkPoseSettings, SmootherSettings
 
-
 K_VARIANCE_FLOOR = 1e-12  # smallest variance of k's prior after a restart
 
 
