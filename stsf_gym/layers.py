@@ -5,7 +5,8 @@
 then any violation, and exits with status 1 when there is one. The rules (:data:`ALLOWED`):
 
     stsf_gym.cli, stsf_gym.experiments -> stsf_gym.agents -> stsf_gym.wrappers
-        -> stsf_gym.estimators -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
+        -> stsf_gym.estimators (and .references) -> stsf_gym.fusion / vision / geometry /
+        metrics / results / tum;
     stsf_gym.envs (and its folders .worlds, .rendering) -> stsf_gym.vision.landmarks / geometry;
     stsf_gym.envs.rendering never imports PyBullet
 
@@ -42,7 +43,7 @@ ENV_FOLDERS = ("stsf_gym.envs.worlds", "stsf_gym.envs.rendering")
 #: Pure measurement code (numpy/scipy): metrics, the results schema, TUM trajectories.
 MEASURES = ("stsf_gym.metrics", "stsf_gym.results", "stsf_gym.tum")
 CORE = (*LEAVES, *MEASURES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
-ESTIMATION = (*CORE, "stsf_gym.estimators")
+ESTIMATION = (*CORE, "stsf_gym.estimators", "stsf_gym.estimators.references")
 EPISODE = (
     *ESTIMATION,
     "stsf_gym",
@@ -70,6 +71,8 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.envs.rendering": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.worlds"),
     "stsf_gym.configs": (),  # package data only
     "stsf_gym.estimators": CORE,
+    # the references (smoother, MCL, the floor): estimators too, on GTSAM and numpy
+    "stsf_gym.estimators.references": ESTIMATION,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
     "stsf_gym.metrics": ("stsf_gym.geometry",),
     "stsf_gym.results": (),

@@ -13,10 +13,10 @@ from stsf_gym.experiments.table1.joint import (
     carried,
     gls,
     inverse_range,
+    joint_rows,
     joint_track,
     with_motions,
 )
-from stsf_gym.experiments.table1.measure import measure_rows
 
 SIGMA_PX = 0.5
 NOISE = OdometryNoise(slip_var_per_m=2e-6, radius_var=0.0033**2, wheelbase_var=0.01**2)
@@ -92,8 +92,8 @@ def test_joint_covariance_matches_monte_carlo():
 
 def test_rows_report_the_joint_fusion():
     places = places_with_odometry()
-    rows = measure_rows(places, K, NORMAL, SIGMA_PX, 0.0, NOISE.calibration_cov)
-    assert len(rows["stsf_joint"]) == len(DISTANCES) - 1
+    rows = joint_rows(places, K, NORMAL, SIGMA_PX, 0.0, NOISE.calibration_cov)
+    assert len(rows) == len(DISTANCES) - 1
     truth = np.array(DISTANCES[1:])
-    assert np.allclose(rows["stsf_joint"], truth, atol=0.02)  # exact data: the true distances
+    assert np.allclose(rows, truth, atol=0.02)  # exact data: the true distances
     assert np.isclose(gls(np.array([1.0, 2.0]), np.diag([1.0, 4.0])), (1.0 + 2.0 / 4) / (1 + 1 / 4))

@@ -179,3 +179,25 @@ def gls(values: np.ndarray, sigma: np.ndarray) -> float:
 def gls_distance(t: np.ndarray, sigma: np.ndarray) -> float:
     """STSF's distance with the joint covariance: GLS in inverse range, as eq. 2-5 fuse."""
     return 1.0 / gls(*inverse_range(t, sigma))
+
+
+def joint_rows(
+    places: list[Place],
+    camera_matrix: np.ndarray,
+    normal: np.ndarray,
+    sigma_px: float,
+    camera_forward: float,
+    calibration_cov: np.ndarray,
+) -> list[float]:
+    """Per row ``k = 1..len(places)-1``: the distances of the pairs measured so far fused by
+    :func:`gls_distance` with their joint covariance (NaN before any pair measured)."""
+    args = (camera_matrix, normal, sigma_px, camera_forward)
+    measured, rows = [], []
+    for k in range(1, len(places)):
+        if pair_distance(places[k - 1], places[k], camera_matrix, normal, sigma_px) is not None:
+            measured.append(k)
+        if not measured:
+            rows.append(np.nan)
+            continue
+        rows.append(gls_distance(*joint_track(places, k, measured, *args, calibration_cov)))
+    return rows

@@ -106,19 +106,11 @@ def measure_rows(
     normal: np.ndarray,
     sigma_px: float,
     camera_forward: float,
-    calibration_cov: np.ndarray | None = None,
 ) -> dict[str, list[float]]:
     """Per row ``k = 1..len(places)-1``: ``conventional`` (pair k-1, k), its ``variance``,
     ``stsf`` and ``stsf_gls`` (rows 1..k fused); NaN where a pair gave no distance (STSF then
-    fuses the rows that did). With ``calibration_cov`` (the wheel calibration's) and places
-    that keep their pose and calibration Jacobian, also ``stsf_joint``: rows 1..k fused with
-    their joint covariance, the shared calibration included (:mod:`.joint`)."""
-    from stsf_gym.experiments.table1.joint import gls_distance, joint_track
-
+    fuses the rows that did)."""
     rows: dict[str, list[float]] = {"conventional": [], "variance": [], "stsf": [], "stsf_gls": []}
-    joint = calibration_cov is not None and all(p.pose is not None for p in places)
-    if joint:
-        rows["stsf_joint"] = []
     track: list[tuple[float, float, int]] = []  # (distance, variance, place) per measurement
     for k in range(1, len(places)):
         measured = pair_distance(places[k - 1], places[k], camera_matrix, normal, sigma_px)
@@ -141,23 +133,6 @@ def measure_rows(
             fused = {m: d + rest for m, d in fused.items()}  # carried on to place k
         rows["stsf"].append(fused["significance"])
         rows["stsf_gls"].append(fused["gls"])
-        if joint:
-            measured = [j for *_, j in track]
-            t, sigma = (
-                joint_track(
-                    places,
-                    k,
-                    measured,
-                    camera_matrix,
-                    normal,
-                    sigma_px,
-                    camera_forward,
-                    calibration_cov,
-                )
-                if measured
-                else (np.zeros(0), np.zeros((0, 0)))
-            )
-            rows["stsf_joint"].append(gls_distance(t, sigma) if measured else math.nan)
     return rows
 
 

@@ -30,6 +30,7 @@ from stsf_gym.envs.config import (
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms
+from stsf_gym.experiments.table1.joint import joint_rows
 from stsf_gym.experiments.table1.measure import measure_rows
 from stsf_gym.experiments.table1.plot import plot_table1
 from stsf_gym.experiments.table1.rig import Table1Rig
@@ -96,14 +97,9 @@ def run_seed(cfg: Table1Config, seed: int) -> SeedResult:
     """One episode of the rig, measured."""
     rig = Table1Rig(cfg.env, seed, cfg.speed, cfg.frames_per_place, cfg.approach_deg)
     places, truths = rig.capture([cfg.start_distance, *cfg.distances])
-    rows = measure_rows(
-        places,
-        rig.model.camera_matrix,
-        rig.landmark.normal,
-        cfg.sigma_px,
-        rig.camera_forward,
-        rig.model.odometry_noise.calibration_cov,
-    )
+    args = (places, rig.model.camera_matrix, rig.landmark.normal, cfg.sigma_px, rig.camera_forward)
+    rows = measure_rows(*args)
+    joint = joint_rows(*args, rig.model.odometry_noise.calibration_cov)
     return SeedResult(
         truth=[t.distance for t in truths[1:]],
         baseline=[t.driven for t in truths[1:]],
@@ -116,7 +112,7 @@ def run_seed(cfg: Table1Config, seed: int) -> SeedResult:
         conventional=rows["conventional"],
         stsf=rows["stsf"],
         stsf_gls=rows["stsf_gls"],
-        stsf_joint=rows["stsf_joint"],
+        stsf_joint=joint,
     )
 
 
