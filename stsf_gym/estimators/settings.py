@@ -140,12 +140,13 @@ class MCLSettings(OdometrySettings):
     min_particles: Count
     kld_error: Positive  # KLD-sampling: bound on the K-L divergence of the particle set
     kld_quantile: OpenProbability  # with this probability
-    bin_size: tuple[Positive, Positive, Positive]  # m, m, rad: KLD-sampling's histogram bins
+    bin_size_xy: Positive  # m: KLD-sampling's histogram bins in x and y
+    bin_size_yaw: Positive  # rad: and in heading
     alpha_slow: OpenProbability  # augmented MCL: the long-term likelihood average's rate
     alpha_fast: OpenProbability  # and the short-term one's
     update_min_d: NonNegative  # m driven between measurement updates (AMCL's update_min_d)
     update_min_a: NonNegative  # rad turned between them (update_min_a)
-    boards_every_frame: bool  # weigh by the boards of every frame, not only at those updates
+    board_updates: Literal["every-frame", "with-sonar"]  # every frame's boards, or only those
     resample_threshold: OpenProbability  # resample when the effective sample size falls below
     odometry_inflation: Inflation  # factor on the wheel slip the particles are spread by
     sonar_std: Positive  # m, the likelihood field's Gaussian

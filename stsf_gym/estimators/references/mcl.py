@@ -12,8 +12,8 @@ corrected by its calibration, ``d (1 - c)``, plus slip ``N(0, (odometry_inflatio
 (the wheel noise model, inflated), then the mid-point model.
 
 **Measurement** (when the robot has moved ``update_min_d`` or turned ``update_min_a`` since the
-last one, AMCL's rule against counting one view many times; with ``boards_every_frame`` the
-boards of every frame in between too), particle weights multiply by
+last one, AMCL's rule against counting one view many times; with ``board_updates:
+every-frame`` the boards of every frame in between too), particle weights multiply by
 
 - the sonar ring's likelihood field (:mod:`.likelihood_field`): ``sonar_beams`` readings
   evenly spread over the ring (AMCL's ``max_beams``: neighbouring cones overlap and share
@@ -38,7 +38,8 @@ carried along the corridor as well.
 **Resampling** when the effective sample size ``1 / sum w^2`` falls below
 ``resample_threshold`` times the count, or particles are to be injected: low-variance
 (systematic) draws, in random order, kept
-until their number reaches the KLD bound for the number ``k`` of occupied ``bin_size`` bins::
+until their number reaches the KLD bound for the number ``k`` of occupied bins
+(``bin_size_xy`` by ``bin_size_xy`` by ``bin_size_yaw``)::
 
     n = (k - 1) / (2 eps) (1 - 2 / (9 (k - 1)) + sqrt(2 / (9 (k - 1))) z)^3
 
@@ -155,7 +156,7 @@ class MonteCarloLocalization(PoseEstimator):
         sonar = obs.get("sonar")
         if self.moved[0] >= s.update_min_d or self.moved[1] >= s.update_min_a:
             self.moved[:] = 0.0
-        elif s.boards_every_frame and boards:
+        elif s.board_updates == "every-frame" and boards:
             sonar = None  # the boards' update alone
         else:
             return self.mean, self.cov
@@ -275,7 +276,8 @@ class MonteCarloLocalization(PoseEstimator):
     def _kld_count(self, poses: np.ndarray) -> int:
         """The fewest leading particles whose count reaches the KLD bound of their bins."""
         s = self.settings
-        bins = np.floor(poses / np.asarray(s.bin_size)).astype(np.int64)
+        size = np.array([s.bin_size_xy, s.bin_size_xy, s.bin_size_yaw])
+        bins = np.floor(poses / size).astype(np.int64)
         _, first = np.unique(bins, axis=0, return_index=True)
         occupied = np.searchsorted(np.sort(first), np.arange(len(poses)), side="right")
         k = np.maximum(occupied - 1, 1)
