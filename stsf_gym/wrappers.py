@@ -162,6 +162,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             )
             self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
+        self.start, self.searching_since = None, None  # set by reset
         lo, hi = env.unwrapped.world.bounds[0] - 50.0, env.unwrapped.world.bounds[1] + 50.0
         pose_space = spaces.Box(
             np.array([lo[0], lo[1], -np.pi], np.float32),
