@@ -55,7 +55,7 @@ from stsf_gym.envs.generated_env import parse_world
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results.provenance import fingerprint, provenance
-from stsf_gym.wrappers import POSE_SOURCES
+from stsf_gym.wrappers import check_pose_source
 
 PREFIX = "model"  # checkpoints are checkpoints/model_<timesteps>_steps.zip
 EVAL_SEED_OFFSET = 10_000  # the evaluation env's seed is the training seed plus this
@@ -234,8 +234,7 @@ def train(
     """Train (or continue training) until ``timesteps``; return the summary in train.json."""
     import torch
 
-    if estimator not in POSE_SOURCES:
-        raise ConfigError(f"unknown estimator {estimator!r}; known: {', '.join(POSE_SOURCES)}")
+    check_pose_source(estimator)
     hp = load_hyperparams(algo, env_id_for(world, estimator), config, overrides)
     cfg = hp.training
     n_envs = cfg.n_envs if n_envs is None else n_envs

@@ -185,13 +185,12 @@ def _world_cmd(args: argparse.Namespace) -> dict:
 
 def _evaluate(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.evaluate import evaluate
-    from stsf_gym.wrappers import POSE_SOURCES
+    from stsf_gym.wrappers import check_pose_source
 
     _check_counts(args)
     estimators = [e.strip() for e in args.estimators.split(",") if e.strip()]
     for name in estimators:
-        if name not in POSE_SOURCES:
-            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+        check_pose_source(name)
     args.world = _world(args)
     agents = [a.strip() for a in args.agent.split(",") if a.strip()]
     models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
@@ -302,14 +301,13 @@ def _sweep(args: argparse.Namespace) -> dict:
 def _accuracy_curve(args: argparse.Namespace) -> dict:
     from stsf_gym.estimators import make_estimator
     from stsf_gym.experiments.curve.run import accuracy_curve
-    from stsf_gym.wrappers import POSE_SOURCES
+    from stsf_gym.wrappers import check_pose_source
 
     _check_counts(args)
     agents = _names(args.agent)
     estimators = _names(args.estimators)
     for name in estimators:
-        if name not in POSE_SOURCES:
-            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+        check_pose_source(name)
     models = [a for a in agents if a != "follower"]
     if models:
         from stsf_gym.agents.sb3_agent import model_metadata
@@ -456,7 +454,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--estimators",
         default="odometry,conventional,stsf,ekf",
         help="comma-separated pose sources: odometry, conventional (the paper's: current pair "
-        "only), conventional-filter, stsf, ekf, truth, degraded-truth",
+        "only), conventional-filter, stsf, ekf, smoother, mcl, truth, degraded-truth, or your "
+        "own as package.module:Class (e.g. examples.complementary:ComplementaryFilter)",
     )
     _world_args(evaluate)
     evaluate.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")

@@ -5,7 +5,7 @@
 then any violation, and exits with status 1 when there is one. The rules (:data:`ALLOWED`):
 
     stsf_gym.cli, stsf_gym.experiments -> stsf_gym.agents -> stsf_gym.wrappers
-        -> stsf_gym.state_history -> stsf_gym.estimators
+        -> stsf_gym.state_history -> stsf_gym.estimators (and .references)
         -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
     stsf_gym.experiments, stsf_gym.bench -> stsf_gym.recording -> stsf_gym.wrappers (no envs);
     stsf_gym.envs (and its folders .worlds, .rendering) -> stsf_gym.vision.landmarks / geometry;
@@ -46,7 +46,12 @@ ENV_FOLDERS = ("stsf_gym.envs.worlds", "stsf_gym.envs.rendering")
 #: Pure measurement code (numpy/scipy): metrics, the results schema, TUM trajectories.
 MEASURES = ("stsf_gym.metrics", "stsf_gym.results", "stsf_gym.tum")
 CORE = (*LEAVES, *MEASURES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
-ESTIMATION = (*CORE, "stsf_gym.estimators", "stsf_gym.state_history")
+ESTIMATION = (
+    *CORE,
+    "stsf_gym.estimators",
+    "stsf_gym.estimators.references",
+    "stsf_gym.state_history",
+)
 EPISODE = (
     *ESTIMATION,
     "stsf_gym",
@@ -84,6 +89,8 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.estimators": CORE,
     # late measurements: any estimator rewound and replayed (used by the wrapper)
     "stsf_gym.state_history": (*CORE, "stsf_gym.estimators"),
+    # the references (smoother, MCL, the floor): estimators too, on GTSAM and numpy
+    "stsf_gym.estimators.references": ESTIMATION,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
     "stsf_gym.metrics": ("stsf_gym.geometry",),
     "stsf_gym.results": (),

@@ -18,9 +18,11 @@ from stsf_gym.estimators import (
     MapLandmark,
     PoseEstimator,
     SensorModel,
+    estimator_class,
     estimator_settings,
     make_estimator,
 )
+from stsf_gym.estimators.base import SonarRingModel
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.settings import OdometrySettings
@@ -30,6 +32,10 @@ from stsf_gym.validation import ConfigError
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
 COV_LIMIT = 1e4
+#: With an unknown start the pan camera sweeps (a sine of this period, s) until the estimate's
+#: position standard deviation first falls below ``FOUND_STD`` (m): pointed from a pose that
+#: is not known yet, it would look at walls.
+SWEEP_PERIOD_S, FOUND_STD = 4.0, 0.2
 #: The privileged pose source: the true pose from ``info``, for reference runs only.
 TRUTH = "truth"
 #: Standard deviations (m, m, rad) reported with the true pose: tiny, fixed.
@@ -37,6 +43,17 @@ TRUTH_STD = (0.001, 0.001, 0.001)
 #: Every pose source a wrapper accepts: the estimators, the privileged ``truth`` and the
 #: privileged ``degraded-truth`` (the accuracy curve's dial).
 POSE_SOURCES = (*ESTIMATORS, TRUTH, *PRIVILEGED)
+
+
+def check_pose_source(name: str) -> None:
+    """Fail (:class:`ConfigError`) unless ``name`` is a pose source: one of
+    :data:`POSE_SOURCES`, a registered estimator or a ``package.module:Class`` estimator."""
+    if name == TRUTH:
+        return
+    try:
+        estimator_class(name)
+    except ValueError as err:
+        raise ConfigError(str(err)) from err
 
 
 def sensor_model(env: gym.Env, belief: OdometrySettings | None = None) -> SensorModel:
@@ -70,6 +87,16 @@ def sensor_model(env: gym.Env, belief: OdometrySettings | None = None) -> Sensor
         },
         pattern=cfg.world.landmark_pattern,
         walls=np.array(cfg.world.walls, dtype=float).reshape(-1, 4),
+        wall_thickness=cfg.world.wall_thickness,
+        sonar=SonarRingModel(
+            axes=np.asarray(u.sonar.axes, dtype=float),
+            ring_radius=u.sonar.origin_radius,
+            min_range=cfg.sonar.min_range,
+            max_range=cfg.sonar.max_range,
+            noise_std=cfg.sonar.noise_std,
+            noise_std_per_m=cfg.sonar.noise_std_per_m,
+        ),
+        body_radius=cfg.robot.body_radius,
     )
 
 
@@ -122,17 +149,19 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     error model (:mod:`stsf_gym.estimators.degraded_truth`), seeded by ``reset(seed=...)``.
     The real estimators never see ``info``: each starts an episode at the commanded start
     pose (the world's ``start`` or ``options["start_pose"]``) with standard deviations
-    ``start_std``.
+    ``start_std``; ``reset(options={"unknown_start": True})`` gives an estimator that
+    localizes globally (``mcl``) no start at all: its prior spreads over the map's free space.
     When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
     landmark from the pose estimate and the map (:class:`LandmarkPointer`) and the agent's
     action stays ``[v, w]``.
 
     Args:
         env: a stsf-gym env.
-        estimator: ``"odometry"``, ... (see :data:`stsf_gym.estimators.ESTIMATORS`), or
-            ``"truth"`` (privileged).
+        estimator: ``"odometry"``, ... (see :data:`stsf_gym.estimators.ESTIMATORS`), a
+            ``package.module:Class`` estimator of your own, or ``"truth"`` (privileged).
         start_std: standard deviations of the start pose (m, m, rad).
-        **options: estimator options, over ``configs/estimators/<name>.yaml``.
+        **options: estimator options, over ``configs/estimators/<name>.yaml`` (your own
+            estimator: over its settings dataclass's defaults).
 
     Its constructor arguments are recorded (``RecordConstructorArgs``), so ``env.spec``
     re-creates a hand-built stack: ``gym.make(env.spec)``.
@@ -161,6 +190,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             dt = env.unwrapped.dt
             self.history = StateHistory(latency.delay_s + 5 * latency.jitter_s + 2 * dt)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
+        self.start, self.searching_since = None, None  # set by reset
         lo, hi = env.unwrapped.world.bounds[0] - 50.0, env.unwrapped.world.bounds[1] + 50.0
         pose_space = spaces.Box(
             np.array([lo[0], lo[1], -np.pi], np.float32),
@@ -173,13 +203,20 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         )
 
     def reset(self, *, seed=None, options=None):
-        obs, info = self.env.reset(seed=seed, options=options)
+        options = dict(options or {})
+        unknown_start = bool(options.pop("unknown_start", False))  # the wrapper's, not the env's
+        obs, info = self.env.reset(seed=seed, options=options or None)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
+        self.start = np.asarray(start, dtype=float)  # the commanded start (a floor starts there)
         settings = getattr(self.estimator, "settings", None)
         model = sensor_model(self.env, settings if isinstance(settings, OdometrySettings) else None)
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
             self.estimator.seed(seed)
         self.estimator.reset(model, start, self.start_cov)
+        self.searching_since = None
+        if unknown_start:
+            self._forget_start()
+            self.searching_since = 0.0
         self._time = float(obs["encoders_time"][0])
         if self.history is not None:
             self.history.reset(self.estimator, obs)
@@ -190,8 +227,26 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             self.pointer.reset()
         return self._with_pose(obs, self.estimator.mean, self.estimator.cov), info
 
+    def _forget_start(self) -> None:
+        spread = getattr(self.estimator, "spread_prior", None)
+        if spread is None:
+            raise ValueError(
+                f"reset option unknown_start needs an estimator that localizes globally "
+                f"(mcl), not {self.estimator.name or type(self.estimator).__name__!r}"
+            )
+        spread()
+
     def step(self, action):
-        if self.pointer is not None:
+        if self.searching_since is not None:
+            cov = self.estimator.cov
+            if math.sqrt(max(cov[0, 0], cov[1, 1])) < FOUND_STD:
+                self.searching_since = None
+            else:
+                self.searching_since += self.env.unwrapped.dt
+        if self.pointer is not None and self.searching_since is not None:
+            pan = math.sin(math.tau * self.searching_since / SWEEP_PERIOD_S)
+            action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
+        elif self.pointer is not None:
             pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
             action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
         obs, reward, terminated, truncated, info = self.env.step(action)

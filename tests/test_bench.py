@@ -18,14 +18,19 @@ def test_a_case_reports_speed_memory_and_stage_latency(fast_row):
     assert fast_row["camera_frames"] == 15  # 5 Hz over 3 s
     assert set(fast_row["ms_per_frame"]) == {"camera frame", "detect", "stsf update"}
     assert "detector_vs_aruco" not in fast_row  # no images in the fast mode
+    assert fast_row["estimator_ms_per_step"] > 0
 
 
 def _summary(row: dict, **changes) -> dict:
-    rows = [{**row, "case": name, **changes} for name in ("a: x", "e: x", "f: x", "g: x")]
+    cases = ("a: x", "e: x", "f: x", "g: x", "h: x", "i: x", "j: x")
+    rows = [{**row, "case": name, **changes} for name in cases]
     rows[1]["ms_per_frame"] = {"detect": 1.5, "stsf update": 0.4, "camera frame": 3.0}
     rows[1]["detector_vs_aruco"] = {"frames": 3, "detector_ms": 1.5, "aruco_ms": 1.0, "ratio": 1.5}
     rows[1]["renderer"] = "gl"
     rows[2]["ms_per_frame"] = {"detect": 1.5, "ekf update": 0.1}
+    rows[4]["ms_per_frame"] = {"detect": 0.2, "ekf update": 0.1}
+    rows[5]["ms_per_frame"] = {"detect": 0.2, "smoother update": 2.5}
+    rows[6]["estimator_ms_per_step"] = 1.0
     return {
         "machine": {"cpu": "test", "cores": 2, "python": "3", "reference_ms": 50.0},
         "speed": rows,
@@ -43,6 +48,8 @@ def test_targets_are_judged_against_their_bounds(fast_row):
     assert not met["GL render 640x480, ms per frame"]  # 4.5 > 4
     assert not met["2 workers / 1 worker (rendered pipeline)"]  # 1.6 < 1.7
     assert not met["peak memory per GL-camera env process, MB"]  # 350 > 250
+    assert not met["smoother update, ms per camera frame"]  # 2.5 > 2
+    assert met["MCL, ms per step (every stage)"]  # 1.0 <= 3
     summary["targets"] = targets(summary)
     text = to_markdown(summary)
     assert "ratio 1.50" in text and "| 2 workers / 1 worker (rendered pipeline) |" in text

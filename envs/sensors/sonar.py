@@ -33,9 +33,9 @@ class SonarRing:
         half = math.radians(cfg.beam_width_deg) / 2
         spread = np.linspace(-half, half, cfg.rays_per_beam) if cfg.rays_per_beam > 1 else [0.0]
         ray_angles = (self.axes[:, None] + np.asarray(spread)[None, :]).ravel()
-        origin_radius = body_radius + 0.01
+        self.origin_radius = body_radius + 0.01  # the ring the rays start from (m)
         # robot-frame ray starts (on the ring, at each transducer) and unit directions
-        self._origins = origin_radius * np.repeat(
+        self._origins = self.origin_radius * np.repeat(
             np.column_stack([np.cos(self.axes), np.sin(self.axes)]), cfg.rays_per_beam, axis=0
         )
         self._directions = np.column_stack([np.cos(ray_angles), np.sin(ray_angles)])

@@ -26,7 +26,7 @@ import numpy as np
 from tqdm import tqdm
 
 from stsf_gym.bench.recording import recording_costs
-from stsf_gym.bench.speed import CASES, render_latency, run_case, vector_scaling
+from stsf_gym.bench.speed import CASES, FAST_CASES, render_latency, run_case, vector_scaling
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results.provenance import provenance
 
@@ -74,7 +74,7 @@ def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, se
     """Run every measurement; write bench.json / bench.md; return the summary."""
     speed = []
     for name in tqdm(CASES, desc="bench cases", unit="case"):
-        fast_case = name.startswith(("a:", "g:"))
+        fast_case = name.startswith(FAST_CASES)
         seconds = sim_seconds * (4 if fast_case else 1)  # fast cases: a longer, steadier span
         speed.append(run_case(name, seconds, seed, profile=name == PROFILED_CASE))
     renders = render_latency()
@@ -103,6 +103,7 @@ def targets(summary: dict) -> list[dict]:
     """Each speed target with what was measured and whether it holds."""
     stsf = _row(summary, "e:")
     ekf = _row(summary, "f:")
+    fast_ekf, smoother, mcl = (_row(summary, case) for case in ("h:", "i:", "j:"))
     aruco = stsf.get("detector_vs_aruco", {})
     gl = next((r for r in summary["render"] if r["renderer"] == "gl"), {})
     nan = float("nan")
@@ -120,6 +121,14 @@ def targets(summary: dict) -> list[dict]:
         ("detector / ArUco time", aruco.get("ratio", nan), "<=", 2.0),
         ("peak memory per GL-camera env process, MB", max(gl_cases, default=nan), "<=", 250),
         ("EKF update, ms per frame (no target)", ekf["ms_per_frame"]["ekf update"], "<", 1e9),
+        (
+            "smoother update, ms per camera frame",
+            smoother["ms_per_frame"]["smoother update"],
+            "<=",
+            2.0,
+        ),
+        ("MCL, ms per step (every stage)", mcl["estimator_ms_per_step"], "<=", 3.0),
+        ("EKF, ms per step (every stage, no target)", fast_ekf["estimator_ms_per_step"], "<", 1e9),
     ]
     if "recording" in summary:
         checks += recording_checks(summary["recording"])
@@ -201,6 +210,17 @@ def to_markdown(summary: dict) -> str:
             "paper ms": None,
         },
     ]
+    fast = [_row(summary, case) for case in ("h:", "i:", "j:")]
+    reference_rows = [
+        {
+            "case": r["case"],
+            "update, ms per camera frame": next(
+                v for k, v in r["ms_per_frame"].items() if k.endswith(" update")
+            ),
+            "every stage, ms per step": r["estimator_ms_per_step"],
+        }
+        for r in fast
+    ]
     parts = [
         f"# stsf-gym bench\n\n{m['cpu']}, {m['cores']} cores, Python {m['python']}; "
         "each speed case in its own process pinned to one core. Reference workload "
@@ -208,6 +228,8 @@ def to_markdown(summary: dict) -> str:
         "## Env speed (IRL corridor, follower driving)\n\n" + markdown_table(speed_rows),
         "## Renderers alone (one core)\n\n" + markdown_table(summary["render"]),
         "## Latency per camera frame (320x240)\n\n" + markdown_table(latency_rows),
+        "## The references beside the EKF (fast sensor mode, one core)\n\n"
+        + markdown_table(reference_rows),
     ]
     if "detector_vs_aruco" in stsf:
         a = stsf["detector_vs_aruco"]

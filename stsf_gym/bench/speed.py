@@ -5,7 +5,8 @@ runs) for a fixed span of simulated time; the figure is simulated seconds per wa
 Each case runs in a fresh ``spawn`` process so that its peak memory (``ru_maxrss``) is that of
 one env process and no renderer state leaks between cases. The pipeline cases also report the
 per-frame latency of each stage: camera frame (render, lens, sensor), detection, motion stereo
-+ STSF update, EKF update. :func:`render_latency` times each renderer alone at two sizes.
++ STSF update, EKF update, and the references' (smoother per frame, MCL per step, in the
+fast sensor mode). :func:`render_latency` times each renderer alone at two sizes.
 """
 
 from __future__ import annotations
@@ -31,7 +32,12 @@ CASES: dict[str, tuple[dict, str]] = {
     "e: camera + detector + STSF": ({"camera": {"control": "pan"}}, "stsf"),
     "f: camera + detector + EKF": ({"camera": {"control": "pan"}}, "ekf"),
     "g: fast sensor mode + STSF": ({"camera": {"control": "pan", "mode": "fast"}}, "stsf"),
+    "h: fast sensor mode + EKF": ({"camera": {"control": "pan", "mode": "fast"}}, "ekf"),
+    "i: fast sensor mode + smoother": ({"camera": {"control": "pan", "mode": "fast"}}, "smoother"),
+    "j: fast sensor mode + MCL": ({"camera": {"control": "pan", "mode": "fast"}}, "mcl"),
 }
+#: The cases whose env is cheap: a longer, steadier span of simulated time.
+FAST_CASES = ("a:", "g:", "h:", "i:", "j:")
 RENDERERS = ("gl", "egl", "tiny")
 RENDER_SIZES = ((320, 240), (640, 480))
 PER_STEP_STAGES = ("odometry",)  # estimator stages that run every step, not per frame
@@ -96,6 +102,10 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
         "steps_per_s": steps / wall,
         "camera_frames": frames,
         "ms_per_frame": {k: 1e3 * v / max(frames, 1) for k, v in stages.items()},
+        # every stage of the estimator (odometry, detection, update) per control step
+        "estimator_ms_per_step": None
+        if source == "truth"
+        else 1e3 * sum(env.estimator.timings.values()) / steps,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
     if profiler is not None:

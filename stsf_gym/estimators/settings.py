@@ -110,7 +110,87 @@ class EKFSettings(RelocalisationSettings, OdometrySettings):
         )
 
 
+@dataclass(frozen=True)
+class LandmarkPoseSettings(RelocalisationSettings, OdometrySettings):
+    """The landmark pose measurement of the graph smoothers (:mod:`.references.measurements`)."""
+
+    sigma_px: Positive
+    gate_probability: OpenProbability
+    min_range: NonNegative
+    max_range: Positive
+    position_std_floor: NonNegative
+    position_std_per_m: NonNegative
+    orientation_std_floor: NonNegative
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require(
+            self.min_range < self.max_range,
+            "max_range",
+            f"must be > min_range ({self.min_range:g}), got {self.max_range:g}",
+        )
+
+
+@dataclass(frozen=True)
+class SmootherSettings(LandmarkPoseSettings):
+    """The fixed-lag factor-graph smoother (``smoother.yaml``)."""
+
+    window_s: Positive  # s of frames kept in the graph; older ones are marginalised
+    relinearize_threshold: Positive  # iSAM2: relinearise a variable whose update exceeds this
+
+
+@dataclass(frozen=True)
+class MCLSettings(OdometrySettings):
+    """Monte Carlo localization (``mcl.yaml``)."""
+
+    particles: Count  # the most particles (KLD-sampling's ceiling), and the start's count
+    min_particles: Count
+    kld_error: Positive  # KLD-sampling: bound on the K-L divergence of the particle set
+    kld_quantile: OpenProbability  # with this probability
+    bin_size_xy: Positive  # m: KLD-sampling's histogram bins in x and y
+    bin_size_yaw: Positive  # rad: and in heading
+    alpha_slow: OpenProbability  # augmented MCL: the long-term likelihood average's rate
+    alpha_fast: OpenProbability  # and the short-term one's
+    update_min_d: NonNegative  # m driven between measurement updates (AMCL's update_min_d)
+    update_min_a: NonNegative  # rad turned between them (update_min_a)
+    board_updates: Literal["every-frame", "with-sonar"]  # every frame's boards, or only those
+    resample_threshold: OpenProbability  # resample when the effective sample size falls below
+    odometry_inflation: Inflation  # factor on the wheel slip the particles are spread by
+    sonar_std: Positive  # m, the likelihood field's Gaussian
+    sonar_random: OpenProbability  # weight of a random sonar reading (z_rand)
+    sonar_beams: Count  # readings used per update, evenly spread over the ring (max_beams)
+    field_resolution: Positive  # m, the likelihood field's cell
+    sigma_px: Positive
+    position_std_floor: NonNegative  # m, std added to a board's x and y (the smoother's)
+    position_std_per_m: NonNegative  # and this fraction of its range
+    orientation_std_floor: NonNegative  # rad, std added to its orientation
+    landmark_outlier: OpenProbability  # likelihood floor of a board (a misread id)
+    min_range: NonNegative
+    max_range: Positive
+    prior: Literal["start", "free-space"]  # the start pose, or uniform over the free space
+
+    def __post_init__(self) -> None:
+        require(
+            self.min_particles <= self.particles,
+            "min_particles",
+            f"must be <= particles ({self.particles}), got {self.min_particles}",
+        )
+        require(
+            self.alpha_slow < self.alpha_fast,
+            "alpha_fast",
+            f"must be > alpha_slow ({self.alpha_slow:g}), got {self.alpha_fast:g}",
+        )
+
+
 Settings = TypeVar("Settings")
+
+
+def build_settings(
+    name: str, settings_type: type[Settings], options: Mapping[str, Any]
+) -> Settings:
+    """``settings_type``'s own defaults with ``options`` over them (an estimator with no YAML
+    file: your own); errors name the key as ``<name>.<key>``."""
+    return build(settings_type, dict(options), name)
 
 
 def load_settings(name: str, settings_type: type[Settings], options: Mapping[str, Any]) -> Settings:

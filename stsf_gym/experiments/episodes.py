@@ -16,9 +16,12 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.episode_env import make_episode_env, resolved_config
+from stsf_gym.estimators import estimator_settings
+from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
+from stsf_gym.wrappers import sensor_model
 
 RESULT_VERSION = 6  # bumped when EpisodeResult changes, so older episode files are rerun
 
@@ -77,6 +80,16 @@ class EpisodeResult:
     stops: list[dict] = field(default_factory=list)
     goals: int = 1  # goals of the route
     route_length: float = 0.0  # m along the path from its start to the last goal (SPL's l)
+    #: [x, y, yaw] per record of the episode's floor: the batch smoother over all of its
+    #: measurements (:mod:`stsf_gym.estimators.references.floor`); None with the camera off
+    floor_estimates: list[list[float]] | None = None
+
+    @property
+    def floor_errors(self) -> np.ndarray | None:
+        """The floor's position error per record (m), None without a floor."""
+        if self.floor_estimates is None:
+            return None
+        return np.hypot(*pose_error(self.floor_estimates, self.true_poses)[:, :2].T)
 
     @property
     def pose_errors(self) -> np.ndarray:
@@ -117,6 +130,10 @@ class EpisodeResult:
     def nees(self) -> float:
         """Time average of the NEES."""
         return float(np.mean(self.nees_trace))
+
+
+#: Whose measurement model (board noise, floors, mount) the floor uses.
+FLOOR_SETTINGS = "smoother"
 
 
 def agent_label(agent: str) -> str:
@@ -175,6 +192,10 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
     try:
         obs, info = env.reset(seed=spec.seed)  # first: a generated world is drawn here
         act = make_agent(spec.agent, env, spec.agent_options)
+        floor = None
+        if "image_new" in obs:  # the floor needs the camera
+            floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
+            floor.reset(sensor_model(env), estimating.start, estimating.start_cov)
         path = np.asarray(env.unwrapped.config.world.path, dtype=float)
         record: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
         frames, in_view, terminated, truncated = 0, 0, False, False
@@ -194,6 +215,8 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
                 break
             obs, _, terminated, truncated, info = env.step(act(obs))
             steps += 1
+            if floor is not None:
+                floor.update(obs)
             if obs["image_new"]:
                 frames += 1
                 in_view += bool(env.unwrapped.landmarks_in_view())
@@ -230,6 +253,7 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             stops=[{**stop, "position": list(stop["position"])} for stop in info["stops"]],
             goals=len(task.goals),
             route_length=task.path.project(task.goals[-1]),
+            floor_estimates=None if floor is None else batch_floor(floor.data)[0].tolist(),
         )
     finally:
         env.close()

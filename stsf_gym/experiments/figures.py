@@ -43,7 +43,15 @@ FIG11_PAPER_NUMBERS = {
     "conventional": {"paper_success": 1.0},
     "stsf": {"paper_success": 1.0, "paper_match_rate_vs_conventional": 0.22},
 }
-FIG11_ESTIMATORS = ["odometry", "conventional", "conventional-filter", "stsf", "ekf"]
+FIG11_ESTIMATORS = [
+    "odometry",
+    "conventional",
+    "conventional-filter",
+    "stsf",
+    "ekf",
+    "smoother",
+    "mcl",
+]
 #: Fig. 11 runs under the paper's camera whatever the defaults (``--set`` may still change it).
 PAPER_CAMERA = {"camera": {"profile": "paper"}}
 LATTER_PART_M = 12.0
@@ -137,6 +145,9 @@ def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
                 **{
                     key: row[key]
                     for key in (
+                        "ate_rmse_m",
+                        "floor_ate_m",
+                        "ate_vs_floor",
                         "rms_heading_error_deg",
                         "landmark_in_view",
                         "match_rate",

@@ -34,10 +34,14 @@ def episode_metrics(episode: EpisodeResult) -> dict[str, float | None]:
     errors = episode.errors
     rpe = rpe_per_metre(episode.true_poses, episode.estimates, RPE_DELTA_M)
     nis = np.asarray(episode.nis, dtype=float).reshape(-1, 2)
+    ate = ate_rmse(episode.true_xy, episode.estimate_xy)
+    floor = None if episode.floor_errors is None else rms(episode.floor_errors)
     return {
         "success_rate": float(episode.outcome == "goal"),
         "collision_rate": float(episode.outcome == "collision"),
-        "ate_rmse_m": ate_rmse(episode.true_xy, episode.estimate_xy),
+        "ate_rmse_m": ate,
+        "floor_ate_m": floor,
+        "ate_vs_floor": None if not floor else ate / floor,
         "rpe_trans_m_per_m": finite_or_none(rpe.trans_m_per_m),
         "rpe_rot_deg_per_m": finite_or_none(rpe.rot_deg_per_m),
         "final_error_m": float(errors[-1]),

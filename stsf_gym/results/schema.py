@@ -25,6 +25,8 @@ METRICS: dict[str, str] = {
     "collision_rate": "collision rate",
     "distance_before_failure_m": "distance before failure (m)",
     "ate_rmse_m": "ATE RMSE (m)",
+    "floor_ate_m": "floor ATE (m)",
+    "ate_vs_floor": "ATE / floor",
     "rpe_trans_m_per_m": "RPE trans (m/m)",
     "rpe_rot_deg_per_m": "RPE rot (deg/m)",
     "final_error_m": "final error (m)",

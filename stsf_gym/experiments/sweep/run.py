@@ -196,14 +196,13 @@ def _axes(path: Path, where: str, axes: dict, base: dict, sections: tuple[str, .
 def _checked(path: Path, label: str, base: dict, point: dict, sections: tuple[str, ...]) -> None:
     """``base`` with ``point`` set must be a valid cell: estimator, seed, agent, fault set,
     and the world and env as the env builds them."""
-    from stsf_gym.wrappers import POSE_SOURCES
+    from stsf_gym.wrappers import check_pose_source
 
     try:
         cell = _apply(base, point, sections)
         estimator, seed, agent = cell["estimator"], cell["seed"], cell["agent"]
-        if estimator is not None and estimator not in POSE_SOURCES:
-            known = ", ".join(POSE_SOURCES)
-            raise ConfigError(f"unknown estimator {estimator!r}; known: {known}")
+        if estimator is not None:
+            check_pose_source(estimator)
         if isinstance(seed, bool) or not isinstance(seed, int):
             raise ConfigError(f"seed must be an integer, got {seed!r}")
         if agent != "follower" and not (isinstance(agent, str) and Path(agent).is_file()):

@@ -10,6 +10,9 @@ the odometry motion since the previous place with its covariance. Places ``0..n`
   the odometry between the places (eq. 3, its uncertainty propagated) and fused (eq. 2) in
   inverse range with the significance weights of eq. 4-5 (and, for comparison, generalised
   least squares). Row 1 has one measurement, so both methods give the same distance.
+- STSF with the joint covariance (``stsf_joint``): the same carried distances, fused by
+  generalised least squares with the covariance the shared wheel calibration gives them
+  (:mod:`~stsf_gym.experiments.table1.joint`): the best linear unbiased distance.
 
 Distances are to the landmark's plane (eq. 10), from the camera of the place.
 """
@@ -39,6 +42,8 @@ class Place:
     heading: float  # odometry heading (rad)
     motion: np.ndarray  # odometry motion [x, y, yaw] since the previous place, in its robot frame
     motion_cov: np.ndarray  # its 3x3 covariance
+    pose: np.ndarray | None = None  # the odometry pose [x, y, yaw] (None: not kept)
+    motion_by_calibration: np.ndarray | None = None  # d motion / d wheel calibration (3x3)
 
 
 def average_features(frames: list[dict[int, np.ndarray]]) -> dict[int, np.ndarray]:

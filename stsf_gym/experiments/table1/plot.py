@@ -11,15 +11,18 @@ from stsf_gym.io import save_figure
 
 
 def plot_table1(rows: list[dict], path: Path) -> Path:
-    """Per row, conventional fusion's and STSF's RMS error (bars: spread over seeds; hollow:
-    median) beside the paper's errors and the stereo bound, on a log scale."""
+    """Per row, conventional fusion's and STSF's RMS error (and STSF's with the joint covariance
+    where the rows have it; bars: spread over seeds; hollow: median) beside the paper's errors
+    and the stereo bound, on a log scale."""
     plt = pyplot()
     x = np.arange(len(rows))
     fig, ax = plt.subplots(figsize=(9, 4.5))
-    for offset, name, label, color in (
-        (-0.12, "conventional", "conventional (ours)", "tab:orange"),
-        (0.12, "stsf", "STSF (ours)", "tab:blue"),
-    ):
+    series = [
+        (-0.15, "conventional", "conventional (ours)", "tab:orange"),
+        (0.0, "stsf", "STSF (ours)", "tab:blue"),
+        (0.15, "stsf_joint", "STSF, joint covariance (ours)", "tab:green"),
+    ]
+    for offset, name, label, color in [s for s in series if f"{s[1]}_m" in rows[0]]:
         rms = np.array(
             [np.nan if r[f"{name}_rms_error_m"] is None else r[f"{name}_rms_error_m"] for r in rows]
         )

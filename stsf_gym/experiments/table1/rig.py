@@ -108,6 +108,13 @@ class Table1Rig:
         finally:
             self.env.close()
 
+    def _motion_by_calibration(self) -> np.ndarray:
+        """``J`` of the motion since the last place by the wheel calibration ``c``: the dead
+        reckoning carries ``Cov(e, c) = J Sigma_c`` (:mod:`~stsf_gym.estimators.pose_errors`)."""
+        errors = self.since_place.errors
+        with_c = errors.joint[0:3, errors.considered][:, :3]
+        return with_c @ np.linalg.pinv(self.model.odometry_noise.calibration_cov)
+
     def _dead_reckoning(self, pose: np.ndarray) -> OdometryEstimator:
         odometry = make_estimator("odometry")
         odometry.reset(self.model, pose, np.zeros((3, 3)))
@@ -159,6 +166,8 @@ class Table1Rig:
             heading=float(pose[2]),
             motion=self.since_place.mean.copy(),
             motion_cov=self.since_place.cov.copy(),
+            pose=pose.copy(),
+            motion_by_calibration=self._motion_by_calibration(),
         )
         self.since_place.restart(np.zeros(3), np.zeros((3, 3)))
         return place, float(np.mean(truth)), self.info["camera_pose"][:3, 3].copy()

@@ -33,6 +33,7 @@ from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms
+from stsf_gym.experiments.table1.joint import joint_rows
 from stsf_gym.experiments.table1.measure import measure_rows
 from stsf_gym.experiments.table1.plot import plot_table1
 from stsf_gym.experiments.table1.rig import Table1Rig
@@ -52,6 +53,10 @@ PAPER_TABLE1 = [
     (5.52, 5.39, 0.13, 5.63, 0.11),
     (6.32, 6.46, 0.14, 6.43, 0.11),
 ]
+
+
+#: The rows' methods: the paper's two, STSF by GLS without and with the joint covariance.
+METHODS = ("conventional", "stsf", "stsf_gls", "stsf_joint")
 
 
 @dataclass(frozen=True)
@@ -99,15 +104,16 @@ class SeedResult:
     conventional: list[float] = field(default_factory=list)  # NaN: no distance
     stsf: list[float] = field(default_factory=list)  # significance weights (eq. 4-5)
     stsf_gls: list[float] = field(default_factory=list)  # generalised least squares weights
+    stsf_joint: list[float] = field(default_factory=list)  # GLS with the joint covariance
 
 
 def run_seed(cfg: Table1Config, seed: int) -> SeedResult:
     """One episode of the rig, measured."""
     rig = Table1Rig(cfg.env, seed, cfg.speed, cfg.frames_per_place, cfg.approach_deg)
     places, truths = rig.capture([cfg.start_distance, *cfg.distances])
-    rows = measure_rows(
-        places, rig.model.camera_matrix, rig.landmark.normal, cfg.sigma_px, rig.camera_forward
-    )
+    args = (places, rig.model.camera_matrix, rig.landmark.normal, cfg.sigma_px, rig.camera_forward)
+    rows = measure_rows(*args)
+    joint = joint_rows(*args, rig.model.odometry_noise.calibration_cov)
     return SeedResult(
         truth=[t.distance for t in truths[1:]],
         baseline=[t.driven for t in truths[1:]],
@@ -120,6 +126,7 @@ def run_seed(cfg: Table1Config, seed: int) -> SeedResult:
         conventional=rows["conventional"],
         stsf=rows["stsf"],
         stsf_gls=rows["stsf_gls"],
+        stsf_joint=joint,
     )
 
 
@@ -202,7 +209,7 @@ def summarise(cfg: Table1Config, results: list[SeedResult]) -> list[dict]:
             "heading_error_rad": stat(r.heading_error[k] for r in results),
             "frames": stat(r.frames[k] for r in results),
         }
-        for name in ("conventional", "stsf", "stsf_gls"):
+        for name in METHODS if all(r.stsf_joint for r in results) else METHODS[:-1]:
             estimates = [getattr(r, name)[k] for r in results]
             errors = [e - r.truth[k] for e, r in zip(estimates, results, strict=True)]
             row[f"{name}_m"] = stat(estimates)
@@ -279,6 +286,7 @@ def _markdown(rows: list[dict], cfg: Table1Config) -> str:
             "STSF error (m)": error(row, "stsf"),
             "STSF median": median(row, "stsf"),
             "paper STSF error (m)": row.get("paper_stsf_error_m", "-"),
+            "STSF joint cov. error (m)": error(row, "stsf_joint") if "stsf_joint_m" in row else "-",
             "bound (m)": f"{row['bound_m']:.3f}",
             "odometry heading error (mrad)": f"{1e3 * _rms(row['heading_error_rad']):.1f}",
         }

@@ -1,0 +1,1 @@
+"""Examples that use stsf-gym as a library (importable from the repository root)."""
