@@ -22,7 +22,7 @@ from stsf_gym.experiments.episodes import (
     run_episodes,
     specs_config,
 )
-from stsf_gym.experiments.plots import pyplot
+from stsf_gym.experiments.plotting.maps import pyplot
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms, summarise
 from stsf_gym.io import markdown_table, save_figure

@@ -15,7 +15,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.episode_env import estimator_options
-from stsf_gym.experiments.consistency_plot import plot_nees
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
@@ -23,7 +22,8 @@ from stsf_gym.experiments.episodes import (
     specs_config,
 )
 from stsf_gym.experiments.fault_runs import evaluate_faults
-from stsf_gym.experiments.plots import plot_errors, plot_trajectories
+from stsf_gym.experiments.plotting.consistency import plot_nees
+from stsf_gym.experiments.plotting.maps import plot_errors, plot_trajectories
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import summarise
 from stsf_gym.io import markdown_table

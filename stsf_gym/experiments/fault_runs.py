@@ -34,7 +34,7 @@ from stsf_gym.experiments.episodes import (
     run_episodes,
     specs_config,
 )
-from stsf_gym.experiments.plots import plot_errors
+from stsf_gym.experiments.plotting.maps import plot_errors
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, rendered, stat
