@@ -27,6 +27,9 @@ from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording import topics
 from stsf_gym.recording.sensor_model_json import sensor_model_from_dict
 
+#: Topics a replay does not need (for looking at only), left unread.
+NOT_READ = frozenset({topics.TF, topics.TF_STATIC, topics.CMD_VEL, topics.CAMERA_INFO})
+
 
 @dataclass
 class RecordedLog:
@@ -120,7 +123,8 @@ def read_log(path: str | Path) -> RecordedLog:
     by_topic: dict[str, list] = defaultdict(list)
     try:
         with Reader(path) as reader:
-            for connection, _, data in reader.messages():
+            wanted = [c for c in reader.connections if c.topic not in NOT_READ]
+            for connection, _, data in reader.messages(connections=wanted):
                 message = ros.deserialize(data, connection.msgtype)
                 by_topic[connection.topic].append(message)
     except Exception as err:
