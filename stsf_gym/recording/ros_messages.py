@@ -4,6 +4,10 @@
 their CDR serialization, so a log holds what ``ros2 bag``, Foxglove and evo expect. Poses are
 planar: ``[x, y, yaw]`` is a pose at ``z = 0`` rotated by ``yaw`` about z, its 3x3 covariance
 the ``x, y, yaw`` block of ROS's 6x6 (``x, y, z, roll, pitch, yaw``) covariance.
+
+The builders here are what a script writing a log of its own robot uses
+(``examples/own_robot_log.py``), and the reference the recorder's packed per-step bytes
+(:mod:`.cdr`) are tested against.
 """
 
 from __future__ import annotations
