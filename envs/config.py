@@ -12,13 +12,16 @@ it, the full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
+
 from stsf_gym.envs.fault_spec import FaultSpec
-from stsf_gym.envs.worlds.checks import check_clearance, check_world
+from stsf_gym.envs.worlds.checks import check_clearance, check_route, check_world
 from stsf_gym.validation import (
     ConfigError,
     Count,
@@ -82,15 +85,23 @@ class WorldConfig:
     landmark_pattern: LandmarkPattern
     landmarks: tuple[LandmarkSpec, ...]
     obstacles: tuple[ObstacleSpec, ...] = ()
+    #: goals visited in order, each on the path (the last one its end); empty: the path's end
+    route: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         require(len(self.walls) > 0, "walls", "must list at least one wall segment")
         require(len(self.path) >= 2, "path", f"must have at least 2 points, got {len(self.path)}")
         check_world(self)
+        check_route(self)
 
     @property
     def goal(self) -> tuple[float, float]:
         return self.path[-1]
+
+    @property
+    def goals(self) -> tuple[tuple[float, float], ...]:
+        """The goals in visiting order: the route, or the path's end alone."""
+        return self.route or (self.path[-1],)
 
 
 @dataclass(frozen=True)
@@ -147,6 +158,8 @@ class FastCameraConfig:
     detect_size_px: Positive  # square pitch (px) at which half of the boards are detected
     detect_size_scale: Positive  # logistic width of the detection rate in square pitch (px)
     false_detection_rate: NonNegative  # wrong-id detections per frame
+    aided_size_px: Positive  # size (px) at which a track-aided search finds half the missed boards
+    aided_size_scale: Positive  # logistic width of that rate (px)
     max_detections: Count  # detection slots in the observation
 
 
@@ -160,6 +173,18 @@ class LensConfig:
     distortion: tuple[float, float, float, float, float]  # OpenCV k1 k2 p1 p2 k3
     vignetting: Annotated[float, Range(ge=0, lt=1)]  # share of light lost at the image corner
     defocus_px: NonNegative  # std (px) of the lens's Gaussian point spread; 0 in focus
+
+
+def radial_reach(distortion: tuple[float, ...], limit: float = 10.0) -> float:
+    """The largest distorted radius (normalised image coordinates) that the radial part of
+    ``distortion`` (OpenCV k1 k2 p1 p2 k3) reaches while it still grows with the ray's
+    radius: the image is invertible up to there. ``limit`` for a lens that never stops."""
+    k1, k2, _, _, k3 = distortion
+    r = np.linspace(0.0, limit, 20001)
+    slope = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6
+    stop = int(np.argmax(slope <= 0)) if (slope <= 0).any() else r.size - 1
+    radius = r[: stop + 1]
+    return float(np.max(radius * (1 + k1 * radius**2 + k2 * radius**4 + k3 * radius**6)))
 
 
 @dataclass(frozen=True)
@@ -204,6 +229,16 @@ class CameraConfig:
 
     def __post_init__(self) -> None:
         require(self.far > self.near, "far", f"must be > near ({self.near}), got {self.far}")
+        corner = math.hypot(self.width, self.height) / self.height  # normalised corner radius
+        corner *= math.tan(math.radians(self.vfov_deg) / 2)
+        reach = radial_reach(self.lens.distortion)
+        require(
+            reach > corner,
+            "lens.distortion",
+            f"{list(self.lens.distortion)} folds the image over: its radial mapping "
+            f"r(1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at distorted radius {reach:.3g}, "
+            f"inside the image corner at {corner:.3g} (a lens maps each ray to one pixel)",
+        )
 
 
 @dataclass(frozen=True)
@@ -244,6 +279,18 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class TaskConfig:
+    """When an episode succeeds (:mod:`stsf_gym.envs.task`): ``reach`` (the paper's protocol) or
+    ``declare`` (the agent stops to declare arrival at each goal of the route)."""
+
+    protocol: Literal["reach", "declare"]
+    goal_radius: Positive  # declare: success radius around each goal at the declared stop (m)
+    stop_speed: Positive  # declare: a commanded |forward speed| below this (m/s) ...
+    stop_yaw_rate: Positive  # ... and |yaw rate| below this (rad/s) is standing still
+    stop_seconds: Positive  # declare: standing still this long declares arrival
+
+
+@dataclass(frozen=True)
 class RenderConfig:
     view: Literal["map", "chase", "top"]
     width: Pixels
@@ -260,12 +307,19 @@ class EnvConfig:
     encoders: EncoderConfig
     reward: RewardConfig
     render: RenderConfig
+    task: TaskConfig
     faults: tuple[FaultSpec, ...] = ()  # timed faults (envs/fault_spec.py); none by default
 
     def __post_init__(self) -> None:
         check_clearance(self.world, self.robot.body_radius)
         map_ids = sorted(lm.id for lm in self.world.landmarks)
         for i, fault in enumerate(self.faults):
+            require(
+                fault.start < self.sim.max_episode_seconds,
+                f"faults[{i}].start",
+                f"must be before the episode ends (sim.max_episode_seconds "
+                f"{self.sim.max_episode_seconds:g} s), got {fault.start:g}: it would never act",
+            )
             require(
                 fault.landmark_id is None or fault.landmark_id in map_ids,
                 f"faults[{i}].landmark_id",

@@ -71,9 +71,22 @@ class CorridorEnv(gym.Env):
     ``reward.goal`` on reaching the goal, ``reward.collision`` on a collision, and
     ``reward.steering_change`` (<= 0, default 0) per unit change of the yaw command ``action[1]``.
 
-    ## Episode end
-    Terminated on reaching the goal (within ``goal_radius``) or on touching a wall or obstacle;
-    truncated after ``sim.max_episode_seconds`` of simulated time.
+    ## Episode end (``task.protocol``, :class:`stsf_gym.envs.task.PathTask`)
+    - ``reach`` (default; the paper's **reach-the-goal protocol**, used by Table I, Fig. 10 and
+      Fig. 11): terminated as a success when the TRUE position enters the world's
+      ``goal_radius`` around the path's end.
+    - ``declare`` (**declared arrival**, as Habitat PointNav's STOP): the agent declares that it
+      has arrived by standing still (commanded ``|v| < task.stop_speed`` and ``|w| <
+      task.stop_yaw_rate``, held ``task.stop_seconds``, after moving). The declaration is a
+      success only if the true position is then within ``task.goal_radius`` (0.25 m: one body
+      radius, near Habitat's 0.2 m) of the current goal; the goals are the world's ``route`` in
+      order (or the path's end), a declared stop at each. A stop outside the radius ends the
+      episode as a failure; the truth crossing a goal ends nothing. Standing still keeps the
+      ``Box`` action of every agent as it is (no extra entry to learn or to append after the
+      camera mount), and is how a real robot ends a delivery.
+
+    Under both, touching a wall or obstacle terminates (a failure); truncated (a failure) after
+    ``sim.max_episode_seconds`` of simulated time.
 
     ## Faults
     The ``faults:`` config section (none by default, :mod:`stsf_gym.envs.faults`) injects timed
@@ -84,7 +97,9 @@ class CorridorEnv(gym.Env):
     ``true_pose`` ([x, y, yaw], privileged: for evaluation only), ``camera_pose`` (4x4
     world-from-camera, OpenCV axes, of the frame in ``image``, at the middle of its exposure),
     ``collision``, ``distance_travelled`` (m, true), ``progress`` (m along the path),
-    ``sim_time`` (s).
+    ``sim_time`` (s), ``goals_reached`` (goals done so far), ``success`` (every goal reached),
+    ``stops`` (``declare``: each declared stop as ``{goal, time, position, true_distance_m,
+    success}``, the true distance to the goal it was declared for).
 
     ## Camera
     ``camera_matrix`` (K) and ``dist_coeffs`` (OpenCV ``k1 k2 p1 p2 k3``) are the TRUE camera of
@@ -180,7 +195,7 @@ class CorridorEnv(gym.Env):
         self.config = dataclasses.replace(self.config, world=world)
         if self.view is not None:  # the map of the new world
             self.view = self._map_view()
-        self.task = PathTask(world, self.config.reward)
+        self.task = PathTask(world, self.config.reward, self.config.task)
         self.faults = FaultInjector(
             self.config.faults, self.world, self.robot, self.observation_space
         )
@@ -291,6 +306,7 @@ class CorridorEnv(gym.Env):
         self._distance = 0.0
         self._pose = self.robot.floor_pose()
         self._progress = self.task.progress(self._pose)
+        self.task.reset()
         self._next_frame = 0.0
         obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, self.np_random)
         self._last_obs = obs
@@ -325,14 +341,16 @@ class CorridorEnv(gym.Env):
         ticks = self.encoders.read(self.robot.wheel_angles(), self.np_random)
         collision = self.robot.in_collision(ignore={self.world.floor})
         progress = self.task.progress(pose)
-        reached = self.task.reached_goal(pose)
+        reached = self.task.update(
+            pose, a[0] * robot.max_speed, a[1] * robot.max_yaw_rate, self.dt, self._time
+        )
         steering_change = abs(a[1] - self._yaw_command)
         self._yaw_command = float(a[1])
         reward = self.task.reward(
             progress - self._progress, self.dt, reached, collision, steering_change
         )
         self._progress = progress
-        terminated = reached or collision
+        terminated = self.task.finished or collision
         truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9
         obs = self.faults.observe(self._observe(ticks), self._time, self.np_random)
         self._last_obs = obs
@@ -364,6 +382,9 @@ class CorridorEnv(gym.Env):
             "distance_travelled": self._distance,
             "progress": self._progress,
             "sim_time": self._time,
+            "goals_reached": self.task.goal_index,
+            "success": self.task.success,
+            "stops": [dataclasses.asdict(stop) for stop in self.task.stops],
         }
 
     def render(self):

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from stsf_gym.config import ConfigError, parse_overrides
+from stsf_gym.io import remove_partial_writes
 from stsf_gym.results.provenance import set_command
 
 
@@ -45,6 +46,11 @@ def _demo(args: argparse.Namespace) -> dict:
     if args.seconds is not None:
         if args.seconds <= 0:
             raise ConfigError(f"--seconds must be positive, got {args.seconds}")
+        if "max_episode_seconds" in env.get("sim", {}):
+            raise ConfigError(
+                "--seconds and sim.max_episode_seconds (from --config or --set) both set the "
+                "episode length; give one"
+            )
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
     if args.video_seconds is not None and args.video_seconds < 0:
         raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")
@@ -316,10 +322,17 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
         raise ConfigError(f"--levels must be comma-separated numbers, got {args.levels!r}") from err
     dial = parse_overrides(args.dial)
     make_estimator("degraded-truth", **dial)  # a bad dial option fails before any work
+    world, env = args.world, _env_overrides(args, None if args.suite else args.world)
+    if args.suite:
+        from stsf_gym.envs.config import deep_merge
+        from stsf_gym.envs.suite import load_suite
+        from stsf_gym.experiments.benchmark.run import WORLD
+
+        world, env = WORLD, deep_merge(load_suite(args.suite).episode_env, env)
     summary = accuracy_curve(
         args.out,
         agents,
-        args.world,
+        world,
         args.seeds,
         args.seed,
         levels,
@@ -327,10 +340,46 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
         args.backend,
         args.workers,
         args.address,
-        _env_overrides(args, args.world),
+        env,
         dial,
+        args.suite,
     )
     _print_markdown(args, args.out / "curve.md")
+    for failed in summary["failed"]:
+        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
+    return summary
+
+
+def _benchmark(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.benchmark.run import benchmark
+    from stsf_gym.wrappers import POSE_SOURCES
+
+    _check_counts(args)
+    if args.worlds < 1:
+        raise ConfigError(f"--worlds must be at least 1, got {args.worlds}")
+    if args.config or args.overrides:
+        raise ConfigError("benchmark runs a suite as written: edit or copy its configs/suites file")
+    estimators = _names(args.estimators)
+    for name in estimators:
+        if name not in POSE_SOURCES:
+            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    agents = _names(args.agents)
+    for model in (a for a in agents if a != "follower"):
+        from stsf_gym.agents.sb3_agent import model_metadata
+
+        model_metadata(model)  # a missing or foreign model file fails here, clearly
+    summary = benchmark(
+        args.out / args.suite,
+        args.suite,
+        agents,
+        estimators,
+        args.worlds,
+        args.seed,
+        args.backend,
+        args.workers,
+        args.address,
+    )
+    _print_markdown(args, args.out / args.suite / "leaderboard.md")
     for failed in summary["failed"]:
         print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
     return summary
@@ -373,6 +422,8 @@ def _world_args(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from stsf_gym.envs.suite import suite_names
+
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     demo = commands.add_parser("demo", help="the follower on each estimator, IRL corridor")
@@ -451,6 +502,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--agent", default="follower", help="follower and/or saved models, comma-separated"
     )
     curve.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    curve.add_argument(
+        "--suite",
+        choices=suite_names(),
+        help="a benchmark suite's test worlds and declared-stop task instead of --world",
+    )
     curve.add_argument("--seeds", type=int, default=3, help="episodes per point (3)")
     curve.add_argument(
         "--levels",
@@ -471,6 +527,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _backend_args(curve)
     curve.set_defaults(run=_accuracy_curve)
+    bench_suite = commands.add_parser(
+        "benchmark", help="agents x pose sources on a suite's test worlds: the leaderboard"
+    )
+    _common(bench_suite, "out/benchmark")
+    bench_suite.add_argument("--suite", required=True, choices=suite_names(), help="difficulty")
+    bench_suite.add_argument(
+        "--agents", default="follower", help="follower and/or saved models, comma-separated"
+    )
+    bench_suite.add_argument(
+        "--estimators",
+        default="odometry,conventional,conventional-filter,stsf,ekf",
+        help="pose sources, comma-separated",
+    )
+    bench_suite.add_argument("--worlds", type=int, default=100, help="test worlds (100)")
+    _backend_args(bench_suite)
+    bench_suite.set_defaults(run=_benchmark)
     world = commands.add_parser(
         "world", help="a generated world as world YAML (--seed N), or a grid of them (--grid)"
     )
@@ -526,6 +598,7 @@ def main(argv: list[str] | None = None) -> int:
         if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
             folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
             _check_writable(folder.absolute())
+            remove_partial_writes(args.out)  # left by a run killed mid-write: nothing to resume
         if args.verbose:
             from stsf_gym.envs.quiet import VERBOSE_ENV
 

@@ -9,8 +9,8 @@ from typing import Any
 
 import gymnasium as gym
 
-from stsf_gym.estimators import estimator_settings
-from stsf_gym.wrappers import TRUTH, PoseEstimateWrapper
+from stsf_gym.estimators import estimator_class, estimator_settings
+from stsf_gym.wrappers import TRUTH, PoseEstimateWrapper, check_sensors
 
 #: Keyword arguments of an env that are not config values.
 NOT_CONFIG = ("render_mode", "split", "generator")
@@ -74,6 +74,10 @@ def resolved_config(
         resolved["env"] = env_cfg
         resolved["generator"] = asdict(load_generator_config(generator))
         resolved["split"] = split
+    camera = resolved["env"]["camera"]["enabled"]
+    check_sensors(
+        estimator, () if estimator == TRUTH else estimator_class(estimator).sensors, camera
+    )
     resolved["estimator"] = {
         "name": estimator,
         "settings": estimator_options(estimator, **(options or {})),

@@ -73,7 +73,7 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
         *ENV_FOLDERS,
     ),
     "stsf_gym.wrappers": ESTIMATION,
-    "stsf_gym": (),  # the package's __init__: registration only
+    "stsf_gym": ("stsf_gym.yaml_layers",),  # the __init__: registration (reads suite files)
     "stsf_gym.envs": (*ENV_SHARED, *ENV_FOLDERS, *EXTERNAL),
     # worlds: layouts, checks, the generator (numpy) and the PyBullet builder of a world
     "stsf_gym.envs.worlds": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.rendering", *EXTERNAL),

@@ -22,6 +22,7 @@ from stsf_gym.estimators import (
 )
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.validation import ConfigError
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
@@ -66,6 +67,16 @@ def sensor_model(env: gym.Env) -> SensorModel:
     )
 
 
+def check_sensors(name: str, sensors: tuple[str, ...], camera_enabled: bool) -> None:
+    """Refuse pose source ``name`` (reading ``sensors``) on an env whose camera is off."""
+    if "camera" in sensors and not camera_enabled:
+        raise ConfigError(
+            f"pose source {name!r} reads the camera, but camera.enabled is false; switch it on "
+            "(camera.mode: fast simulates detections without rendering)",
+            "camera.enabled",
+        )
+
+
 class TruePose(PoseEstimator):
     """The privileged reference "estimator": the true pose with a tiny fixed covariance.
 
@@ -75,6 +86,7 @@ class TruePose(PoseEstimator):
     """
 
     name = TRUTH
+    sensors = ()
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, np.diag(np.square(TRUTH_STD)))
@@ -123,6 +135,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if estimator == TRUTH and options:
             raise ValueError(f"the truth pose source takes no options, got {sorted(options)}")
         self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
+        check_sensors(estimator, self.estimator.sensors, env.unwrapped.config.camera.enabled)
         robot = env.unwrapped.config.robot
         self.pointer = None
         if env.unwrapped.config.camera.control == "pan":

@@ -45,7 +45,7 @@ def test_settings_are_frozen():
 
 def test_keyword_options_override_the_yaml(make_env):
     assert make_estimator("stsf", max_track_frames=4).max_track_frames == 4
-    env = PoseEstimateWrapper(make_env(camera__enabled=False), "stsf", max_track_frames=10)
+    env = PoseEstimateWrapper(make_env(camera__mode="fast"), "stsf", max_track_frames=10)
     assert env.estimator.max_track_frames == 10
     assert env.estimator.settings.weights == "significance"
     made = make_env("stsf_gym/Straight10m-EKF-v0", estimator_options={"max_range": 7.5})

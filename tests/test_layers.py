@@ -105,5 +105,5 @@ def test_layers_command_prints_the_graph():
         [sys.executable, "-m", "stsf_gym.layers"], capture_output=True, text=True, cwd=ROOT
     )
     assert done.returncode == 0, done.stdout
-    assert "stsf_gym.wrappers         -> stsf_gym.estimators\n" in done.stdout
+    assert "stsf_gym.wrappers         -> stsf_gym.estimators, stsf_gym.validation\n" in done.stdout
     assert done.stdout.rstrip().endswith("violations:\n  none")

@@ -73,6 +73,9 @@ class PoseEstimator(ABC):
     """
 
     name: str = ""
+    #: The sensors the estimator reads: a pose source whose sensor is switched off in the env
+    #: is refused (:func:`stsf_gym.wrappers.check_sensors`), never run as something else.
+    sensors: tuple[str, ...] = ("encoders",)
 
     def __init__(self) -> None:
         self.timings: dict[str, float] = defaultdict(float)

@@ -20,7 +20,7 @@ from stsf_gym.experiments.cache import run_cached
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
 
-RESULT_VERSION = 5  # bumped when EpisodeResult changes, so older episode files are rerun
+RESULT_VERSION = 6  # bumped when EpisodeResult changes, so older episode files are rerun
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ class EpisodeResult:
     with the pose the estimator starts from at reset (time 0)."""
 
     spec: dict
-    outcome: str  # goal | collision | time
+    outcome: str  # goal (every goal reached) | collision | missed (a declared stop off) | time
     distance: float  # metres driven (true)
     sim_time: float
     steps: int
@@ -73,6 +73,10 @@ class EpisodeResult:
     finite: bool  # pose and covariance finite at every step
     min_cov_eigenvalue: float  # smallest eigenvalue of the covariance over the steps
     stage_ms_per_step: dict[str, float]
+    #: the declared stops (``task.protocol: declare``; ``info["stops"]``), in order
+    stops: list[dict] = field(default_factory=list)
+    goals: int = 1  # goals of the route
+    route_length: float = 0.0  # m along the path from its start to the last goal (SPL's l)
 
     @property
     def pose_errors(self) -> np.ndarray:
@@ -194,7 +198,10 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
                 frames += 1
                 in_view += bool(env.unwrapped.landmarks_in_view())
         counters = estimating.estimator.counters
-        outcome = "collision" if info["collision"] else "goal" if terminated else "time"
+        outcome = "collision" if info["collision"] else "time"
+        if terminated and not info["collision"]:
+            outcome = "goal" if info["success"] else "missed"
+        task = env.unwrapped.task
         return EpisodeResult(
             spec=asdict(spec),
             outcome=outcome,
@@ -220,6 +227,9 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             stage_ms_per_step={
                 k: 1000 * v / steps for k, v in estimating.estimator.timings.items()
             },
+            stops=[{**stop, "position": list(stop["position"])} for stop in info["stops"]],
+            goals=len(task.goals),
+            route_length=task.path.project(task.goals[-1]),
         )
     finally:
         env.close()

@@ -74,7 +74,13 @@ def _after(episode: EpisodeResult, distance: float) -> np.ndarray:
     return episode.errors[np.asarray(episode.travelled) >= distance]
 
 
+#: The paper's figures keep the paper's reach-the-goal protocol (``task.protocol: reach``: the
+#: true pose entering the goal circle ends the episode as a success), whatever the config says.
+REACH = {"task": {"protocol": "reach"}}
+
+
 def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
+    env = deep_merge(env or {}, REACH)
     summary, by_estimator = evaluate(
         out,
         ["odometry", "stsf", "ekf"],
@@ -105,7 +111,7 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
 
 def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
     names = FIG11_ESTIMATORS
-    env = deep_merge(PAPER_CAMERA, env or {})
+    env = deep_merge(deep_merge(PAPER_CAMERA, env or {}), REACH)
     summary, by_estimator = evaluate(
         out, names, seeds, seed, "irl_corridor", workers=workers, env=env, agent_options=PATH_ONLY
     )
@@ -176,7 +182,8 @@ def _maximum(values: np.ndarray) -> float | None:
 
 
 def _write(out: Path, name: str, title: str, summary: dict, rows: list[dict]) -> dict:
-    summary = {**summary, "paper_rows": rows}
+    summary = {**summary, "protocol": "reach", "paper_rows": rows}
+    title += " (the paper's reach-the-goal protocol)"
     paper = markdown_table([rendered(row, headers=HEADERS) for row in rows])
     every = markdown_table([rendered(row) for row in summary["rows"]])
     body = f"{paper}\n## All metrics\n\n{every}"

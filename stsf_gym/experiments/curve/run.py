@@ -19,7 +19,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, deep_merge, load_config
-from stsf_gym.episode_env import estimator_options
+from stsf_gym.envs.generated_env import parse_world
+from stsf_gym.episode_env import NOT_CONFIG, estimator_options
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.curve.plot import plot_curve
 from stsf_gym.experiments.sweep.backends import make_runner
@@ -104,12 +105,17 @@ def accuracy_curve(
     address: str | None = None,
     env: dict | None = None,
     dial: dict | None = None,
+    suite: str | None = None,
 ) -> dict:
-    """Run (or resume) every cell of the curve; write curve.json, curve.md and curve.png."""
+    """Run (or resume) every cell of the curve; write curve.json, curve.md and curve.png.
+    ``suite`` names the benchmark suite whose worlds and task ``world`` and ``env`` hold."""
     out, env, dial = Path(out), env or {}, dial or {}
     if not levels or any(not level > 0 for level in levels):
         raise ConfigError(f"levels must be positive numbers, got {levels!r}")
-    load_config(env, world=world)  # a bad world or env key fails before anything runs
+    generated = parse_world(world) is not None
+    config = {k: v for k, v in env.items() if k not in NOT_CONFIG}
+    # a bad world or env key fails before anything runs
+    task = load_config(config, world=None if generated else world).task
     cells = curve_cells(
         agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
     )
@@ -130,6 +136,9 @@ def accuracy_curve(
     summary.update(
         schema_version=SCHEMA_VERSION,
         world=world,
+        suite=suite,
+        protocol=task.protocol,
+        goal_radius_m=task.goal_radius if task.protocol == "declare" else None,
         seeds=[seed, seed + seeds - 1],
         dial={**estimator_options(DIAL), **dial},
     )
@@ -203,7 +212,15 @@ def tolerated_ate(levels: list[dict]) -> float | None:
 
 def curve_markdown(summary: dict) -> str:
     """The reading, then one table per agent's dial and one of the estimators' points."""
-    text = f"# Accuracy curve on {summary['world']}\n\n"
+    where = f"suite `{summary['suite']}`" if summary.get("suite") else summary["world"]
+    text = f"# Accuracy curve on {where}\n\n"
+    if summary.get("protocol") == "declare":
+        text += (
+            f"Declared arrival: a success is a declared stop within "
+            f"{summary['goal_radius_m']} m of every goal.\n\n"
+        )
+    else:
+        text += "Reach-the-goal protocol (the paper's): the true pose entering the goal circle.\n\n"
     for curve in summary["curves"]:
         ate = curve["tolerated_ate_m"]
         reading = "not even at the smallest level" if ate is None else f"up to ATE {ate:.3f} m"

@@ -64,6 +64,11 @@ def evaluate_cell(cell: dict) -> dict:
         "outcome": episode.outcome,
         "distance": episode.distance,
         "metrics": episode_metrics(episode),
+        "navigation": {  # what the declared-stop task scores (stsf_gym.experiments.benchmark)
+            "goals": episode.goals,
+            "route_length_m": episode.route_length,
+            "stops": episode.stops,
+        },
     }
 
 
