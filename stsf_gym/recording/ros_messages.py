@@ -213,6 +213,28 @@ def detection_cloud(stamp: int, points: np.ndarray) -> object:
     )
 
 
+def detection_slots(ids: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The :data:`DETECTION_POINT` rows of the fast mode's slots: ``ids`` (one per slot, -1
+    empty) and ``points`` (``x0, y0, x1, y1, ...``, the same count per slot)."""
+    ids = np.asarray(ids)
+    uv = np.asarray(points, np.float32).reshape(-1, 2)
+    per_slot = len(uv) // max(len(ids), 1)
+    rows = np.zeros(len(uv), DETECTION_POINT)
+    rows["x"], rows["y"] = uv[:, 0], uv[:, 1]
+    rows["slot"] = np.repeat(np.arange(len(ids)), per_slot)
+    rows["landmark_id"] = np.repeat(ids, per_slot)
+    return rows
+
+
+def slots_of(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(ids, points)`` of :func:`detection_slots` rows (inverse); no rows: one empty slot."""
+    if not len(rows):
+        return np.full(1, -1, np.int64), np.zeros(2, np.float32)
+    ids = np.full(int(rows["slot"].max()) + 1, -1, np.int64)
+    ids[rows["slot"]] = rows["landmark_id"]
+    return ids, np.column_stack([rows["x"], rows["y"]]).ravel()
+
+
 def detection_points(message) -> np.ndarray:
     """The :data:`DETECTION_POINT` rows of a :func:`detection_cloud` message."""
     names = [f.name for f in message.fields]
