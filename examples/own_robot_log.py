@@ -114,10 +114,7 @@ def write_log(path: Path, seed: int = 0) -> Path:
                 topics.PAN_TILT, stamp, ros.joint_state(stamp, topics.MOUNT_JOINTS, [PAN, 0.0])
             )
             ids, slots = detections(model, pose, rng)
-            points = np.zeros(slots.shape[0] * slots.shape[1], ros.DETECTION_POINT)
-            points["x"], points["y"] = slots[..., 0].ravel(), slots[..., 1].ravel()
-            points["slot"] = np.repeat(np.arange(len(ids)), slots.shape[1])
-            points["landmark_id"] = np.repeat(ids, slots.shape[1])
+            points = ros.detection_slots(ids, slots.ravel())
             log.write(topics.DETECTIONS, stamp, ros.detection_cloud(stamp, points))
     log.close()
     return path

@@ -94,11 +94,12 @@ def _record_args(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _recording(args: argparse.Namespace) -> dict | None:
-    """The ``record`` setting of the episode runners, from ``--record``/``--record-frames``."""
+def _recording(args: argparse.Namespace, out: Path | None = None) -> dict | None:
+    """The ``record`` setting of the episode runners, from ``--record``/``--record-frames``:
+    files in ``<out or --out>/recordings/``."""
     if args.record is None:
         return None
-    folder = str((args.out / "recordings").absolute())
+    folder = str(((out or args.out) / "recordings").absolute())
     return {"format": args.record, "frames": args.record_frames, "folder": folder}
 
 
@@ -376,6 +377,7 @@ def _benchmark(args: argparse.Namespace) -> dict:
         args.backend,
         args.workers,
         args.address,
+        _recording(args, args.out / args.suite),
     )
     _print_markdown(args, args.out / args.suite / "leaderboard.md")
     for failed in summary["failed"]:
@@ -541,6 +543,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench_suite.add_argument("--worlds", type=int, default=100, help="test worlds (100)")
     _backend_args(bench_suite)
+    _record_args(bench_suite)
     bench_suite.set_defaults(run=_benchmark)
     world = commands.add_parser(
         "world", help="a generated world as world YAML (--seed N), or a grid of them (--grid)"

@@ -108,10 +108,12 @@ def test_a_recorded_episode_replays_bit_for_bit(fast_log):
     log = read_log(env.paths[0])
     assert log.lossless
     for replayed, (live, _) in zip(log.observations(), history, strict=True):
-        for key in ("encoders", "image_new", "camera_pan_tilt", "sonar", "landmark_ids"):
+        for key in ("encoders", "image_new", "camera_pan_tilt", "sonar"):
             assert np.array_equal(replayed[key], live[key]), key
             assert np.asarray(replayed[key]).dtype == np.asarray(live[key]).dtype, key
-        assert np.array_equal(replayed["landmark_points"], live["landmark_points"], equal_nan=True)
+        for key in ("landmark", "aided"):
+            assert np.array_equal(replayed[f"{key}_ids"], live[f"{key}_ids"]), key
+            assert np.array_equal(replayed[f"{key}_points"], live[f"{key}_points"], equal_nan=True)
     run = replay(log, "stsf")
     assert np.array_equal(run.means, means)
     assert np.array_equal(run.covs, covs)

@@ -86,3 +86,15 @@ def test_replay_names_a_bad_log(tmp_path):
     assert main(["replay", str(bad), "--out", str(tmp_path / "r")]) == 2
     assert main(["replay", str(tmp_path / "missing.mcap"), "--out", str(tmp_path / "r")]) == 2
     assert not (tmp_path / "r" / "results.json").exists()
+
+
+def test_benchmark_records_its_episodes(tmp_path):
+    args = ["benchmark", "--suite", "corridor", "--worlds", "1", "--estimators", "odometry"]
+    assert (
+        main([*args, "--workers", "1", "--record", "mcap", "--out", str(tmp_path), "--json"]) == 0
+    )
+    (log,) = sorted((tmp_path / "corridor" / "recordings").glob("*.mcap"))
+    assert ":" not in log.name
+    assert main(["replay", str(log), "--estimators", "odometry", "--out", str(tmp_path / "r")]) == 0
+    row = json.loads((tmp_path / "r" / "results.json").read_text())["rows"][0]
+    assert row["recorded_difference_m"] == 0.0

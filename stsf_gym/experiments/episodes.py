@@ -186,7 +186,7 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             record["folder"],
             record["format"],
             record.get("frames", "raw"),
-            spec.key,
+            spec.key.replace(":", "_"),  # generated:test-... as a portable file name
             meta={"spec": asdict(spec)},
         )
     try:
@@ -197,7 +197,7 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
             floor.reset(sensor_model(env), estimating.start, estimating.start_cov)
         path = np.asarray(env.unwrapped.config.world.path, dtype=float)
-        record: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
+        trace: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
         frames, in_view, terminated, truncated = 0, 0, False, False
         finite, min_eig, steps = True, math.inf, 0
         while True:
@@ -206,11 +206,11 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             finite = finite and bool(np.isfinite(pose).all() and np.isfinite(cov).all())
             if finite:
                 min_eig = min(min_eig, float(np.linalg.eigvalsh(cov)[0]))
-            record["t"].append(float(info["sim_time"]) if steps else 0.0)
-            record["d"].append(float(info["distance_travelled"]) if steps else 0.0)
-            record["true"].append(np.asarray(info["true_pose"], dtype=float).tolist())
-            record["est"].append(pose.tolist())
-            record["cov"].append(cov[np.triu_indices(3)].tolist())
+            trace["t"].append(float(info["sim_time"]) if steps else 0.0)
+            trace["d"].append(float(info["distance_travelled"]) if steps else 0.0)
+            trace["true"].append(np.asarray(info["true_pose"], dtype=float).tolist())
+            trace["est"].append(pose.tolist())
+            trace["cov"].append(cov[np.triu_indices(3)].tolist())
             if terminated or truncated:
                 break
             obs, _, terminated, truncated, info = env.step(act(obs))
@@ -231,13 +231,13 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             distance=float(info["distance_travelled"]),
             sim_time=float(info["sim_time"]),
             steps=steps,
-            times=record["t"],
-            travelled=record["d"],
-            true_poses=record["true"],
-            estimates=record["est"],
-            covariances=record["cov"],
+            times=trace["t"],
+            travelled=trace["d"],
+            true_poses=trace["true"],
+            estimates=trace["est"],
+            covariances=trace["cov"],
             nis=[list(value) for value in estimating.estimator.innovations()],
-            path_errors=distance_to_path(np.array(record["true"])[:, :2], path).tolist(),
+            path_errors=distance_to_path(np.array(trace["true"])[:, :2], path).tolist(),
             frames=counters.get("frames", 0),
             camera_frames=frames,
             frames_in_view=in_view,

@@ -27,6 +27,9 @@ from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording import topics
 from stsf_gym.recording.sensor_model_json import sensor_model_from_dict
 
+#: Topics a replay does not need (for looking at only), left unread.
+NOT_READ = frozenset({topics.TF, topics.TF_STATIC, topics.CMD_VEL, topics.CAMERA_INFO})
+
 
 @dataclass
 class RecordedLog:
@@ -42,6 +45,7 @@ class RecordedLog:
     frames: list[tuple[int, object]]  # (stamp, message) of camera frames, in time order
     pan_tilt: list[tuple[int, np.ndarray]]
     sonar: list[tuple[int, np.ndarray]]
+    aided: dict[int, object]  # stamp -> the fast mode's track-aided slots of that frame
     truth: np.ndarray | None  # (N, 3) true poses at the steps, when recorded
     estimates: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     end: dict = field(default_factory=dict)  # the episode's ending ("outcome"), if recorded
@@ -63,14 +67,18 @@ class RecordedLog:
         """The observation of each step, the start's first."""
         frame_at = [bisect.bisect_left(self.stamps, stamp) for stamp, _ in self.frames]
         new_frames = defaultdict(list)
-        for index, (_, message) in zip(frame_at, self.frames, strict=True):
-            new_frames[index].append(message)
+        for index, frame in zip(frame_at, self.frames, strict=True):
+            new_frames[index].append(frame)
         camera: dict = {}
         pan_tilt_at = [stamp for stamp, _ in self.pan_tilt]
         sonar_at = [stamp for stamp, _ in self.sonar]
         for k, stamp in enumerate(self.stamps):
             if new_frames.get(k):
-                camera = decode_frame(new_frames[k][-1])
+                stamp_of_frame, message = new_frames[k][-1]
+                camera = decode_frame(message)
+                if stamp_of_frame in self.aided:  # the fast mode's track-aided slots
+                    ids, points = ros.slots_of(ros.detection_points(self.aided[stamp_of_frame]))
+                    camera.update(aided_ids=ids, aided_points=points)
             yield {
                 **camera,
                 "image_new": int(bool(new_frames.get(k))),
@@ -99,16 +107,8 @@ def decode_frame(message) -> dict:
             raise ValueError(f"camera images must be rgb8, got {message.encoding!r}")
         data = np.asarray(message.data, np.uint8)
         return {"image": data.reshape(message.height, message.width, 3).copy()}
-    points = ros.detection_points(message)
-    if not len(points):  # nothing detected: one empty slot
-        return {
-            "landmark_ids": np.full(1, -1, np.int64),
-            "landmark_points": np.zeros(2, np.float32),
-        }
-    ids = np.full(int(points["slot"].max()) + 1, -1, np.int64)
-    ids[points["slot"]] = points["landmark_id"]
-    uv = np.column_stack([points["x"], points["y"]])
-    return {"landmark_ids": ids, "landmark_points": uv.ravel()}
+    ids, points = ros.slots_of(ros.detection_points(message))
+    return {"landmark_ids": ids, "landmark_points": points}
 
 
 def read_log(path: str | Path) -> RecordedLog:
@@ -120,7 +120,8 @@ def read_log(path: str | Path) -> RecordedLog:
     by_topic: dict[str, list] = defaultdict(list)
     try:
         with Reader(path) as reader:
-            for connection, _, data in reader.messages():
+            wanted = [c for c in reader.connections if c.topic not in NOT_READ]
+            for connection, _, data in reader.messages(connections=wanted):
                 message = ros.deserialize(data, connection.msgtype)
                 by_topic[connection.topic].append(message)
     except Exception as err:
@@ -152,6 +153,7 @@ def read_log(path: str | Path) -> RecordedLog:
         frames=sorted(frames, key=lambda f: f[0]),
         pan_tilt=sorted(pan_tilt, key=lambda p: p[0]),
         sonar=_sonar(by_topic.get(topics.SONAR, [])),
+        aided={ros.stamp_ns(m): m for m in by_topic.get(topics.AIDED, [])},
         truth=_poses_at(by_topic.get(topics.TRUTH, []), stamps),
         end=json.loads(by_topic[topics.EPISODE_END][0].data)
         if by_topic[topics.EPISODE_END]

@@ -157,14 +157,12 @@ class McapRecorder:
         if "image" in obs:
             self._image(stamp, obs["image"])
         else:
-            ids = np.asarray(obs["landmark_ids"])
-            uv = np.asarray(obs["landmark_points"], np.float32).reshape(-1, 2)
-            per_slot = len(uv) // len(ids)
-            points = np.zeros(len(uv), ros.DETECTION_POINT)
-            points["x"], points["y"] = uv[:, 0], uv[:, 1]
-            points["slot"] = np.repeat(np.arange(len(ids)), per_slot)
-            points["landmark_id"] = np.repeat(ids, per_slot)  # -1: an empty slot
-            write(topics.DETECTIONS, stamp, cdr.detection_cloud(stamp, "camera_image", points))
+            slots = [(topics.DETECTIONS, "landmark")]
+            if "aided_ids" in obs:  # the boards a track-aided search would find
+                slots.append((topics.AIDED, "aided"))
+            for topic, key in slots:
+                points = ros.detection_slots(obs[f"{key}_ids"], obs[f"{key}_points"])
+                write(topic, stamp, cdr.detection_cloud(stamp, "camera_image", points))
 
     def _image(self, stamp: int, rgb: np.ndarray) -> None:
         if self.frames == "raw":

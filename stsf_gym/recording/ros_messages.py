@@ -4,6 +4,10 @@
 their CDR serialization, so a log holds what ``ros2 bag``, Foxglove and evo expect. Poses are
 planar: ``[x, y, yaw]`` is a pose at ``z = 0`` rotated by ``yaw`` about z, its 3x3 covariance
 the ``x, y, yaw`` block of ROS's 6x6 (``x, y, z, roll, pitch, yaw``) covariance.
+
+The builders here are what a script writing a log of its own robot uses
+(``examples/own_robot_log.py``), and the reference the recorder's packed per-step bytes
+(:mod:`.cdr`) are tested against.
 """
 
 from __future__ import annotations
@@ -207,6 +211,28 @@ def detection_cloud(stamp: int, points: np.ndarray) -> object:
         data=points.view(np.uint8).ravel(),
         is_dense=False,
     )
+
+
+def detection_slots(ids: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The :data:`DETECTION_POINT` rows of the fast mode's slots: ``ids`` (one per slot, -1
+    empty) and ``points`` (``x0, y0, x1, y1, ...``, the same count per slot)."""
+    ids = np.asarray(ids)
+    uv = np.asarray(points, np.float32).reshape(-1, 2)
+    per_slot = len(uv) // max(len(ids), 1)
+    rows = np.zeros(len(uv), DETECTION_POINT)
+    rows["x"], rows["y"] = uv[:, 0], uv[:, 1]
+    rows["slot"] = np.repeat(np.arange(len(ids)), per_slot)
+    rows["landmark_id"] = np.repeat(ids, per_slot)
+    return rows
+
+
+def slots_of(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(ids, points)`` of :func:`detection_slots` rows (inverse); no rows: one empty slot."""
+    if not len(rows):
+        return np.full(1, -1, np.int64), np.zeros(2, np.float32)
+    ids = np.full(int(rows["slot"].max()) + 1, -1, np.int64)
+    ids[rows["slot"]] = rows["landmark_id"]
+    return ids, np.column_stack([rows["x"], rows["y"]]).ravel()
 
 
 def detection_points(message) -> np.ndarray:

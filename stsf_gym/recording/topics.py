@@ -16,6 +16,7 @@ PAN_TILT = "/camera/pan_tilt"  # sensor_msgs/JointState: mount angles (rad) of e
 IMAGE_COMPRESSED = "/camera/image/compressed"  # sensor_msgs/CompressedImage: png or jpeg
 IMAGE_RAW = "/camera/image"  # sensor_msgs/Image: rgb8
 DETECTIONS = "/camera/detections"  # sensor_msgs/PointCloud2: fast-mode detections per frame
+AIDED = "/camera/aided_detections"  # sensor_msgs/PointCloud2: what a track-aided search finds
 CAMERA_INFO = "/camera/camera_info"  # sensor_msgs/CameraInfo: the believed calibration
 SONAR = "/sonar/scan"  # sensor_msgs/LaserScan: the sonar ring, one range each, every step
 TRUTH = "/ground_truth/pose"  # geometry_msgs/PoseWithCovarianceStamped: for scoring only
@@ -38,6 +39,7 @@ TYPES: dict[str, str] = {
     IMAGE_COMPRESSED: "sensor_msgs/msg/CompressedImage",
     IMAGE_RAW: "sensor_msgs/msg/Image",
     DETECTIONS: "sensor_msgs/msg/PointCloud2",
+    AIDED: "sensor_msgs/msg/PointCloud2",
     CAMERA_INFO: "sensor_msgs/msg/CameraInfo",
     SONAR: "sensor_msgs/msg/LaserScan",
     TRUTH: "geometry_msgs/msg/PoseWithCovarianceStamped",

@@ -71,13 +71,18 @@ def benchmark(
     backend: str = "local",
     workers: int = 2,
     address: str | None = None,
+    record: dict | None = None,
 ) -> dict:
-    """Run (or resume) the benchmark; write results.json, leaderboard.md and .png."""
+    """Run (or resume) the benchmark; write results.json, leaderboard.md and .png. With
+    ``record`` (:func:`~stsf_gym.experiments.episodes.run_episode`) every episode is recorded
+    too (a cell finished without its recording is run again)."""
     out, loaded = Path(out), load_suite(suite)
     if worlds < 1:
         raise ValueError(f"--worlds must be at least 1, got {worlds}")
     seeds = list(range(seed, seed + worlds))
     cells = benchmark_cells(loaded, list(agents), list(estimators), seeds)
+    if record:
+        cells = [{**cell, "record": record} for cell in cells]
     forget_failures(cells, out / "cells")
     configs = {cell_name(cell): cell_config(cell) for cell in cells}
     results = run_cached(

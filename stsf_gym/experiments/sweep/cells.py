@@ -59,7 +59,8 @@ def evaluate_cell(cell: dict) -> dict:
     spec = EpisodeSpec(
         cell["world"], cell["estimator"], cell["seed"], cell["agent"], cell["env"], cell["options"]
     )
-    episode = run_episode(spec)
+    record = cell.get("record")  # benchmark --record: the episode written as a log too
+    episode = run_episode(spec, record) if record else run_episode(spec)
     return {
         "outcome": episode.outcome,
         "distance": episode.distance,
