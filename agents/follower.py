@@ -14,12 +14,22 @@ from stsf_gym.envs.task import Polyline
 
 
 @dataclass(frozen=True)
+class ArrivalConfig:
+    """How the follower declares arrival (``task.protocol: declare``) on its estimate."""
+
+    tolerance: float  # m: stop when the estimated goal is this close along the path (or passed)
+    approach_gain: float  # 1/s: speed = gain * estimated distance left, capped at ``speed`` ...
+    min_speed: float  # ... and at least this (m/s), so it gets there
+
+
+@dataclass(frozen=True)
 class FollowerConfig:
     speed: float
     lookahead: float
     max_yaw_rate: float
     turn_in_place: float
     avoidance: AvoidanceConfig
+    arrival: ArrivalConfig
 
 
 def load_follower_config(path: str | Path | None = None, **overrides) -> FollowerConfig:
@@ -40,6 +50,13 @@ class PathFollower:
     sonar ranges, :class:`~stsf_gym.agents.sonar_avoidance.SonarAvoidance` (``avoidance`` in the
     config) may bend or slow that command around obstacles. Actions are scaled to the env's ``[-1,
     1]`` box by the robot's ``max_speed`` and ``max_yaw_rate``.
+
+    Given ``goals`` (arc lengths along the path, in order; the ``declare`` task), the follower
+    declares arrival where its pose says the goal is: the lookahead point stops at the current
+    goal, the speed falls as ``approach_gain`` times the distance its estimate has left (at least
+    ``min_speed``), and once that is within ``arrival.tolerance`` (or the estimate has passed
+    the goal) it commands ``[0, 0]`` for ``hold_steps`` steps (the task's ``stop_seconds``),
+    then heads for the next goal. It turns where its estimate says the turn is, as always.
     """
 
     def __init__(
@@ -49,9 +66,13 @@ class PathFollower:
         max_speed: float,
         max_yaw_rate: float,
         avoidance: SonarAvoidance | None = None,
+        goals: list[float] | None = None,
+        hold_steps: int = 0,
     ) -> None:
         self.path, self.cfg, self.avoidance = Polyline(path), cfg, avoidance
         self.scale = np.array([max_speed, max_yaw_rate])
+        self.goals, self.hold_steps = list(goals or []), hold_steps
+        self._goal, self._holding = 0, 0
 
     @classmethod
     def for_env(cls, env, config: str | Path | None = None, **overrides) -> PathFollower:
@@ -66,8 +87,19 @@ class PathFollower:
                 env_cfg.robot.body_radius,
                 env_cfg.sonar.max_range,
             )
+        goals, hold = None, 0
+        if env_cfg.task.protocol == "declare":
+            path = Polyline(env_cfg.world.path)
+            goals = [path.project(goal) for goal in env_cfg.world.goals]
+            hold = math.ceil(env_cfg.task.stop_seconds / env_cfg.sim.control_dt - 1e-9) + 1
         return cls(
-            env_cfg.world.path, cfg, env_cfg.robot.max_speed, env_cfg.robot.max_yaw_rate, avoidance
+            env_cfg.world.path,
+            cfg,
+            env_cfg.robot.max_speed,
+            env_cfg.robot.max_yaw_rate,
+            avoidance,
+            goals,
+            hold,
         )
 
     def act(self, pose: np.ndarray, sonar: np.ndarray | None = None) -> np.ndarray:
@@ -77,7 +109,22 @@ class PathFollower:
         sees bend the command; without it this is plain pure pursuit.
         """
         x, y, yaw = pose
-        target = self.path.point_at(self.path.project(pose) + self.cfg.lookahead)
+        along = self.path.project(pose)
+        ahead, speed = along + self.cfg.lookahead, self.cfg.speed
+        if self._holding:  # declaring arrival: stand still
+            self._holding -= 1
+            return np.zeros(2, np.float32)
+        if self._goal < len(self.goals):
+            goal = self.goals[self._goal]
+            arrival = self.cfg.arrival
+            left = max(goal - along, 0.0)
+            if left <= arrival.tolerance:
+                self._goal += 1
+                self._holding = self.hold_steps - 1
+                return np.zeros(2, np.float32)
+            ahead = min(ahead, goal)
+            speed = float(np.clip(arrival.approach_gain * left, arrival.min_speed, speed))
+        target = self.path.point_at(ahead)
         dx, dy = target - (x, y)
         c, s = math.cos(yaw), math.sin(yaw)
         x_r, y_r = c * dx + s * dy, -s * dx + c * dy
@@ -86,7 +133,7 @@ class PathFollower:
             v, w = 0.0, math.copysign(self.cfg.max_yaw_rate, bearing)
         else:
             curvature = 2 * y_r / max(x_r * x_r + y_r * y_r, 1e-9)
-            v = self.cfg.speed
+            v = speed
             w = float(np.clip(v * curvature, -self.cfg.max_yaw_rate, self.cfg.max_yaw_rate))
         if sonar is not None and self.avoidance is not None:
             v, w = self.avoidance.adjust(sonar, bearing, v, w, self.cfg.max_yaw_rate)

@@ -71,6 +71,30 @@ class Hyperparams:
     algo_kwargs: dict  # keyword arguments of the algorithm's constructor
 
 
+def update_size(hp: Hyperparams, n_envs: int) -> tuple[int, str]:
+    """Env steps (summed over the envs) between two points where a run can stop, and what
+    makes them: PPO stops only after a whole rollout (``n_steps`` per env), SAC after
+    ``train_freq`` steps per env (an integer: the hyper-parameter check takes no episodes)."""
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+
+    cls = algorithm_class(hp.algo)
+    defaults = inspect.signature(cls.__init__).parameters
+    key = "n_steps" if issubclass(cls, OnPolicyAlgorithm) else "train_freq"
+    return int(hp.algo_kwargs.get(key, defaults[key].default)) * n_envs, f"{key} x n_envs"
+
+
+def check_timesteps(hp: Hyperparams, n_envs: int, total: int) -> None:
+    """``total`` must be a whole number of :func:`update_size`: the run then ends at exactly
+    ``total`` steps, resumed or not."""
+    size, what = update_size(hp, n_envs)
+    if total % size:
+        below, above = total // size * size, (total // size + 1) * size
+        raise ConfigError(
+            f"timesteps {total} is not a multiple of {what} = {size}: the run would end at "
+            f"{above}; ask for {below or above} or {above}"
+        )
+
+
 def algorithm_class(algo: str) -> type:
     if algo not in ALGORITHMS:
         raise ConfigError(f"unknown algorithm {algo!r}; known: {', '.join(ALGORITHMS)}")

@@ -48,8 +48,8 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     - the sonar ranges, 0 at ``min_range`` to 1 at ``max_range``;
     - the wheel speeds from the encoder ticks, 1 at the robot's top speed.
 
-    ``info["is_success"]`` is set at the end of an episode (the goal reached), which
-    stable-baselines3's evaluation callback counts.
+    ``info["is_success"]`` is set at the end of an episode (every goal reached, under the
+    task's protocol), which stable-baselines3's evaluation callback counts.
     """
 
     def __init__(self, env: gym.Env, config: ObservationConfig | None = None) -> None:
@@ -71,7 +71,7 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
         if terminated or truncated:
-            info["is_success"] = bool(terminated and not info.get("collision", False))
+            info["is_success"] = bool(info["success"])
         return self.observation(obs), reward, terminated, truncated, info
 
     def observation(self, obs: dict) -> np.ndarray:

@@ -5,7 +5,13 @@ pointed by :class:`PoseEstimateWrapper`), with :class:`PolicyObservation` on top
 ``Monitor`` outside. ``OUT`` receives ``checkpoints/``, ``tb/`` (TensorBoard), ``monitor/``,
 ``eval/`` and ``best/`` (the best evaluated model), ``episodes.csv``, ``eval.csv``,
 ``learning_curve.png``, ``model.zip`` and ``train.json``. Rerunning with the same ``OUT``
-continues from the newest checkpoint; Ctrl-C saves one first.
+continues from the newest checkpoint (PPO checkpoints after every update, SAC every
+``checkpoint_freq`` steps and on Ctrl-C) and ends at exactly the timesteps asked for, which must
+be a whole number of updates (:func:`~stsf_gym.agents.hyperparams.check_timesteps`). A
+checkpoint made by other code or another resolved configuration (its
+:func:`~stsf_gym.results.provenance.fingerprint` differs) is not resumed: the run says so, moves
+the old checkpoints to ``stale-checkpoints/`` and starts afresh. ``train.json`` and every model
+file carry the run's provenance.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from __future__ import annotations
 import io
 import re
 import signal
+import sys
 import time
 import warnings
 from dataclasses import asdict
@@ -22,10 +29,16 @@ from pathlib import Path
 import gymnasium as gym
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList, EvalCallback
 from stable_baselines3.common.monitor import Monitor
+from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 import stsf_gym
-from stsf_gym.agents.hyperparams import algorithm_class, load_hyperparams, policy_kwargs_for_sb3
+from stsf_gym.agents.hyperparams import (
+    algorithm_class,
+    check_timesteps,
+    load_hyperparams,
+    policy_kwargs_for_sb3,
+)
 from stsf_gym.agents.observation import PolicyObservation, observation_config
 from stsf_gym.agents.sb3_agent import META_KEY, model_metadata
 from stsf_gym.agents.training_log import (
@@ -39,8 +52,9 @@ from stsf_gym.agents.training_log import (
 )
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.generated_env import parse_world
-from stsf_gym.episode_env import make_episode_env
+from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.io import write_atomic, write_json
+from stsf_gym.results.provenance import fingerprint, provenance
 from stsf_gym.wrappers import check_pose_source
 
 PREFIX = "model"  # checkpoints are checkpoints/model_<timesteps>_steps.zip
@@ -111,15 +125,41 @@ def save_checkpoint(model, out: Path) -> Path:
 
 
 class AtomicCheckpoint(BaseCallback):
-    """Every ``save_freq`` calls, :func:`save_checkpoint` (``CheckpointCallback`` writes in
-    place, so an interrupt during a save could leave a corrupt newest checkpoint)."""
+    """Checkpoints a resume starts from, each written atomically (:func:`save_checkpoint`;
+    ``CheckpointCallback`` writes in place, so a kill during a save could corrupt it).
 
-    def __init__(self, save_freq: int, out: Path) -> None:
+    On-policy (PPO): after every update, at the start of the next rollout, so a kill loses at
+    most the rollout under way and a resumed run goes on from a whole number of rollouts and
+    ends at exactly its timesteps; the previous one is removed unless a multiple of
+    ``save_freq`` steps lies between them. Off-policy (SAC): every ``save_freq`` steps, with
+    the replay buffer (each step is an update: any count is a place to stop).
+    """
+
+    def __init__(self, save_freq: int, n_envs: int, out: Path) -> None:
         super().__init__()
-        self.save_freq, self.out = save_freq, out
+        self.save_freq, self.n_envs, self.out = save_freq, n_envs, out
+        self.rolling: Path | None = None
+
+    def _on_training_start(self) -> None:
+        self.on_policy = isinstance(self.model, OnPolicyAlgorithm)
+        self.start = self.model.num_timesteps
+        self.mark = self.start // self.save_freq
+
+    def _on_rollout_start(self) -> None:
+        steps = self.model.num_timesteps
+        if not self.on_policy or steps == self.start:
+            return
+        path = save_checkpoint(self.model, self.out)
+        if self.rolling is not None:
+            self.rolling.unlink(missing_ok=True)
+        crossed = steps // self.save_freq > self.mark
+        self.rolling, self.mark = (
+            (None if crossed else path),
+            max(self.mark, steps // self.save_freq),
+        )
 
     def _on_step(self) -> bool:
-        if self.n_calls % self.save_freq == 0:
+        if not self.on_policy and self.n_calls % max(self.save_freq // self.n_envs, 1) == 0:
             save_checkpoint(self.model, self.out)
         return True
 
@@ -149,6 +189,14 @@ def _resume(cls: type, out: Path, meta: dict, env: VecEnv):
                 f"{out} holds a run with {key} {saved.get(key)!r}, not {meta[key]!r}; "
                 "choose another --out"
             )
+    if saved.get("made_by") != meta["made_by"]:
+        stale = _set_aside(out)
+        print(
+            f"{out}: the checkpoints were made by other code or settings; they are kept in "
+            f"{stale} and training starts afresh",
+            file=sys.stderr,
+        )
+        return None
     model = cls.load(str(path), env=env, device="cpu")
     setattr(model, META_KEY, {**meta, "wall_time_s": saved.get("wall_time_s", 0.0)})
     buffer = path.with_name(f"{PREFIX}_replay_buffer_{steps}_steps.pkl")
@@ -157,6 +205,18 @@ def _resume(cls: type, out: Path, meta: dict, env: VecEnv):
     for name in (EPISODES_CSV, EVAL_CSV):
         drop_rows_after(out / name, steps)
     return model
+
+
+def _set_aside(out: Path) -> Path:
+    """Move ``out``'s checkpoints to a new folder under ``stale-checkpoints/``; forget the
+    episodes and evaluations they logged."""
+    stale = out / "stale-checkpoints"
+    stale.mkdir(exist_ok=True)
+    target = stale / str(len(list(stale.iterdir())))
+    (out / "checkpoints").rename(target)
+    for name in (EPISODES_CSV, EVAL_CSV):
+        drop_rows_after(out / name, 0)
+    return target
 
 
 def train(
@@ -181,6 +241,7 @@ def train(
     total = cfg.n_timesteps if timesteps is None else timesteps
     if n_envs < 1 or total < 1:
         raise ConfigError(f"--n-envs and --timesteps must be at least 1, got {n_envs}, {total}")
+    check_timesteps(hp, n_envs, total)
     torch.set_num_threads(1)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -188,7 +249,21 @@ def train(
     spec = {"world": world, "estimator": estimator, "env": cfg.env, "observation": observation}
     training = {k: v for k, v in asdict(cfg).items() if k not in ("env", "observation")}
     hyperparams = {"section": hp.section, **training, **hp.algo_kwargs, "n_envs": n_envs}
-    meta = {"algo": algo, "seed": seed, **spec, "hyperparams": hyperparams, "wall_time_s": 0.0}
+    resolved = {
+        **resolved_config(world, estimator, cfg.env),
+        "algo": algo,
+        "hyperparams": hyperparams,
+        "observation": observation,
+    }
+    meta = {
+        "algo": algo,
+        "seed": seed,
+        **spec,
+        "hyperparams": hyperparams,
+        "wall_time_s": 0.0,
+        "made_by": fingerprint(resolved),
+        "provenance": provenance(resolved, [seed]),
+    }
     cls = algorithm_class(algo)
     train_env = make_vec_env(n_envs, out, "train", **spec)
     eval_env = make_vec_env(1, out, "eval", **spec)
@@ -211,7 +286,7 @@ def train(
         callbacks = CallbackList(
             [
                 EpisodeLog(out, model.stsf_meta["wall_time_s"]),
-                AtomicCheckpoint(max(cfg.checkpoint_freq // n_envs, 1), out),
+                AtomicCheckpoint(cfg.checkpoint_freq, n_envs, out),
                 EvalCallback(
                     eval_env,
                     n_eval_episodes=cfg.n_eval_episodes,
@@ -238,7 +313,8 @@ def train(
                         tb_log_name=algo,
                     )
             except KeyboardInterrupt:
-                save_checkpoint(model, out)
+                if not isinstance(model, OnPolicyAlgorithm):  # PPO: its last update is saved
+                    save_checkpoint(model, out)
                 raise
         session = time.perf_counter() - started
     finally:

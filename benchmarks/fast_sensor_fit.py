@@ -7,7 +7,10 @@ Renders the landmark from a grid of distances and viewing angles
   (maximum likelihood over every view: ``detect_size_px``, ``detect_size_scale``);
 - the feature error: RMS per axis of detected square centres against their true projection
   (``feature_noise_px``);
-- false detections: wrong-id detections per frame (``false_detection_rate``).
+- false detections: wrong-id detections per frame (``false_detection_rate``);
+- track-aided matching: of the views the detector missed, the rate at which STSF's predicted
+  matcher finds the board given its corners off by a track's error, as a logistic function of
+  the apparent size (maximum likelihood, the same fit: ``aided_size_px``, ``aided_size_scale``).
 
 Then it measures the fast mode with the fitted numbers on fresh views and prints both side by
 side. ``--write`` puts the fitted numbers into the camera profile's file,
@@ -52,12 +55,18 @@ def fit(records: list[dict]) -> dict:
     sizes = np.array([r["size_px"] for r in records])
     detected = np.array([r["detected"] for r in records])
     centre, width = fit_detection_rate(sizes, detected)
+    missed = [r for r in records if r["aided"] is not None]
+    aided_centre, aided_width = fit_detection_rate(
+        np.array([r["size_px"] for r in missed]), np.array([r["aided"] for r in missed])
+    )
     summary = summarise_records(records)
     return {
         "feature_noise_px": round(summary["feature_rms_px"], 4),
         "detect_size_px": round(centre, 3),
         "detect_size_scale": round(width, 3),
         "false_detection_rate": round(summary["wrong_ids_per_view"], 4),
+        "aided_size_px": round(aided_centre, 3),
+        "aided_size_scale": round(aided_width, 3),
     }
 
 
@@ -86,7 +95,8 @@ def main(argv: list[str] | None = None) -> int:
         camera = {"mode": mode, "profile": args.profile, "fast": results.get("fitted", {})}
         env = gym.make("stsf_gym/Straight10m-v0", world=room_world(), camera=camera)
         try:
-            records = detection_records(env, rng, repeats=args.repeats)
+            aided_rng = np.random.default_rng(args.seed + 1)  # apart: the views stay the same
+            records = detection_records(env, rng, repeats=args.repeats, aided_rng=aided_rng)
         finally:
             env.close()
         if mode == "rendered":

@@ -12,13 +12,16 @@ it, the full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
+
 from stsf_gym.envs.fault_spec import FaultSpec
-from stsf_gym.envs.worlds.checks import check_clearance, check_world
+from stsf_gym.envs.worlds.checks import check_clearance, check_route, check_world
 from stsf_gym.validation import (
     ConfigError,
     Count,
@@ -82,15 +85,23 @@ class WorldConfig:
     landmark_pattern: LandmarkPattern
     landmarks: tuple[LandmarkSpec, ...]
     obstacles: tuple[ObstacleSpec, ...] = ()
+    #: goals visited in order, each on the path (the last one its end); empty: the path's end
+    route: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         require(len(self.walls) > 0, "walls", "must list at least one wall segment")
         require(len(self.path) >= 2, "path", f"must have at least 2 points, got {len(self.path)}")
         check_world(self)
+        check_route(self)
 
     @property
     def goal(self) -> tuple[float, float]:
         return self.path[-1]
+
+    @property
+    def goals(self) -> tuple[tuple[float, float], ...]:
+        """The goals in visiting order: the route, or the path's end alone."""
+        return self.route or (self.path[-1],)
 
 
 @dataclass(frozen=True)
@@ -125,6 +136,8 @@ class RobotConfig:
     wheel_max_torque: Positive
     max_speed: Positive
     max_yaw_rate: Positive
+    max_acceleration: Positive  # m/s^2, the wheel velocity controller's linear limit
+    max_yaw_acceleration: Positive  # rad/s^2, its angular limit
     nominal_speed: Positive
     camera_height: Positive
     camera_forward: float
@@ -147,6 +160,8 @@ class FastCameraConfig:
     detect_size_px: Positive  # square pitch (px) at which half of the boards are detected
     detect_size_scale: Positive  # logistic width of the detection rate in square pitch (px)
     false_detection_rate: NonNegative  # wrong-id detections per frame
+    aided_size_px: Positive  # size (px) at which a track-aided search finds half the missed boards
+    aided_size_scale: Positive  # logistic width of that rate (px)
     max_detections: Count  # detection slots in the observation
 
 
@@ -160,6 +175,18 @@ class LensConfig:
     distortion: tuple[float, float, float, float, float]  # OpenCV k1 k2 p1 p2 k3
     vignetting: Annotated[float, Range(ge=0, lt=1)]  # share of light lost at the image corner
     defocus_px: NonNegative  # std (px) of the lens's Gaussian point spread; 0 in focus
+
+
+def radial_reach(distortion: tuple[float, ...], limit: float = 10.0) -> float:
+    """The largest distorted radius (normalised image coordinates) that the radial part of
+    ``distortion`` (OpenCV k1 k2 p1 p2 k3) reaches while it still grows with the ray's
+    radius: the image is invertible up to there. ``limit`` for a lens that never stops."""
+    k1, k2, _, _, k3 = distortion
+    r = np.linspace(0.0, limit, 20001)
+    slope = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6
+    stop = int(np.argmax(slope <= 0)) if (slope <= 0).any() else r.size - 1
+    radius = r[: stop + 1]
+    return float(np.max(radius * (1 + k1 * radius**2 + k2 * radius**4 + k3 * radius**6)))
 
 
 @dataclass(frozen=True)
@@ -182,6 +209,15 @@ class CalibrationErrorConfig:
 
 
 @dataclass(frozen=True)
+class LatencyConfig:
+    """Exposure to availability of a camera frame (``configs/latency/<profile>.yaml``)."""
+
+    profile: str  # zero | paper | any file of configs/latency
+    delay_s: NonNegative  # s from a frame's exposure until the robot has its result
+    jitter_s: NonNegative  # s, std of a half-normal extra delay per frame
+
+
+@dataclass(frozen=True)
 class CameraConfig:
     enabled: bool
     width: Pixels
@@ -201,9 +237,31 @@ class CameraConfig:
     feature_rms_px: Positive  # the detector's feature error the profile is made to give
     mode: Literal["rendered", "fast"]
     fast: FastCameraConfig
+    latency: LatencyConfig
 
     def __post_init__(self) -> None:
         require(self.far > self.near, "far", f"must be > near ({self.near}), got {self.far}")
+        corner = math.hypot(self.width, self.height) / self.height  # normalised corner radius
+        corner *= math.tan(math.radians(self.vfov_deg) / 2)
+        reach = radial_reach(self.lens.distortion)
+        require(
+            reach > corner,
+            "lens.distortion",
+            f"{list(self.lens.distortion)} folds the image over: its radial mapping "
+            f"r(1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at distorted radius {reach:.3g}, "
+            f"inside the image corner at {corner:.3g} (a lens maps each ray to one pixel)",
+        )
+
+
+@dataclass(frozen=True)
+class SonarBeamConfig:
+    """The sonar beam model (:mod:`stsf_gym.envs.sensors.sonar_beam`), off by default."""
+
+    enabled: bool
+    critical_angle_deg: Annotated[float, Range(gt=0, le=90)]  # incidence at half detection
+    angle_width_deg: Annotated[float, Range(gt=0, le=90)]  # how sharply detection falls
+    random_prob: Probability  # a reading uniform in [min_range, max_range]
+    crosstalk_prob: Probability  # a neighbour's echo (a ring firing all together)
 
 
 @dataclass(frozen=True)
@@ -217,12 +275,26 @@ class SonarConfig:
     noise_std: NonNegative
     noise_std_per_m: NonNegative
     dropout_prob: Probability
+    firing_order: tuple[int, ...]  # transducers in firing order; empty: all fire at each step end
+    firing_interval_s: NonNegative  # s between consecutive firings of the order
+    beam: SonarBeamConfig
 
     def __post_init__(self) -> None:
         require(
             self.max_range > self.min_range,
             "max_range",
             f"must be > min_range ({self.min_range}), got {self.max_range}",
+        )
+        order = self.firing_order
+        require(
+            all(0 <= t < self.count for t in order) and len(set(order)) == len(order),
+            "firing_order",
+            f"must list distinct transducers of 0..{self.count - 1}, got {list(order)}",
+        )
+        require(
+            not order or self.firing_interval_s > 0,
+            "firing_interval_s",
+            f"must be > 0 with a firing_order, got {self.firing_interval_s}",
         )
 
 
@@ -244,6 +316,18 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class TaskConfig:
+    """When an episode succeeds (:mod:`stsf_gym.envs.task`): ``reach`` (the paper's protocol) or
+    ``declare`` (the agent stops to declare arrival at each goal of the route)."""
+
+    protocol: Literal["reach", "declare"]
+    goal_radius: Positive  # declare: success radius around each goal at the declared stop (m)
+    stop_speed: Positive  # declare: a commanded |forward speed| below this (m/s) ...
+    stop_yaw_rate: Positive  # ... and |yaw rate| below this (rad/s) is standing still
+    stop_seconds: Positive  # declare: standing still this long declares arrival
+
+
+@dataclass(frozen=True)
 class RenderConfig:
     view: Literal["map", "chase", "top"]
     width: Pixels
@@ -260,12 +344,19 @@ class EnvConfig:
     encoders: EncoderConfig
     reward: RewardConfig
     render: RenderConfig
+    task: TaskConfig
     faults: tuple[FaultSpec, ...] = ()  # timed faults (envs/fault_spec.py); none by default
 
     def __post_init__(self) -> None:
         check_clearance(self.world, self.robot.body_radius)
         map_ids = sorted(lm.id for lm in self.world.landmarks)
         for i, fault in enumerate(self.faults):
+            require(
+                fault.start < self.sim.max_episode_seconds,
+                f"faults[{i}].start",
+                f"must be before the episode ends (sim.max_episode_seconds "
+                f"{self.sim.max_episode_seconds:g} s), got {fault.start:g}: it would never act",
+            )
             require(
                 fault.landmark_id is None or fault.landmark_id in map_ids,
                 f"faults[{i}].landmark_id",
@@ -329,17 +420,25 @@ def load_config(
 
 
 def _add_camera_profile(tree: dict, sources: KeySources) -> None:
-    """Fill the camera section from its profile file; keys a layer set stay as set."""
+    """Fill the camera section from its profile file, and its latency section from its own
+    profile; keys a layer set stay as set."""
     camera = tree.setdefault("camera", {})
-    name = camera.get("profile")
-    known = sorted(p.stem for p in (CONFIG_DIR / "cameras").glob("*.yaml"))
-    file = CONFIG_DIR / "cameras" / f"{name}.yaml"
+    tree["camera"] = _with_profile(camera, "cameras", "camera", sources)
+    latency = tree["camera"].setdefault("latency", {})
+    tree["camera"]["latency"] = _with_profile(latency, "latency", "camera.latency", sources)
+
+
+def _with_profile(section: dict, folder: str, label: str, sources: KeySources) -> dict:
+    """``section`` over the keys of ``configs/<folder>/<section['profile']>.yaml``."""
+    name = section.get("profile")
+    known = sorted(p.stem for p in (CONFIG_DIR / folder).glob("*.yaml"))
+    file = CONFIG_DIR / folder / f"{name}.yaml"
     if not isinstance(name, str) or not file.is_file():
         raise ConfigError(
-            f"camera.profile must be one of {known}, got {name!r}",
-            "camera.profile",
-            sources.file_of("camera.profile") or None,
+            f"{label}.profile must be one of {known}, got {name!r}",
+            f"{label}.profile",
+            sources.file_of(f"{label}.profile") or None,
         )
     profile = read_yaml(file)
-    tree["camera"] = deep_merge(profile, camera)
-    sources.record(profile, shown(file), "camera", keep=True)
+    sources.record(profile, shown(file), label, keep=True)
+    return deep_merge(profile, section)

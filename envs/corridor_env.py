@@ -10,17 +10,21 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from stsf_gym.camera_model import CameraCalibration
+from stsf_gym.camera_model import CameraCalibration, PanTiltMount
 from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
+from stsf_gym.envs.drive_controller import VelocityController
 from stsf_gym.envs.faults import FaultInjector
+from stsf_gym.envs.random_streams import RandomStreams
 from stsf_gym.envs.rendering.map_view import MapView, detections_frame
 from stsf_gym.envs.rendering.window import HumanWindow, display_available
 from stsf_gym.envs.robot import DiffDriveRobot
 from stsf_gym.envs.sensors.camera import PinholeCamera, believed_calibration, look_at, view_matrix
+from stsf_gym.envs.sensors.camera_timing import FrameQueue
 from stsf_gym.envs.sensors.encoders import WheelEncoders
 from stsf_gym.envs.sensors.fast_camera import SimulatedDetector
 from stsf_gym.envs.sensors.rendered_camera import RenderedCamera
 from stsf_gym.envs.sensors.sonar import SonarRing
+from stsf_gym.envs.sensors.sonar_firing import FiringSchedule
 from stsf_gym.envs.simulator import Simulator
 from stsf_gym.envs.task import PathTask
 from stsf_gym.envs.worlds.checks import check_start_pose
@@ -53,7 +57,10 @@ class CorridorEnv(gym.Env):
       (``camera.renderer``) through the lens and sensor of ``camera.profile``
       (:mod:`stsf_gym.envs.sensors.rendered_camera`: distortion, vignetting, defocus, motion blur
       over the exposure, gain and noise).
-    - ``image_new``: ``Discrete(2)``, 1 when a camera frame was taken during this step (or reset).
+    - ``image_new``: ``Discrete(2)``, 1 when a camera frame became available during this step
+      (or reset): with zero ``camera.latency`` the frame exposed at this step's end; with a
+      latency (``camera.latency.profile: paper``: 0.127 s detect + 0.332 s localise, plus
+      jitter) one exposed earlier (:mod:`stsf_gym.envs.sensors.camera_timing`).
     - With ``camera.mode: fast`` (no rendering; :mod:`stsf_gym.envs.sensors.fast_camera`) ``image``
     is
       replaced by the frame's simulated detections: ``landmark_ids`` ``Box((L,), int64)``
@@ -66,14 +73,38 @@ class CorridorEnv(gym.Env):
     - ``encoders``: ``Box((2,), int64)``, wheel tick **deltas** [left, right] since the previous
       step (not cumulative counts); convert with ``env.unwrapped.odometry_calibration``.
 
+    Every sensor's reading carries its time (s of simulated time since reset, ``float64``):
+
+    - ``image_time``: ``Box((1,))``, the exposure time of the frame in ``image`` (or
+      ``landmark_ids``/``landmark_points``) and ``camera_pan_tilt``; -1 before any frame is
+      available;
+    - ``sonar_time``: ``Box((16,))``, when each transducer last fired: all at the step end, or
+      one after another in ``sonar.firing_order`` every ``sonar.firing_interval_s``
+      (:mod:`stsf_gym.envs.sensors.sonar_firing`), the others keeping their last reading;
+    - ``encoders_time``: ``Box((1,))``, the end of the interval the tick deltas cover (the
+      step's end).
+
     ## Reward
     ``reward.progress`` per metre gained along the path, ``reward.time`` per second,
     ``reward.goal`` on reaching the goal, ``reward.collision`` on a collision, and
     ``reward.steering_change`` (<= 0, default 0) per unit change of the yaw command ``action[1]``.
 
-    ## Episode end
-    Terminated on reaching the goal (within ``goal_radius``) or on touching a wall or obstacle;
-    truncated after ``sim.max_episode_seconds`` of simulated time.
+    ## Episode end (``task.protocol``, :class:`stsf_gym.envs.task.PathTask`)
+    - ``reach`` (default; the paper's **reach-the-goal protocol**, used by Table I, Fig. 10 and
+      Fig. 11): terminated as a success when the TRUE position enters the world's
+      ``goal_radius`` around the path's end.
+    - ``declare`` (**declared arrival**, as Habitat PointNav's STOP): the agent declares that it
+      has arrived by standing still (commanded ``|v| < task.stop_speed`` and ``|w| <
+      task.stop_yaw_rate``, held ``task.stop_seconds``, after moving). The declaration is a
+      success only if the true position is then within ``task.goal_radius`` (0.25 m: one body
+      radius, near Habitat's 0.2 m) of the current goal; the goals are the world's ``route`` in
+      order (or the path's end), a declared stop at each. A stop outside the radius ends the
+      episode as a failure; the truth crossing a goal ends nothing. Standing still keeps the
+      ``Box`` action of every agent as it is (no extra entry to learn or to append after the
+      camera mount), and is how a real robot ends a delivery.
+
+    Under both, touching a wall or obstacle terminates (a failure); truncated (a failure) after
+    ``sim.max_episode_seconds`` of simulated time.
 
     ## Faults
     The ``faults:`` config section (none by default, :mod:`stsf_gym.envs.faults`) injects timed
@@ -84,13 +115,22 @@ class CorridorEnv(gym.Env):
     ``true_pose`` ([x, y, yaw], privileged: for evaluation only), ``camera_pose`` (4x4
     world-from-camera, OpenCV axes, of the frame in ``image``, at the middle of its exposure),
     ``collision``, ``distance_travelled`` (m, true), ``progress`` (m along the path),
-    ``sim_time`` (s).
+    ``sim_time`` (s), ``goals_reached`` (goals done so far), ``success`` (every goal reached),
+    ``stops`` (``declare``: each declared stop as ``{goal, time, position, true_distance_m,
+    success}``, the true distance to the goal it was declared for).
 
     ## Camera
     ``camera_matrix`` (K) and ``dist_coeffs`` (OpenCV ``k1 k2 p1 p2 k3``) are the TRUE camera of
     ``image``, for evaluation; ``camera_calibration`` is what the robot believes (K and
-    distortion with this episode's calibration error, drawn at reset from ``np_random``), the
-    only calibration an estimator may use. ``renderer`` names the renderer in use.
+    distortion with this episode's calibration error, drawn at reset), the only calibration an
+    estimator may use. ``renderer`` names the renderer in use.
+
+    ## Randomness
+    Every draw comes from :attr:`streams` (:mod:`stsf_gym.envs.random_streams`): one generator
+    per subsystem (encoders, sonar, camera sensor, detector simulation, calibration, faults,
+    world generation, timing), spawned at each reset from a seed drawn from ``np_random``. So
+    ``reset(seed=s)`` fixes everything, and the camera's mode, rate or absence leaves the other
+    subsystems' draws unchanged (common random numbers for paired comparisons).
 
     ## Arguments
     - ``world``: world name in ``configs/worlds`` (set by the registered id), path or mapping.
@@ -147,7 +187,10 @@ class CorridorEnv(gym.Env):
         self.camera_calibration: CameraCalibration = self.camera.calibration
         self.camera_sensor = self._camera_sensor()
         self.sonar = SonarRing(cfg.sonar, cfg.robot.body_radius)
+        self.sonar_firing = FiringSchedule(cfg.sonar)
+        self.frames = FrameQueue(cfg.camera.latency)
         self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
+        self.controller = VelocityController(cfg.robot)
         self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
         self.observation_space = self._observation_space()
         self._initial_state: int | None = None
@@ -180,7 +223,7 @@ class CorridorEnv(gym.Env):
         self.config = dataclasses.replace(self.config, world=world)
         if self.view is not None:  # the map of the new world
             self.view = self._map_view()
-        self.task = PathTask(world, self.config.reward)
+        self.task = PathTask(world, self.config.reward, self.config.task)
         self.faults = FaultInjector(
             self.config.faults, self.world, self.robot, self.observation_space
         )
@@ -230,6 +273,12 @@ class CorridorEnv(gym.Env):
         """Nominal robot-from-camera 4x4 (OpenCV axes) for mount angles (rad)."""
         return self.robot.robot_from_camera(pan, tilt)
 
+    @property
+    def camera_mount(self) -> PanTiltMount:
+        """The nominal pan-tilt head of the camera (``camera_mount(pan, tilt)`` is
+        :meth:`robot_from_camera`)."""
+        return self.robot.mount
+
     def landmarks_in_view(self, camera_pose: np.ndarray | None = None) -> list[int]:
         """Ids of landmarks wholly inside the frame, facing the camera, present (a fault may
         remove one) and not occluded.
@@ -249,20 +298,29 @@ class CorridorEnv(gym.Env):
             4 * wheel_rate * self.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
         )
         limits = np.radians([cfg.robot.pan_limit_deg, cfg.robot.tilt_limit_deg]).astype(np.float32)
+        end = cfg.sim.max_episode_seconds + self.dt  # the latest timestamp (s)
         return spaces.Dict(
             {
                 **self.camera_sensor.observation_space(),
                 "image_new": spaces.Discrete(2),
                 "camera_pan_tilt": spaces.Box(-limits - 0.05, limits + 0.05, (2,), np.float32),
+                "image_time": spaces.Box(-1.0, end, (1,), np.float64),
                 "sonar": spaces.Box(
                     cfg.sonar.min_range, cfg.sonar.max_range, (cfg.sonar.count,), np.float32
                 ),
+                "sonar_time": spaces.Box(0.0, end, (cfg.sonar.count,), np.float64),
                 "encoders": spaces.Box(-self._max_ticks, self._max_ticks, (2,), np.int64),
+                "encoders_time": spaces.Box(0.0, end, (1,), np.float64),
             }
         )
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
+        self.streams = RandomStreams.draw(self.np_random)
+        return self._start_episode(options)
+
+    def _start_episode(self, options: dict | None):
+        """Everything of :meth:`reset` after the seed and the episode's :attr:`streams`."""
         options = dict(options or {})
         start = options.pop("start_pose", self.config.world.start)
         if options:
@@ -274,19 +332,31 @@ class CorridorEnv(gym.Env):
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
         self.robot.reset(tuple(start), *self._mount_target)
         self.faults.reset()
-        self.encoders.reset(self.robot.wheel_angles(), self.np_random)
+        self.controller.reset()
+        streams = self.streams
+        self.encoders.reset(self.robot.wheel_angles(), streams.calibration)
         self.camera_calibration = believed_calibration(
-            self.camera.calibration, self.config.camera.calibration_error, self.np_random
+            self.camera.calibration, self.config.camera.calibration_error, streams.calibration
         )
         if self.config.camera.enabled:
-            self.camera_sensor.reset(self.np_random)
+            self.camera_sensor.reset(self._camera_stream())
         self._time = 0.0
         self._yaw_command = 0.0
         self._distance = 0.0
         self._pose = self.robot.floor_pose()
         self._progress = self.task.progress(self._pose)
+        self.task.reset()
         self._next_frame = 0.0
-        obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, self.np_random)
+        self.frames.reset()
+        self._shown = None  # the frame in the observation (None: none available yet)
+        self._camera_obs = self.camera_sensor.observe()  # nothing seen yet
+        self._frame_pose = self.robot.camera_pose()
+        self._frame_pan_tilt = self.robot.mount_angles().astype(np.float32)
+        self.sonar_firing.reset()
+        self._sonar_time = np.zeros(self.config.sonar.count)
+        if self.sonar_firing.sequential:  # the whole ring's first readings, then the sequence
+            self._sonar = self.sonar.read(self.sim, self._pose, streams.sonar)
+        obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, streams.faults)
         self._last_obs = obs
         if self.view is not None:
             self.view.clear()
@@ -305,50 +375,83 @@ class CorridorEnv(gym.Env):
             raise ValueError(f"action contains NaN or infinite values: {a.tolist()}")
         a = np.clip(a, -1.0, 1.0)
         robot = self.config.robot
-        self.robot.drive(a[0] * robot.max_speed, a[1] * robot.max_yaw_rate)
+        target = np.array([a[0] * robot.max_speed, a[1] * robot.max_yaw_rate])
         if len(a) > 2:
             self._mount_target[: len(a) - 2] = a[2:] * self.robot.pan_tilt_limits[: len(a) - 2]
             self.robot.point_camera(*self._mount_target)
         if self.faults.before_physics(self._time + self.dt):
             self._pose = self.robot.floor_pose()  # a kidnap is no distance driven
-        self.sim.step(self._substeps)
+        for substep in range(1, self._substeps + 1):  # the controller runs at the physics rate
+            self.robot.drive(*self.controller.update(target, self.sim.time_step))
+            self.sim.step(1)
+            self._fire_sonars(self._time + substep * self.sim.time_step)
         self._time += self.dt
         pose = self.robot.floor_pose()
         self._distance += float(np.hypot(*(pose[:2] - self._pose[:2])))
         self._pose = pose
-        ticks = self.encoders.read(self.robot.wheel_angles(), self.np_random)
+        ticks = self.encoders.read(self.robot.wheel_angles(), self.streams.encoders)
         collision = self.robot.in_collision(ignore={self.world.floor})
         progress = self.task.progress(pose)
-        reached = self.task.reached_goal(pose)
+        reached = self.task.update(
+            pose, a[0] * robot.max_speed, a[1] * robot.max_yaw_rate, self.dt, self._time
+        )
         steering_change = abs(a[1] - self._yaw_command)
         self._yaw_command = float(a[1])
         reward = self.task.reward(
             progress - self._progress, self.dt, reached, collision, steering_change
         )
         self._progress = progress
-        terminated = reached or collision
+        terminated = self.task.finished or collision
         truncated = not terminated and self._time >= self.config.sim.max_episode_seconds - 1e-9
-        obs = self.faults.observe(self._observe(ticks), self._time, self.np_random)
+        obs = self.faults.observe(self._observe(ticks), self._time, self.streams.faults)
         self._last_obs = obs
         if self._window is not None:
             self.render()
         return obs, float(reward), terminated, truncated, self._info(collision)
 
+    def _fire_sonars(self, time: float) -> None:
+        """Transducers of the firing sequence due by ``time`` read the world now."""
+        for transducer, fired in self.sonar_firing.due(time):
+            pose = self.robot.floor_pose()
+            self._sonar[transducer] = self.sonar.read(
+                self.sim, pose, self.streams.sonar, np.array([transducer])
+            )[0]
+            self._sonar_time[transducer] = fired
+
     def _observe(self, ticks: np.ndarray) -> dict:
-        new_frame = self._time >= self._next_frame - 1e-9
-        if new_frame:
+        if self._time >= self._next_frame - 1e-9:  # a frame is exposed
             self._next_frame += 1.0 / self.config.camera.rate_hz
-            self._frame_pose = self.robot.camera_pose()
-            self._frame_pan_tilt = self.robot.mount_angles().astype(np.float32)
+            pose = self.robot.camera_pose()
             if self.config.camera.enabled:
-                self.camera_sensor.capture(self._frame_pose, self.np_random)
+                self.camera_sensor.capture(pose, self._camera_stream())
+            pan_tilt = self.robot.mount_angles().astype(np.float32)
+            camera_obs = self.camera_sensor.observe()
+            self.frames.expose(self._time, camera_obs, pose, pan_tilt, self.streams.timing)
+        shown = self.frames.release(self._time)
+        if shown is not None:
+            self._shown, self._camera_obs = shown, shown.camera_obs
+            self._frame_pose, self._frame_pan_tilt = shown.pose, shown.pan_tilt
+        if not self.sonar_firing.sequential:
+            self._sonar = self.sonar.read(self.sim, self._pose, self.streams.sonar)
+            self._sonar_time[:] = self._time
         return {
-            **self.camera_sensor.observe(),
-            "image_new": int(new_frame and self.config.camera.enabled),
+            **{key: value.copy() for key, value in self._camera_obs.items()},
+            "image_new": int(shown is not None and self.config.camera.enabled),
+            "image_time": np.array([-1.0 if self._shown is None else self._shown.exposure]),
             "camera_pan_tilt": self._frame_pan_tilt.copy(),
-            "sonar": self.sonar.read(self.sim, self._pose, self.np_random),
+            "sonar": self._sonar.copy(),
+            "sonar_time": self._sonar_time.copy(),
             "encoders": np.clip(ticks, -self._max_ticks, self._max_ticks).astype(np.int64),
+            "encoders_time": np.array([self._time]),
         }
+
+    def _camera_stream(self) -> np.random.Generator:
+        """The rendered camera's sensor noise stream, or the fast mode's detector stream."""
+        return (
+            self.streams.detector
+            if self.config.camera.mode == "fast"
+            else (self.streams.camera_sensor)
+        )
 
     def _info(self, collision: bool) -> dict:
         return {
@@ -358,6 +461,9 @@ class CorridorEnv(gym.Env):
             "distance_travelled": self._distance,
             "progress": self._progress,
             "sim_time": self._time,
+            "goals_reached": self.task.goal_index,
+            "success": self.task.success,
+            "stops": [dataclasses.asdict(stop) for stop in self.task.stops],
         }
 
     def render(self):

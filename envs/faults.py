@@ -20,7 +20,7 @@ frame; the injector repeats the delivered (faulted) one instead. With simulated 
 adds a copy of a real detection labelled with the fault's id. The injector reads and writes
 only the observation keys, so it works in either camera mode.
 
-Every random draw comes from the env's ``np_random`` and only while a fault acts, so a config
+Every random draw comes from the episode's fault stream and only while a fault acts, so a config
 without faults gives the same episodes as before.
 """
 
@@ -35,7 +35,14 @@ from gymnasium import spaces
 from stsf_gym.envs.config import LandmarkSpec
 from stsf_gym.envs.fault_spec import INSTANT_KINDS, FaultSpec
 
-FRAME_KEYS = ("image", "camera_pan_tilt", "landmark_ids", "landmark_points")
+FRAME_KEYS = (
+    "image",
+    "camera_pan_tilt",
+    "landmark_ids",
+    "landmark_points",
+    "aided_ids",
+    "aided_points",
+)
 BOARD_KINDS = ("landmark_removed", "landmark_occluded", "outlier_detection")
 WHEELS = {"left": 0, "right": 1}
 
@@ -136,9 +143,10 @@ class FaultInjector:
 def _blackout(obs: dict) -> None:
     if "image" in obs:
         obs["image"] = np.zeros_like(obs["image"])
-    if "landmark_ids" in obs:
-        obs["landmark_ids"] = np.full_like(obs["landmark_ids"], -1)
-        obs["landmark_points"] = np.zeros_like(obs["landmark_points"])
+    for prefix in ("landmark", "aided"):
+        if f"{prefix}_ids" in obs:
+            obs[f"{prefix}_ids"] = np.full_like(obs[f"{prefix}_ids"], -1)
+            obs[f"{prefix}_points"] = np.zeros_like(obs[f"{prefix}_points"])
 
 
 def blur_kernel(length_px: float, angle_deg: float) -> np.ndarray:

@@ -13,6 +13,7 @@ import gymnasium as gym
 
 from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
 from stsf_gym.envs.corridor_env import CorridorEnv
+from stsf_gym.envs.random_streams import RandomStreams
 from stsf_gym.envs.worlds.generator import generate_world, world_tree
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
 
@@ -74,7 +75,7 @@ class GeneratedCorridorEnv(CorridorEnv):
     """:class:`~stsf_gym.envs.corridor_env.CorridorEnv` whose world is drawn at each reset.
 
     - ``reset(seed=s)``: world seed ``first + s % count`` of the split (``world_seed_for``);
-    - ``reset()`` without a seed: a world seed of the split drawn with ``self.np_random``;
+    - ``reset()`` without a seed: a world seed of the split drawn from the episode's world stream;
     - ``reset(options={"world_seed": k})``: world ``k`` (it must lie in the split).
 
     ``env.unwrapped.world_seed`` is the current world's seed. The world is rebuilt in the
@@ -106,13 +107,13 @@ class GeneratedCorridorEnv(CorridorEnv):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         options = dict(options or {})
         world_seed = options.pop("world_seed", None)
-        if seed is not None:
-            gym.Env.reset(self, seed=seed)
+        gym.Env.reset(self, seed=seed)
+        self.streams = RandomStreams.draw(self.np_random)
         if world_seed is None:
             world_seed = (
                 world_seed_for(self.world_seeds, seed)
                 if seed is not None
-                else int(self.world_seeds[int(self.np_random.integers(len(self.world_seeds)))])
+                else int(self.world_seeds[int(self.streams.world.integers(len(self.world_seeds)))])
             )
         elif isinstance(world_seed, bool) or world_seed not in self.world_seeds:
             first, last = self.world_seeds.start, self.world_seeds.stop - 1
@@ -123,4 +124,4 @@ class GeneratedCorridorEnv(CorridorEnv):
         if world_seed != self.world_seed:
             self._build_world(generate_world(int(world_seed), self.generator, self.config))
             self.world_seed = int(world_seed)
-        return super().reset(options=options)
+        return self._start_episode(options)

@@ -1,7 +1,10 @@
 """A differential-drive robot with two casters and a pan/tilt camera mount.
 
 The URDF is generated from ``configs`` (``robot`` section) so every dimension lives in one
-place; the wheels touch the floor through PyBullet contacts and are driven by velocity motors.
+place; the wheels touch the floor through PyBullet contacts and are driven by velocity motors
+(their targets from :mod:`stsf_gym.envs.drive_controller`). The chassis rests level on its
+wheels and sprung, frictionless casters: the camera's true pose is ``true_pose`` composed with
+:meth:`DiffDriveRobot.robot_from_camera` to a fraction of a millimetre and milliradian.
 The base frame sits on the wheel axle midpoint; ``true_pose`` is its floor position and yaw.
 Every link's centre of mass is at its frame origin (PyBullet reports base poses at the centre
 of mass), which also keeps the robot's centre of mass low.
@@ -13,13 +16,19 @@ import math
 
 import numpy as np
 
+from stsf_gym.camera_model import LINK_FROM_OPTICAL, PanTiltMount, pose_matrix, rot_z
 from stsf_gym.envs.config import RobotConfig
 from stsf_gym.envs.simulator import Simulator, cache_file
 
 CASTER_FRACTION = 0.45  # caster sphere radius as a fraction of the wheel radius
 BODY_CLEARANCE = 0.05  # floor to body bottom (m)
 WHEEL_WIDTH = 0.03
-CASTER_LIFT = 0.001  # casters clear the floor by 1 mm so the wheels carry the weight
+# The casters touch the floor through a stiff, critically damped spring (a rubber-tyred caster),
+# frictionless: with rigid contacts four wheels on a floor are statically indeterminate and the
+# solver may leave the driven wheels unloaded; lifted clear, the chassis tips onto one caster
+# and rocks to the other on every reversal. Loaded by a spring, the driven wheels carry the
+# weight and the chassis stays level to about 0.1 mrad under the controller's accelerations.
+CASTER_CONTACT = {"contactStiffness": 3.0e5, "contactDamping": 2.5e3}  # N/m, N s/m
 
 
 def _box_inertia(mass: float, x: float, y: float, z: float) -> str:
@@ -111,7 +120,7 @@ def robot_urdf(cfg: RobotConfig) -> str:
     for name, x in (("front_caster", caster_x), ("rear_caster", -caster_x)):
         geom = f'<sphere radius="{caster_r:.6f}"/>'
         parts.append(link(name, 0.2, geom, 'xyz="0 0 0"', "0.2 0.2 0.2 1", (caster_r,) * 3))
-        parts.append(joint(f"{name}_joint", "fixed", name, (x, 0, caster_r - r + CASTER_LIFT)))
+        parts.append(joint(f"{name}_joint", "fixed", name, (x, 0, caster_r - r)))
     mast_geom = f'<box size="0.04 0.04 {mast_h:.6f}"/>'
     mast_origin = f'xyz="0 0 {-mast_h / 2:.6f}"'
     head_geom = '<box size="0.06 0.08 0.05"/>'
@@ -146,27 +155,6 @@ def robot_urdf(cfg: RobotConfig) -> str:
     return "\n".join(parts)
 
 
-def pose_matrix(x: float, y: float, z: float, rotation: np.ndarray) -> np.ndarray:
-    pose = np.eye(4)
-    pose[:3, :3] = rotation
-    pose[:3, 3] = (x, y, z)
-    return pose
-
-
-def rot_z(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def rot_y(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-#: Rotation from the camera link (x forward, y left, z up) to OpenCV camera axes.
-LINK_FROM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
-
-
 class DiffDriveRobot:
     """The robot in one simulator: drive, pan/tilt, pose, wheel angles, contacts."""
 
@@ -190,6 +178,7 @@ class DiffDriveRobot:
                 lateralFriction=0.0,
                 rollingFriction=0.0,
                 spinningFriction=0.0,
+                **CASTER_CONTACT,
             )
         for wheel in self.wheels:
             c.changeDynamics(self.body, wheel, lateralFriction=cfg.wheel_friction)
@@ -282,8 +271,12 @@ class DiffDriveRobot:
 
         The robot frame is on the floor below the axle midpoint, x forward, z up.
         """
-        rotation = rot_z(pan) @ rot_y(-tilt) @ LINK_FROM_OPTICAL
-        return pose_matrix(self.cfg.camera_forward, 0.0, self.cfg.camera_height, rotation)
+        return self.mount(pan, tilt)
+
+    @property
+    def mount(self) -> PanTiltMount:
+        """The camera's pan-tilt head on the robot (nominal kinematics)."""
+        return PanTiltMount(self.cfg.camera_forward, 0.0, self.cfg.camera_height)
 
     def in_collision(self, ignore: set[int]) -> bool:
         """Whether the robot touches any body other than those in ``ignore`` (the floor)."""

@@ -95,15 +95,22 @@ class Simulator:
             raise ValueError(f"camera.renderer must be one of {RENDERERS[:-1]}, got {renderer!r}")
         with quiet_c_output():
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
-        self.client.setTimeStep(1.0 / physics_hz)
-        self.client.setGravity(0, 0, -9.81)
         self.time_step = 1.0 / physics_hz
+        self._set_physics()
         self.scene = Scene()
         self._hidden_from: dict[int, tuple] = {}  # hidden body -> its pose in the world
         self._gl: GLRenderer | None = None
         self._closed = False
         self._frames = 0  # rendered so far: the first ones print EGL banners
         self.renderer = self._choose_renderer(renderer)
+
+    def _set_physics(self) -> None:
+        """Time step, gravity, and pyramid friction: Bullet's default friction cone lets
+        wheels creep along their contact as their torque reverses (a body turned to and fro on
+        the spot drifted 2.3 deg in 30 s on perfect encoders; with pyramid friction 0.02 deg)."""
+        self.client.setTimeStep(self.time_step)
+        self.client.setGravity(0, 0, -9.81)
+        self.client.setPhysicsEngineParameter(enableConeFriction=0)
 
     def _choose_renderer(self, renderer: str) -> str:
         if renderer in ("tiny", "none"):
@@ -208,8 +215,7 @@ class Simulator:
         """Remove every body and the scene (to build another world), keeping the time step
         and gravity."""
         self.client.resetSimulation()
-        self.client.setTimeStep(self.time_step)
-        self.client.setGravity(0, 0, -9.81)
+        self._set_physics()
         self.scene.clear()
         self._hidden_from.clear()
 

@@ -1,10 +1,13 @@
-"""The navigation task: follow the world's path to its goal. Progress, reward, termination."""
+"""The navigation task: follow the world's path to its goal(s). Progress, reward, termination,
+and the two success protocols (``task.protocol``: ``reach``, the paper's, or ``declare``)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from stsf_gym.envs.config import RewardConfig, WorldConfig
+from stsf_gym.envs.config import RewardConfig, TaskConfig, WorldConfig
 
 
 class Polyline:
@@ -39,25 +42,97 @@ class Polyline:
         return self.points[i] + (s - self.offsets[i]) / self.lengths[i] * self.segments[i]
 
 
-class PathTask:
-    """Progress is the arc length of the path point nearest the robot.
+@dataclass(frozen=True)
+class Stop:
+    """A declared arrival: which goal, when, where (true), how far from the goal, success."""
 
-    Reward per step: ``progress * (metres gained) + time * dt``, plus ``goal`` on reaching the
-    goal and ``collision`` on touching a wall or obstacle.
+    goal: int
+    time: float
+    position: tuple[float, float]
+    true_distance_m: float
+    success: bool
+
+
+class PathTask:
+    """Progress, reward and the episode's end under ``task.protocol``.
+
+    Progress is the arc length of the path point nearest the robot. Reward per step:
+    ``progress * (metres gained) + time * dt``, plus ``goal`` on each goal reached and
+    ``collision`` on touching a wall or obstacle.
+
+    - ``reach`` (the paper's reach-the-goal protocol, Table I and Fig. 10/11): the goal is
+      reached, and the episode ends as a success, when the TRUE position enters the world's
+      ``goal_radius`` around the path's end; the agent decides nothing.
+    - ``declare`` (Habitat PointNav's STOP, Anderson et al. 2018): the goals are the world's
+      ``route`` (or the path's end) in order. The agent **declares arrival by standing still**:
+      a commanded ``|v| < stop_speed`` and ``|w| < stop_yaw_rate`` held for ``stop_seconds``,
+      after it has moved since the last declaration (or the reset). At a declaration the true
+      position is compared with the current goal: within ``task.goal_radius`` the goal is
+      reached and the next one becomes current (the last one ends the episode as a success);
+      outside it the episode ends as a failure. The truth crossing a goal never ends anything.
+      Standing still, not an extra action entry, because it keeps every agent's action space
+      (``Box`` ``[v, w]``, plus the camera mount) as it is, so a policy learns when to stop
+      with the same outputs it drives with, and it is how a real robot ends a delivery.
     """
 
-    def __init__(self, world: WorldConfig, reward: RewardConfig) -> None:
+    def __init__(self, world: WorldConfig, reward: RewardConfig, task: TaskConfig) -> None:
         self.path = Polyline(world.path)
-        self.goal = self.path.points[-1]
-        self.goal_radius = world.goal_radius
+        self.protocol = task.protocol
+        self.cfg = task
+        self.goals = np.asarray(world.goals if task.protocol == "declare" else world.path[-1:])
+        self.goal_radius = task.goal_radius if task.protocol == "declare" else world.goal_radius
         self.reward_cfg = reward
+        self.reset()
+
+    def reset(self) -> None:
+        self.goal_index = 0
+        self.stops: list[Stop] = []
+        self._still, self._armed = 0.0, False
+
+    @property
+    def goal(self) -> np.ndarray:
+        """The current goal (the last one once every goal is reached)."""
+        return self.goals[min(self.goal_index, len(self.goals) - 1)]
+
+    @property
+    def success(self) -> bool:
+        """Every goal reached (declared in order, or the path's end entered under ``reach``)."""
+        return self.goal_index >= len(self.goals)
 
     def progress(self, xy: np.ndarray) -> float:
         """Arc length (m) of the path point nearest ``xy``."""
         return self.path.project(xy)
 
-    def reached_goal(self, xy: np.ndarray) -> bool:
-        return bool(np.linalg.norm(np.asarray(xy)[:2] - self.goal) <= self.goal_radius)
+    def distance_to_goal(self, xy: np.ndarray) -> float:
+        return float(np.linalg.norm(np.asarray(xy)[:2] - self.goal))
+
+    def update(self, xy: np.ndarray, v: float, w: float, dt: float, time: float) -> bool:
+        """Advance by one control step with the TRUE position ``xy`` and the commanded speed
+        ``v`` (m/s) and yaw rate ``w`` (rad/s); True when a goal was reached at this step."""
+        if self.protocol == "reach":
+            reached = self.distance_to_goal(xy) <= self.goal_radius
+            self.goal_index += int(reached)
+            return reached
+        if abs(v) >= self.cfg.stop_speed or abs(w) >= self.cfg.stop_yaw_rate:
+            self._still, self._armed = 0.0, True
+            return False
+        if not self._armed:
+            return False
+        self._still += dt
+        if self._still < self.cfg.stop_seconds - 1e-9:
+            return False
+        distance = self.distance_to_goal(xy)
+        success = distance <= self.goal_radius
+        position = (float(xy[0]), float(xy[1]))
+        self.stops.append(Stop(self.goal_index, time, position, distance, success))
+        self._still, self._armed = 0.0, False
+        self.goal_index += int(success)
+        return success
+
+    @property
+    def finished(self) -> bool:
+        """The episode ends: every goal reached, or (``declare``) a declared stop missed."""
+        return self.success or any(not stop.success for stop in self.stops)
 
     def reward(
         self, gained: float, dt: float, reached: bool, collided: bool, steering_change: float = 0.0

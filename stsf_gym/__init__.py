@@ -7,7 +7,11 @@ Importing the package registers the environments with Gymnasium (idempotently):
 - ``stsf_gym/Generated-v0``: a generated corridor world per episode (``split="train"`` or
   ``"test"``, :mod:`stsf_gym.envs.generated_env`).
 
-Each also has an id per pose source, e.g. ``stsf_gym/Corridor-STSF-v0`` (see below).
+- ``stsf_gym/Suite-<Level>-v0``: a benchmark suite's generated worlds under the declared-stop
+  task, one per ``configs/suites/<level>.yaml`` (:mod:`stsf_gym.envs.suite`).
+
+Each also has an id per pose source, e.g. ``stsf_gym/Corridor-STSF-v0`` or
+``stsf_gym/Suite-Sparse-EKF-v0`` (see below).
 """
 
 from gymnasium.envs.registration import register, registry
@@ -51,6 +55,40 @@ def register_envs() -> None:
                 kwargs={"world": world},
             )
         _register_estimating(env_id, world)
+    _register_suites()
+
+
+def suite_id(name: str) -> str:
+    """``stsf_gym/Suite-<Name>-v0`` of suite ``name``."""
+    return f"stsf_gym/Suite-{name.title().replace('_', '').replace('-', '')}-v0"
+
+
+def _register_suites() -> None:
+    """The ids of every suite in ``configs/suites/``: the world env and one per pose source."""
+    from stsf_gym.yaml_layers import SUITE_DIR, read_yaml
+
+    for path in sorted(SUITE_DIR.glob("*.yaml")):
+        suite = read_yaml(path)  # checked when an env is made (stsf_gym.envs.suite)
+        generator, env = suite.get("generator") or {}, suite.get("env") or {}
+        env_id = suite_id(path.stem)
+        if env_id not in registry:
+            register(
+                id=env_id,
+                entry_point="stsf_gym.envs.generated_env:GeneratedCorridorEnv",
+                kwargs={"generator": generator, **env},
+            )
+        for suffix, estimator in ESTIMATOR_IDS.items():
+            estimating_id = env_id.replace("-v0", f"-{suffix}-v0")
+            if estimating_id not in registry:
+                register(
+                    id=estimating_id,
+                    entry_point="stsf_gym.episode_env:make_episode_env",
+                    kwargs={
+                        "world": "generated",
+                        "estimator": estimator,
+                        "env": {**env, "generator": generator},
+                    },
+                )
 
 
 def _register_estimating(env_id: str, world: str) -> None:

@@ -9,16 +9,21 @@ coordinates. Distortion is Brown-Conrady radial-tangential with OpenCV's coeffic
 
 and pixels are ``K @ [x_d, y_d, 1]``, so :meth:`CameraCalibration.project` agrees with
 ``cv2.projectPoints``. The simulator uses it for the true camera, the estimators for the
-camera the robot believes it has (:attr:`CorridorEnv.camera_calibration`).
+camera the robot believes it has (:attr:`CorridorEnv.camera_calibration`). :class:`PanTiltMount`
+is where the camera sits on the robot: the simulated robot's mount kinematics, and what a
+recorded log (:mod:`stsf_gym.recording`) stores of it.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 UNDISTORT_ITERATIONS = 20
+#: Rotation from the camera link (x forward, y left, z up) to OpenCV camera axes.
+LINK_FROM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
 
 def distort(xy: np.ndarray, dist: np.ndarray) -> np.ndarray:
@@ -82,3 +87,37 @@ class CameraCalibration:
         uv = self.to_pixels(xy)
         uv[points[:, 2] <= 0] = np.nan
         return uv
+
+
+def pose_matrix(x: float, y: float, z: float, rotation: np.ndarray) -> np.ndarray:
+    """The 4x4 pose of ``rotation`` (3x3) at ``(x, y, z)``."""
+    pose = np.eye(4)
+    pose[:3, :3] = rotation
+    pose[:3, 3] = (x, y, z)
+    return pose
+
+
+def rot_z(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rot_y(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+@dataclass(frozen=True)
+class PanTiltMount:
+    """A camera on a pan-tilt head at ``(x, y, z)`` in the robot frame (on the floor below the
+    axle midpoint, x forward, z up): ``mount(pan, tilt)`` is the nominal robot-from-camera 4x4
+    (OpenCV axes) for the mount angles (rad; pan about z, positive left; tilt positive up).
+    A fixed camera looking ahead is the mount at ``pan = tilt = 0``."""
+
+    x: float
+    y: float
+    z: float
+
+    def __call__(self, pan: float, tilt: float) -> np.ndarray:
+        rotation = rot_z(pan) @ rot_y(-tilt) @ LINK_FROM_OPTICAL
+        return pose_matrix(self.x, self.y, self.z, rotation)

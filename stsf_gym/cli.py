@@ -11,7 +11,8 @@ import sys
 from pathlib import Path
 
 from stsf_gym.config import ConfigError, parse_overrides
-from stsf_gym.envs.quiet import VERBOSE_ENV
+from stsf_gym.io import remove_partial_writes
+from stsf_gym.results.provenance import set_command
 
 
 def _common(
@@ -45,17 +46,25 @@ def _demo(args: argparse.Namespace) -> dict:
     if args.seconds is not None:
         if args.seconds <= 0:
             raise ConfigError(f"--seconds must be positive, got {args.seconds}")
+        if "max_episode_seconds" in env.get("sim", {}):
+            raise ConfigError(
+                "--seconds and sim.max_episode_seconds (from --config or --set) both set the "
+                "episode length; give one"
+            )
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
     if args.video_seconds is not None and args.video_seconds < 0:
         raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")
-    summary = run_demo(args.out, args.seed, args.workers, env, args.video_seconds)
+    summary = run_demo(
+        args.out, args.seed, args.workers, env, args.video_seconds, args.seeds, _recording(args)
+    )
     if not args.json:
         from rich.console import Console
 
         from stsf_gym.terminal_table import fit_table
 
         console = Console()
-        title = f"stsf-gym demo: follower on the IRL corridor (seed {args.seed})"
+        seeds = f"seed {args.seed}" if args.seeds == 1 else f"{args.seeds} seeds from {args.seed}"
+        title = f"stsf-gym demo: follower on the IRL corridor ({seeds})"
         cells = [rendered(row, COLUMNS) for row in summary["rows"]]
         rows = [list(row.values()) for row in cells]
         console.print(fit_table(list(cells[0]), rows, console.width, title, "results.md"))
@@ -64,6 +73,49 @@ def _demo(args: argparse.Namespace) -> dict:
             f"Wrote {args.out}/results.md, results.json, {', '.join(summary['figures'])}"
             + (f" and {', '.join(videos)}" if videos else "")
         )
+    return summary
+
+
+def _record_args(parser: argparse.ArgumentParser) -> None:
+    """``--record`` and ``--record-frames``: each episode as an MCAP log or Rerun recording."""
+    parser.add_argument(
+        "--record",
+        choices=["mcap", "rerun"],
+        help="record each episode to OUT/recordings/: mcap (replayable by stsf-gym replay; "
+        "Foxglove, ros2 bag, evo) or rerun (.rrd for the Rerun viewer)",
+    )
+    parser.add_argument(
+        "--record-frames",
+        choices=["raw", "png", "jpeg"],
+        default="raw",
+        help="camera frames in an MCAP recording: raw or png (lossless: a replay gives the "
+        "live estimates bit for bit; png is a little smaller and slow to encode) or jpeg "
+        "(about 8x smaller; its replay is approximate). Default raw",
+    )
+
+
+def _recording(args: argparse.Namespace) -> dict | None:
+    """The ``record`` setting of the episode runners, from ``--record``/``--record-frames``."""
+    if args.record is None:
+        return None
+    folder = str((args.out / "recordings").absolute())
+    return {"format": args.record, "frames": args.record_frames, "folder": folder}
+
+
+def _replay(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.replay import replay_logs
+    from stsf_gym.wrappers import POSE_SOURCES
+
+    if args.config or args.overrides:
+        raise ConfigError("replay runs the logs as recorded: it takes no --config or --set")
+    estimators = _names(args.estimators)
+    for name in estimators:
+        if name not in POSE_SOURCES:
+            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    if not estimators:
+        raise ConfigError("--estimators names no pose source")
+    summary = replay_logs(args.files, estimators, args.out)
+    _print_markdown(args, args.out / "results.md")
     return summary
 
 
@@ -150,6 +202,8 @@ def _evaluate(args: argparse.Namespace) -> dict:
     if len(agents) > 1 or "{estimator}" in args.agent:
         from stsf_gym.experiments.compare import compare
 
+        if args.record:
+            raise ConfigError("--record records one agent's episodes, not a comparison")
         summary = compare(
             args.out,
             agents,
@@ -172,6 +226,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
         args.workers,
         _env_overrides(args, args.world),
         args.faults,
+        record=_recording(args),
     )
     _print_markdown(args, args.out / "results.md")
     return summary
@@ -265,10 +320,17 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
         raise ConfigError(f"--levels must be comma-separated numbers, got {args.levels!r}") from err
     dial = parse_overrides(args.dial)
     make_estimator("degraded-truth", **dial)  # a bad dial option fails before any work
+    world, env = args.world, _env_overrides(args, None if args.suite else args.world)
+    if args.suite:
+        from stsf_gym.envs.config import deep_merge
+        from stsf_gym.envs.suite import load_suite
+        from stsf_gym.experiments.benchmark.run import WORLD
+
+        world, env = WORLD, deep_merge(load_suite(args.suite).episode_env, env)
     summary = accuracy_curve(
         args.out,
         agents,
-        args.world,
+        world,
         args.seeds,
         args.seed,
         levels,
@@ -276,10 +338,46 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
         args.backend,
         args.workers,
         args.address,
-        _env_overrides(args, args.world),
+        env,
         dial,
+        args.suite,
     )
     _print_markdown(args, args.out / "curve.md")
+    for failed in summary["failed"]:
+        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
+    return summary
+
+
+def _benchmark(args: argparse.Namespace) -> dict:
+    from stsf_gym.experiments.benchmark.run import benchmark
+    from stsf_gym.wrappers import POSE_SOURCES
+
+    _check_counts(args)
+    if args.worlds < 1:
+        raise ConfigError(f"--worlds must be at least 1, got {args.worlds}")
+    if args.config or args.overrides:
+        raise ConfigError("benchmark runs a suite as written: edit or copy its configs/suites file")
+    estimators = _names(args.estimators)
+    for name in estimators:
+        if name not in POSE_SOURCES:
+            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    agents = _names(args.agents)
+    for model in (a for a in agents if a != "follower"):
+        from stsf_gym.agents.sb3_agent import model_metadata
+
+        model_metadata(model)  # a missing or foreign model file fails here, clearly
+    summary = benchmark(
+        args.out / args.suite,
+        args.suite,
+        agents,
+        estimators,
+        args.worlds,
+        args.seed,
+        args.backend,
+        args.workers,
+        args.address,
+    )
+    _print_markdown(args, args.out / args.suite / "leaderboard.md")
     for failed in summary["failed"]:
         print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
     return summary
@@ -322,17 +420,21 @@ def _world_args(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from stsf_gym.envs.suite import suite_names
+
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     demo = commands.add_parser("demo", help="the follower on each estimator, IRL corridor")
     _common(demo, "out/demo")
     demo.add_argument("--seconds", type=float, help="simulated time limit per episode")
+    demo.add_argument("--seeds", type=int, default=1, help="episodes per estimator (1)")
     demo.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
     demo.add_argument(
         "--video-seconds",
         type=float,
         help="simulated seconds of each estimator's episode in its video (40; 0: no videos)",
     )
+    _record_args(demo)
     demo.set_defaults(run=_demo)
     reproduce = commands.add_parser("reproduce", help="the paper's experiments")
     reproduce.add_argument("experiment", choices=["table1", "fig10", "fig11"])
@@ -365,7 +467,19 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="fault files (e.g. configs/faults/*.yaml): each fault set x each estimator",
     )
+    _record_args(evaluate)
     evaluate.set_defaults(run=_evaluate)
+    replay = commands.add_parser(
+        "replay", help="pose sources rerun on recorded MCAP logs (no simulator)"
+    )
+    replay.add_argument("files", nargs="+", type=Path, metavar="FILE.mcap", help="MCAP logs")
+    _common(replay, "out/replay")
+    replay.add_argument(
+        "--estimators",
+        default="odometry,conventional,stsf,ekf",
+        help="comma-separated pose sources (as evaluate's)",
+    )
+    replay.set_defaults(run=_replay)
     train = commands.add_parser("train", help="a PPO or SAC agent on one pose source")
     _common(train, "out/train", "hyper-parameter YAML (default configs/agents/ALGO.yaml)")
     train.add_argument("--algo", choices=["ppo", "sac"], default="ppo", help="algorithm (ppo)")
@@ -387,6 +501,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--agent", default="follower", help="follower and/or saved models, comma-separated"
     )
     curve.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    curve.add_argument(
+        "--suite",
+        choices=suite_names(),
+        help="a benchmark suite's test worlds and declared-stop task instead of --world",
+    )
     curve.add_argument("--seeds", type=int, default=3, help="episodes per point (3)")
     curve.add_argument(
         "--levels",
@@ -407,6 +526,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _backend_args(curve)
     curve.set_defaults(run=_accuracy_curve)
+    bench_suite = commands.add_parser(
+        "benchmark", help="agents x pose sources on a suite's test worlds: the leaderboard"
+    )
+    _common(bench_suite, "out/benchmark")
+    bench_suite.add_argument("--suite", required=True, choices=suite_names(), help="difficulty")
+    bench_suite.add_argument(
+        "--agents", default="follower", help="follower and/or saved models, comma-separated"
+    )
+    bench_suite.add_argument(
+        "--estimators",
+        default="odometry,conventional,conventional-filter,stsf,ekf",
+        help="pose sources, comma-separated",
+    )
+    bench_suite.add_argument("--worlds", type=int, default=100, help="test worlds (100)")
+    _backend_args(bench_suite)
+    bench_suite.set_defaults(run=_benchmark)
     world = commands.add_parser(
         "world", help="a generated world as world YAML (--seed N), or a grid of them (--grid)"
     )
@@ -456,12 +591,16 @@ def main(argv: list[str] | None = None) -> int:
     from stsf_gym.experiments.cache import JobsFailed
 
     args = build_parser().parse_args(argv)
+    set_command(["stsf-gym", *(sys.argv[1:] if argv is None else argv)])
     error = f"stsf-gym {args.command}: error:"
     try:
         if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
             folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
             _check_writable(folder.absolute())
+            remove_partial_writes(args.out)  # left by a run killed mid-write: nothing to resume
         if args.verbose:
+            from stsf_gym.envs.quiet import VERBOSE_ENV
+
             os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
         else:
             _silence_c_stdout()

@@ -4,11 +4,16 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import asdict
 from typing import Any
 
 import gymnasium as gym
 
-from stsf_gym.wrappers import PoseEstimateWrapper
+from stsf_gym.estimators import estimator_class, estimator_settings
+from stsf_gym.wrappers import TRUTH, PoseEstimateWrapper, check_sensors
+
+#: Keyword arguments of an env that are not config values.
+NOT_CONFIG = ("render_mode", "split", "generator")
 
 
 def make_episode_env(
@@ -32,3 +37,49 @@ def make_episode_env(
     except Exception:
         corridor.close()
         raise
+
+
+def estimator_options(source: str, **options: Any) -> dict:
+    """The settings of pose source ``source`` (its ``configs/estimators/`` YAML with
+    ``options`` over it) as plain values; ``truth`` has none."""
+    return {} if source == TRUTH else asdict(estimator_settings(source, **options))
+
+
+def resolved_config(
+    world: str | Mapping = "irl_corridor",
+    estimator: str = "odometry",
+    env: Mapping[str, Any] | None = None,
+    options: Mapping[str, Any] | None = None,
+) -> dict:
+    """Every value the env of :func:`make_episode_env` with these arguments runs with: the env
+    config after all its layers (defaults, world, config file, overrides), for generated worlds
+    the generator's settings and split instead of one world, and the pose source's settings
+    with ``options`` over them.
+    Nothing is built: the YAML layers are read and checked."""
+    from stsf_gym.envs.config import load_config
+    from stsf_gym.envs.generated_env import GENERATED, parse_world
+    from stsf_gym.envs.worlds.generator_config import load_generator_config
+
+    overrides = {"camera__control": "pan", **(env or {})}
+    config = overrides.pop("config", None)
+    split = overrides.get("split", "train") if world == GENERATED else parse_world(world)
+    generator = overrides.get("generator")
+    overrides = {k: v for k, v in overrides.items() if k not in NOT_CONFIG}
+    resolved: dict[str, Any] = {}
+    if split is None:
+        resolved["env"] = asdict(load_config(config, world=world, **overrides))
+    else:
+        env_cfg = asdict(load_config(config, **overrides))
+        env_cfg.pop("world")
+        resolved["env"] = env_cfg
+        resolved["generator"] = asdict(load_generator_config(generator))
+        resolved["split"] = split
+    camera = resolved["env"]["camera"]["enabled"]
+    check_sensors(
+        estimator, () if estimator == TRUTH else estimator_class(estimator).sensors, camera
+    )
+    resolved["estimator"] = {
+        "name": estimator,
+        "settings": estimator_options(estimator, **(options or {})),
+    }
+    return resolved

@@ -24,6 +24,17 @@ def write_atomic(path: str | Path, data: str | bytes) -> Path:
     return path
 
 
+def remove_partial_writes(folder: str | Path) -> list[Path]:
+    """Delete the temporary files that :func:`write_atomic` calls killed mid-write left under
+    ``folder`` (``.<name>.<random>.tmp``; the file they were to replace is intact); return them."""
+    found = (
+        [p for p in Path(folder).rglob(".*.tmp") if p.is_file()] if Path(folder).is_dir() else []
+    )
+    for path in found:
+        path.unlink(missing_ok=True)
+    return found
+
+
 def write_json(path: str | Path, obj: Any) -> Path:
     return write_atomic(path, json.dumps(obj, indent=2, default=_to_builtin) + "\n")
 

@@ -5,16 +5,19 @@
 then any violation, and exits with status 1 when there is one. The rules (:data:`ALLOWED`):
 
     stsf_gym.cli, stsf_gym.experiments -> stsf_gym.agents -> stsf_gym.wrappers
-        -> stsf_gym.estimators (and .references) -> stsf_gym.fusion / vision / geometry /
-        metrics / results / tum;
+        -> stsf_gym.state_history -> stsf_gym.estimators (and .references)
+        -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
+    stsf_gym.experiments, stsf_gym.bench -> stsf_gym.recording -> stsf_gym.wrappers (no envs);
     stsf_gym.envs (and its folders .worlds, .rendering) -> stsf_gym.vision.landmarks / geometry;
     stsf_gym.envs.rendering never imports PyBullet
 
 plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``, ``video``,
 ``terminal_table``, ``camera_model``: the lens model the simulator renders with and the
 estimators undistort with). Also
-checked: no module imports another's private (``_name``) name, and no import cycle between
-modules.
+checked: no module imports another's private (``_name``) name, no import cycle between
+modules, and no package folder with more than :data:`FOLDER_LIMIT` modules side by side (a
+folder per idea). ``python -m stsf_gym.layers --tree`` prints the layout instead: each package,
+the repository folder it lives in, and its modules.
 """
 
 from __future__ import annotations
@@ -43,7 +46,12 @@ ENV_FOLDERS = ("stsf_gym.envs.worlds", "stsf_gym.envs.rendering")
 #: Pure measurement code (numpy/scipy): metrics, the results schema, TUM trajectories.
 MEASURES = ("stsf_gym.metrics", "stsf_gym.results", "stsf_gym.tum")
 CORE = (*LEAVES, *MEASURES, "stsf_gym.fusion", "stsf_gym.vision", "stsf_gym.vision.landmarks")
-ESTIMATION = (*CORE, "stsf_gym.estimators", "stsf_gym.estimators.references")
+ESTIMATION = (
+    *CORE,
+    "stsf_gym.estimators",
+    "stsf_gym.estimators.references",
+    "stsf_gym.state_history",
+)
 EPISODE = (
     *ESTIMATION,
     "stsf_gym",
@@ -57,13 +65,21 @@ ANY = "*"
 #: Each layer and the layers it may import, top to bottom.
 ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.cli": ANY,
-    "stsf_gym.experiments": (*EPISODE, "stsf_gym.agents", "stsf_gym.config"),
-    "stsf_gym.bench": (*EPISODE, "stsf_gym.agents", "stsf_gym.experiments"),
+    "stsf_gym.experiments": (*EPISODE, "stsf_gym.agents", "stsf_gym.config", "stsf_gym.recording"),
+    "stsf_gym.bench": (*EPISODE, "stsf_gym.agents", "stsf_gym.experiments", "stsf_gym.recording"),
+    # recording: episode logs written from an env stack (duck-typed, never the simulator's
+    # modules) and read back for replays, so a replay runs with no simulator
+    "stsf_gym.recording": (*ESTIMATION, "stsf_gym.wrappers"),
     "stsf_gym.agents": EPISODE,
     "stsf_gym.config": ("stsf_gym.envs", "stsf_gym.validation", "stsf_gym.yaml_layers"),
-    "stsf_gym.episode_env": ("stsf_gym.wrappers", "stsf_gym.envs"),
+    "stsf_gym.episode_env": (
+        "stsf_gym.wrappers",
+        "stsf_gym.estimators",
+        "stsf_gym.envs",
+        *ENV_FOLDERS,
+    ),
     "stsf_gym.wrappers": ESTIMATION,
-    "stsf_gym": (),  # the package's __init__: registration only
+    "stsf_gym": ("stsf_gym.yaml_layers",),  # the __init__: registration (reads suite files)
     "stsf_gym.envs": (*ENV_SHARED, *ENV_FOLDERS, *EXTERNAL),
     # worlds: layouts, checks, the generator (numpy) and the PyBullet builder of a world
     "stsf_gym.envs.worlds": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.rendering", *EXTERNAL),
@@ -71,6 +87,8 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.envs.rendering": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.worlds"),
     "stsf_gym.configs": (),  # package data only
     "stsf_gym.estimators": CORE,
+    # late measurements: any estimator rewound and replayed (used by the wrapper)
+    "stsf_gym.state_history": (*CORE, "stsf_gym.estimators"),
     # the references (smoother, MCL, the floor): estimators too, on GTSAM and numpy
     "stsf_gym.estimators.references": ESTIMATION,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
@@ -88,6 +106,10 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.terminal_table": (),
     "stsf_gym.layers": (),
 }
+
+
+#: Modules (``__init__`` included) one package folder may hold side by side.
+FOLDER_LIMIT = 16
 
 
 def module_files(root: Path = ROOT) -> dict[str, Path]:
@@ -179,7 +201,34 @@ def violations(root: Path = ROOT) -> list[str]:
             if name.startswith("_") and not name.startswith("__") and target != module:
                 found.append(f"{module} imports the private name {target}.{name}")
     found += [f"import cycle: {' -> '.join(cycle)}" for cycle in import_cycles(imports)]
+    for package, modules in packages(root).items():
+        if len(modules) > FOLDER_LIMIT:
+            found.append(
+                f"{package} holds {len(modules)} modules side by side (at most {FOLDER_LIMIT}): "
+                "group them in folders by idea"
+            )
     return list(dict.fromkeys(found))
+
+
+def packages(root: Path = ROOT) -> dict[str, list[str]]:
+    """Each package (dotted name) and the modules directly in its folder (``__init__``
+    first), sorted by package name."""
+    found: dict[str, list[str]] = {}
+    for module, path in module_files(root).items():
+        package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+        found.setdefault(package, []).append(
+            "__init__" if path.name == "__init__.py" else path.stem
+        )
+    return {name: sorted(found[name], key=lambda m: (m != "__init__", m)) for name in sorted(found)}
+
+
+def print_tree(root: Path = ROOT) -> None:
+    """The layout: each package, its folder in the repository, and its modules."""
+    files = module_files(root)
+    for package, modules in packages(root).items():
+        folder = files[package].parent.relative_to(root) if package in files else "?"
+        print(f"{package}  ({folder}/, {len(modules)} modules)")
+        print(f"    {' '.join(modules)}")
 
 
 def import_cycles(imports: dict[str, list[tuple[str, str]]]) -> list[list[str]]:
@@ -203,6 +252,9 @@ def import_cycles(imports: dict[str, list[tuple[str, str]]]) -> list[list[str]]:
 
 
 def main() -> int:
+    if "--tree" in sys.argv[1:]:
+        print_tree()
+        return 0
     graph = layer_graph(module_imports())
     width = max(map(len, graph))
     for layer, targets in graph.items():

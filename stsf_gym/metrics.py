@@ -11,7 +11,9 @@
 - **NEES** ``e^T P^-1 e`` of the pose error against the reported covariance, and **NIS**
   ``nu^T S^-1 nu`` of each measurement innovation; each chi-square with the error's dimension
   as degrees of freedom for a consistent filter, with two-sided bounds from
-  :func:`chi2_bounds` and the fraction of values inside them.
+  :func:`chi2_bounds` and the fraction of values inside them; a time-averaged NEES is judged
+  against bounds of its own degrees of freedom, the steps' correlation acknowledged
+  (:func:`time_averaged_nees_bounds`).
 
 Planar poses are ``[x, y, yaw]``; ``z = 0``.
 """
@@ -96,14 +98,55 @@ def nees(errors: ArrayLike, covariances: ArrayLike) -> np.ndarray:
     return np.einsum("...i,...i->...", errors, solved)
 
 
-def chi2_bounds(dof: int, runs: int = 1, probability: float = BOUNDS_PROBABILITY):
+def chi2_bounds(dof: int, runs: float = 1, probability: float = BOUNDS_PROBABILITY):
     """Two-sided bounds of the mean of ``runs`` chi-square values of ``dof`` degrees of
-    freedom: ``chi2.ppf([a, 1 - a], runs * dof) / runs`` with ``a = (1 - probability) / 2``."""
+    freedom: ``chi2.ppf([a, 1 - a], runs * dof) / runs`` with ``a = (1 - probability) / 2``
+    (``runs`` may be an effective, fractional count of independent values)."""
     if dof < 1 or runs < 1:
         raise ValueError(f"dof and runs must be at least 1, got {dof} and {runs}")
     tail = (1.0 - probability) / 2.0
     lo, hi = chi2.ppf([tail, 1.0 - tail], runs * dof) / runs
     return float(lo), float(hi)
+
+
+def autocorrelation_time(series: ArrayLike) -> float:
+    """Integrated autocorrelation time ``tau = 1 + 2 sum_k rho(k)`` of a series (Sokal; the
+    sum stops at the first lag whose autocorrelation is not positive, Geyer's initial
+    positive sequence): ``N / tau`` of its ``N`` values are worth independent ones for the
+    variance of their mean. 1 for a white series, at most ``N``."""
+    values = np.asarray(series, dtype=float)
+    values = values - values.mean()
+    n = len(values)
+    variance = float(values @ values)
+    if n < 2 or variance == 0.0:
+        return 1.0
+    spectrum = np.fft.rfft(values, 2 * n)
+    rho = np.fft.irfft(spectrum * np.conj(spectrum))[:n] / variance
+    positive = np.argmax(rho[1:] <= 0) if np.any(rho[1:] <= 0) else n - 1
+    return float(min(n, max(1.0, 1.0 + 2.0 * rho[1 : 1 + positive].sum())))
+
+
+def time_averaged_nees_bounds(
+    average_trace: ArrayLike, dof: int, runs: int, probability: float = BOUNDS_PROBABILITY
+) -> tuple[float, tuple[float, float], float]:
+    """The time average of Bar-Shalom's Monte-Carlo NEES and its own two-sided bounds.
+
+    ``average_trace`` is the NEES averaged over ``runs`` independent runs at each of its ``K``
+    steps (``runs`` times it is chi-square with ``runs * dof`` degrees of freedom for a
+    consistent estimator, Bar-Shalom, Li and Kirubarajan 2001, sect. 5.4). Its time average
+    would be chi-square with ``runs * K * dof`` degrees of freedom if the steps were
+    independent; they are not (an estimation error persists over many steps), so ``K`` is
+    replaced by the effective number of independent steps ``K / tau``
+    (:func:`autocorrelation_time` of the trace). Returns the average, its bounds
+    ``chi2_bounds(dof, runs * K / tau)`` and ``K / tau``.
+    """
+    trace = np.asarray(average_trace, dtype=float)
+    effective_steps = len(trace) / autocorrelation_time(trace)
+    return (
+        float(trace.mean()),
+        chi2_bounds(dof, runs * effective_steps, probability),
+        effective_steps,
+    )
 
 
 def fraction_inside(values: ArrayLike, bounds: tuple[float, float]) -> float:

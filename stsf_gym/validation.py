@@ -131,7 +131,7 @@ def _coerce(hint: Any, value: Any, path: str) -> Any:
     if origin is tuple:
         return _coerce_tuple(args, value, path)
     if origin in (typing.Union, types.UnionType):
-        return value
+        return _coerce_union(args, value, path)
     if hint is bool:
         if not isinstance(value, bool):
             raise ConfigError(f"{path} must be true or false, got {value!r}", path)
@@ -141,6 +141,19 @@ def _coerce(hint: Any, value: Any, path: str) -> Any:
     if hint is str and not isinstance(value, str):
         raise ConfigError(f"{path} must be a string, got {value!r}", path)
     return value
+
+
+def _coerce_union(args: tuple, value: Any, path: str) -> Any:
+    """``value`` as the first member of the union that takes it (``None`` for ``X | None``)."""
+    if value is None and type(None) in args:
+        return None
+    problems = []
+    for member in (a for a in args if a is not type(None)):
+        try:
+            return _coerce(member, value, path)
+        except ConfigError as err:
+            problems.append(err.message.removeprefix(f"{path} "))
+    raise ConfigError(f"{path} {' or '.join(problems)}", path)
 
 
 def _coerce_tuple(args: tuple, value: Any, path: str) -> tuple:

@@ -19,11 +19,14 @@ from stsf_gym.estimators import (
     PoseEstimator,
     SensorModel,
     estimator_class,
+    estimator_settings,
     make_estimator,
 )
 from stsf_gym.estimators.base import SonarRingModel
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.settings import OdometrySettings
+from stsf_gym.state_history import StateHistory
 from stsf_gym.validation import ConfigError
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
@@ -53,29 +56,32 @@ def check_pose_source(name: str) -> None:
         raise ConfigError(str(err)) from err
 
 
-def sensor_model(env: gym.Env) -> SensorModel:
+def sensor_model(env: gym.Env, belief: OdometrySettings | None = None) -> SensorModel:
     """The model of ``env``'s robot for the current episode (call after each reset): its
-    believed odometry calibration, the encoder noise, believed camera calibration, mount and
-    landmark map (never the true camera: ``camera_matrix`` and ``dist_coeffs`` are for
-    evaluation)."""
+    believed odometry calibration, believed camera calibration, mount and landmark map (never
+    the true camera: ``camera_matrix`` and ``dist_coeffs`` are for evaluation), and the noise
+    the estimator ``belief`` assumes (default: the nominal ``configs/estimators/odometry.yaml``),
+    never the env's true noise settings."""
     u = env.unwrapped
     cfg = u.config
+    belief = belief or estimator_settings("odometry")
+    calibration = u.odometry_calibration
     return SensorModel(
-        calibration=u.odometry_calibration,
+        calibration=calibration,
         odometry_noise=OdometryNoise.from_encoders(
-            cfg.encoders.slip_std,
-            cfg.encoders.radius_error_std,
-            cfg.encoders.wheelbase_error_std,
-            cfg.robot.wheel_radius,
+            belief.slip_std,
+            belief.radius_error_std,
+            belief.wheelbase_error_std,
+            (calibration.wheel_radius_left + calibration.wheel_radius_right) / 2,
         ),
         camera_calibration=u.camera_calibration,
         camera_calibration_std=(
-            cfg.camera.calibration_error.principal_point_std_px / u.camera_calibration.K[0, 0],
-            cfg.camera.calibration_error.focal_std,
+            belief.principal_point_std_px / u.camera_calibration.K[0, 0],
+            belief.focal_std,
         ),
         camera_matrix=u.camera_calibration.K,
         image_size=(cfg.camera.width, cfg.camera.height),
-        robot_from_camera=u.robot_from_camera,
+        robot_from_camera=u.camera_mount,
         landmarks={
             lm.id: MapLandmark(lm.id, lm.centre, lm.normal, lm.square_centres) for lm in u.landmarks
         },
@@ -94,6 +100,16 @@ def sensor_model(env: gym.Env) -> SensorModel:
     )
 
 
+def check_sensors(name: str, sensors: tuple[str, ...], camera_enabled: bool) -> None:
+    """Refuse pose source ``name`` (reading ``sensors``) on an env whose camera is off."""
+    if "camera" in sensors and not camera_enabled:
+        raise ConfigError(
+            f"pose source {name!r} reads the camera, but camera.enabled is false; switch it on "
+            "(camera.mode: fast simulates detections without rendering)",
+            "camera.enabled",
+        )
+
+
 class TruePose(PoseEstimator):
     """The privileged reference "estimator": the true pose with a tiny fixed covariance.
 
@@ -103,6 +119,7 @@ class TruePose(PoseEstimator):
     """
 
     name = TRUTH
+    sensors = ()
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, np.diag(np.square(TRUTH_STD)))
@@ -121,6 +138,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     - ``obs["pose_cov"]``: ``Box((9,), float32)``, its 3x3 covariance flattened row by row
       (``obs["pose_cov"].reshape(3, 3)``; entries clipped to +-1e4). Flat, so SB3's
       multi-input policies take it as it is.
+
+    The estimator's ``dt`` is the time between the encoders' timestamps. When the camera has
+    a latency (``camera.latency``), a late frame is fused at its exposure time: the estimator
+    is rewound and the odometry since replayed (:class:`~stsf_gym.state_history.StateHistory`,
+    so ``wrapper.estimator`` may be a new object after a step).
 
     With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):
     privileged, for reference runs only; ``"degraded-truth"`` corrupts it with a configurable
@@ -153,6 +175,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if estimator == TRUTH and options:
             raise ValueError(f"the truth pose source takes no options, got {sorted(options)}")
         self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
+        check_sensors(estimator, self.estimator.sensors, env.unwrapped.config.camera.enabled)
         robot = env.unwrapped.config.robot
         self.pointer = None
         if env.unwrapped.config.camera.control == "pan":
@@ -161,6 +184,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 {}, np.zeros((0, 4)), robot.camera_forward, math.radians(robot.pan_limit_deg)
             )
             self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        latency = env.unwrapped.config.camera.latency
+        self.history = None  # late frames fused at their exposure (estimators only)
+        if estimator not in (TRUTH, *PRIVILEGED) and latency.delay_s + latency.jitter_s > 0:
+            dt = env.unwrapped.dt
+            self.history = StateHistory(latency.delay_s + 5 * latency.jitter_s + 2 * dt)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
         self.start, self.searching_since = None, None  # set by reset
         lo, hi = env.unwrapped.world.bounds[0] - 50.0, env.unwrapped.world.bounds[1] + 50.0
@@ -180,7 +208,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         obs, info = self.env.reset(seed=seed, options=options or None)
         start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
         self.start = np.asarray(start, dtype=float)  # the commanded start (a floor starts there)
-        model = sensor_model(self.env)
+        settings = getattr(self.estimator, "settings", None)
+        model = sensor_model(self.env, settings if isinstance(settings, OdometrySettings) else None)
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
             self.estimator.seed(seed)
         self.estimator.reset(model, start, self.start_cov)
@@ -188,6 +217,9 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if unknown_start:
             self._forget_start()
             self.searching_since = 0.0
+        self._time = float(obs["encoders_time"][0])
+        if self.history is not None:
+            self.history.reset(self.estimator, obs)
         if hasattr(self.estimator, "see"):  # privileged: handed the true pose
             self.estimator.see(info["true_pose"])
         if self.pointer is not None:
@@ -220,7 +252,12 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         obs, reward, terminated, truncated, info = self.env.step(action)
         if hasattr(self.estimator, "see"):
             self.estimator.see(info["true_pose"])
-        mean, cov = self.estimator.update(obs, self.env.unwrapped.dt)
+        time = float(obs["encoders_time"][0])
+        dt, self._time = time - self._time, time  # from the sensors' timestamps
+        if self.history is None:
+            mean, cov = self.estimator.update(obs, dt)
+        else:
+            self.estimator, mean, cov = self.history.update(self.estimator, obs, dt)
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 
     def _with_pose(self, obs: dict, mean: np.ndarray, cov: np.ndarray) -> dict:

@@ -21,6 +21,8 @@ from stsf_gym.validation import ConfigError
 #: The package's configs (package data: ``configs/`` of the repository, ``stsf_gym/configs`` of an
 #: installed wheel). The package is installed as files, so this is a real folder.
 CONFIG_DIR = Path(str(files("stsf_gym.configs")))
+#: Benchmark suites (``configs/suites/<name>.yaml``, :mod:`stsf_gym.envs.suite`).
+SUITE_DIR = CONFIG_DIR / "suites"
 
 
 def read_yaml(path: str | Path) -> dict:

@@ -138,15 +138,18 @@ def test_train_cli_names_the_bad_key(tmp_path):
 def test_ppo_trains_saves_loads_and_evaluates(tmp_path):
     out = tmp_path / "ppo"
     summary = train(
-        "ppo", "truth", out, 300, seed=3, n_envs=1, overrides=TINY_PPO, progress_bar=False
+        "ppo", "truth", out, 320, seed=3, n_envs=1, overrides=TINY_PPO, progress_bar=False
     )
-    assert summary["timesteps"] >= 300 and summary["resumed_from"] == 0
+    assert summary["timesteps"] == 320 and summary["resumed_from"] == 0
     for name in ("model.zip", "train.json", "learning_curve.png", "best/best_model.zip"):
         assert (out / name).stat().st_size > 0
     assert json.loads((out / "train.json").read_text())["timesteps"] == summary["timesteps"]
+    # a checkpoint after every update; kept where a multiple of checkpoint_freq (100) was passed
+    kept = sorted(int(p.stem.split("_")[1]) for p in (out / "checkpoints").glob("model_*.zip"))
+    assert kept == [128, 256, 320]
     assert any((out / "tb").iterdir())
     episodes = read_rows(out / "episodes.csv")
-    assert len(episodes) >= 300 // 30 - 1 and np.all(episodes[:, 2] <= 30)  # 3 s episodes
+    assert len(episodes) >= 320 // 30 - 1 and np.all(episodes[:, 2] <= 30)  # 3 s episodes
     assert summary["last_evaluation"]["timesteps"] == 300
     meta = model_metadata(out / "model.zip")
     assert meta["estimator"] == "truth" and meta["wall_time_s"] > 0
@@ -178,6 +181,18 @@ def test_loaded_agent_acts_deterministically(tmp_path, make_env):
         load_agent(tmp_path / "missing.zip", env)
 
 
+def test_timesteps_must_be_whole_updates_and_nothing_is_written_otherwise(tmp_path):
+    out = tmp_path / "run"
+    message = "timesteps 300 is not a multiple of n_steps x n_envs = 64: the run would end at 320"
+    with pytest.raises(ConfigError, match=message + "; ask for 256 or 320"):
+        train("ppo", "truth", out, 300, n_envs=1, overrides=TINY_PPO, progress_bar=False)
+    sac = {**TINY_PPO, "train_freq": 4}
+    del sac["n_steps"]
+    with pytest.raises(ConfigError, match="train_freq x n_envs = 4: the run would end at 304"):
+        train("sac", "truth", out, 301, n_envs=1, overrides=sac, progress_bar=False)
+    assert not out.exists()
+
+
 def test_interrupt_saves_a_checkpoint_and_a_rerun_resumes(tmp_path, monkeypatch):
     out = tmp_path / "run"
     original = EpisodeLog._on_step
@@ -190,15 +205,16 @@ def test_interrupt_saves_a_checkpoint_and_a_rerun_resumes(tmp_path, monkeypatch)
 
     monkeypatch.setattr(EpisodeLog, "_on_step", interrupt_at_100)
     with pytest.raises(KeyboardInterrupt):
-        train("ppo", "truth", out, 300, n_envs=1, overrides=TINY_PPO, progress_bar=False)
-    assert latest_checkpoint(out)[1] == 100 and not (out / "model.zip").exists()
+        train("ppo", "truth", out, 320, n_envs=1, overrides=TINY_PPO, progress_bar=False)
+    # PPO's latest update (after the first 64-step rollout) is the checkpoint, not step 100
+    assert latest_checkpoint(out)[1] == 64 and not (out / "model.zip").exists()
     monkeypatch.setattr(EpisodeLog, "_on_step", original)
-    summary = train("ppo", "truth", out, 300, n_envs=1, overrides=TINY_PPO, progress_bar=False)
-    assert summary["resumed_from"] == 100 and summary["timesteps"] >= 300
+    summary = train("ppo", "truth", out, 320, n_envs=1, overrides=TINY_PPO, progress_bar=False)
+    assert summary["resumed_from"] == 64 and summary["timesteps"] == 320
     steps = read_rows(out / "episodes.csv")[:, 0]
     assert np.all(np.diff(steps) > 0)  # no episode logged twice across the resume
     with pytest.raises(ConfigError, match="estimator 'truth'"):
-        train("ppo", "odometry", out, 400, n_envs=1, overrides=TINY_PPO, progress_bar=False)
+        train("ppo", "odometry", out, 384, n_envs=1, overrides=TINY_PPO, progress_bar=False)
 
 
 def test_policy_env_passes_both_checkers(make_env):

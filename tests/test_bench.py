@@ -54,3 +54,28 @@ def test_targets_are_judged_against_their_bounds(fast_row):
     text = to_markdown(summary)
     assert "ratio 1.50" in text and "| 2 workers / 1 worker (rendered pipeline) |" in text
     assert "Reference workload (fixed Python + numpy work, best of 3): 50.0 ms" in text
+
+
+def test_recording_targets_are_judged(fast_row):
+    summary = _summary(fast_row, x_real_time=120.0)
+    row = {"distance_m": 24.0, "episode_cpu_s": 10.0, "recorded_cpu_s": 11.0, "size_mb": 30.0}
+    summary["recording"] = {
+        "recordings": [
+            {**row, "mode": "fast", "format": "mcap", "frames": "-", "overhead": 0.08},
+            {**row, "mode": "fast", "format": "rerun", "frames": "-", "overhead": 0.12},
+            {**row, "mode": "rendered", "format": "mcap", "frames": "jpeg", "overhead": 0.05},
+            {**row, "mode": "rendered", "format": "mcap", "frames": "png", "overhead": 0.9},
+        ],
+        "replays": [
+            {"mode": "rendered", "episode_cpu_s": 10.0, "replay_cpu_s": 2.0, "speed_up": 5.0}
+        ],
+        "import_cpu_s": {"mcap_writer": 0.3, "rerun_writer": 0.5},
+    }
+    met = {t["target"]: t["met"] for t in targets(summary)}
+    assert not met["recording overhead, fast mode (costlier of MCAP, Rerun), %"]  # 12 % > 10
+    assert met["recording overhead, rendered (costliest of raw, JPEG, Rerun), %"]  # PNG not judged
+    assert met["MCAP of a 24 m rendered episode, JPEG, MB"]
+    assert met["rendered replay (STSF) / live episode speed"]
+    summary["targets"] = targets(summary)
+    text = to_markdown(summary)
+    assert "## Recording" in text and "mcap_writer 0.30, rerun_writer 0.50" in text

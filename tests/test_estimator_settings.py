@@ -22,8 +22,8 @@ def _yaml(name: str) -> dict:
 @pytest.mark.parametrize("name", sorted(ESTIMATORS))
 def test_defaults_are_the_yaml_files(name):
     data = _yaml(name)
-    if data.pop("extends", None):  # stsf.yaml adds its keys to conventional.yaml's
-        data = {**_yaml("conventional"), **data}
+    while base := data.pop("extends", None):  # stsf.yaml adds its keys to conventional.yaml's
+        data = {**_yaml(base), **data}
     assert dataclasses.asdict(estimator_settings(name)) == data
     for field in dataclasses.fields(estimator_class(name).settings_type):
         assert field.default is dataclasses.MISSING, f"{name}.{field.name} has a default in code"
@@ -45,7 +45,7 @@ def test_settings_are_frozen():
 
 def test_keyword_options_override_the_yaml(make_env):
     assert make_estimator("stsf", max_track_frames=4).max_track_frames == 4
-    env = PoseEstimateWrapper(make_env(camera__enabled=False), "stsf", max_track_frames=10)
+    env = PoseEstimateWrapper(make_env(camera__mode="fast"), "stsf", max_track_frames=10)
     assert env.estimator.max_track_frames == 10
     assert env.estimator.settings.weights == "significance"
     made = make_env("stsf_gym/Straight10m-EKF-v0", estimator_options={"max_range": 7.5})
@@ -72,7 +72,9 @@ def test_bad_options_fail_naming_them(name, options, message):
 
 
 def test_files_extend_and_errors_name_the_file(tmp_path, monkeypatch):
-    (tmp_path / "base.yaml").write_text(yaml.safe_dump(_yaml("conventional")))
+    (tmp_path / "base.yaml").write_text(
+        yaml.safe_dump({**_yaml("odometry"), **_yaml("conventional"), "extends": None})
+    )
     (tmp_path / "track.yaml").write_text("extends: base\nweights: gls\nmax_track_frames: 0\n")
     (tmp_path / "short.yaml").write_text("extends: base\nweights: gls\n")
     monkeypatch.setattr(settings_module, "ESTIMATOR_DIR", tmp_path)

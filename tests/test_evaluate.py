@@ -83,12 +83,19 @@ def test_evaluate_cli_json_schema(tmp_path):
         "nees_mean",
         "nees_bounds",
         "nees_in_bounds",
+        "nees_time_average",
+        "nees_time_bounds",
+        "nees_effective_steps",
+        "nees_verdict",
         "nis_mean",
         "nis_bounds",
         "match_rate",
         "ms_per_step",
     }
     check_rows(summary["rows"])
+    for row in summary["rows"]:  # the time average's own bounds lie within the per-step ones
+        low, high = row["nees_time_bounds"]
+        assert row["nees_bounds"][0] <= low < 3 < high <= row["nees_bounds"][1]
     ekf = summary["rows"][1]
     assert ekf["nis_mean"]["count"] == 1 and ekf["nis_bounds"][0] < 2 < ekf["nis_bounds"][1]
     assert summary["rows"][0]["nis_mean"] == {

@@ -20,8 +20,10 @@ SIMULATED = {"camera__mode": "fast"}  # detections simulated: the camera faults 
 RECOVERY_DISTANCE = 1.0  # m driven after a kidnap or a spike until the error is back in bounds
 #: The paper's conventional fusion keeps nothing between pairs: after re-localising, each
 #: estimate is one pair's measurement, and a poor one (a board nearly ahead) takes it out of
-#: bounds again until better pairs come (measured: 1.81 m after the kidnap below).
-PAIR_ONLY_RECOVERY_DISTANCE = 2.0
+#: bounds again until better pairs come (measured: 0.75 m after the kidnap below, 2.24 m after
+#: the encoder spike; 1.81 m after the kidnap before the chassis was levelled and each
+#: subsystem drew from its own random stream).
+PAIR_ONLY_RECOVERY_DISTANCE = 2.5
 
 
 @pytest.mark.parametrize(

@@ -49,6 +49,8 @@ def test_the_import_graph_points_one_way():
             "stsf_gym.wrappers",
         }, core
     assert "pybullet" not in graph["stsf_gym.envs.rendering"]
+    # recordings are written from any env stack and replayed with no simulator
+    assert not graph["stsf_gym.recording"] & {"stsf_gym.envs", *layers.ENV_FOLDERS, "pybullet"}
     assert graph["stsf_gym.envs"] - {"pybullet", "pybullet_utils", *layers.ENV_FOLDERS} <= {
         "stsf_gym.geometry",
         "stsf_gym.vision.landmarks",
@@ -105,6 +107,8 @@ def test_layers_command_prints_the_graph():
     )
     assert done.returncode == 0, done.stdout
     assert re.search(
-        r"stsf_gym\.wrappers +-> stsf_gym\.estimators, stsf_gym\.validation\n", done.stdout
+        r"stsf_gym\.wrappers +-> stsf_gym\.estimators, stsf_gym\.state_history, "
+        r"stsf_gym\.validation\n",
+        done.stdout,
     )
     assert done.stdout.rstrip().endswith("violations:\n  none")

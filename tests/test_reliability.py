@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +14,7 @@ import pytest
 
 import stsf_gym.cli as cli
 from stsf_gym.experiments.cache import JobsFailed, run_cached
+from stsf_gym.validation import ConfigError, Positive, build
 
 ROOT = Path(__file__).resolve().parent.parent
 LIFETIME_CYCLES = 200  # 1000 in `benchmarks/soak.py --cycles 1000`; this many keep it < 1 min
@@ -235,3 +238,69 @@ def test_images_are_bit_identical_per_renderer_serial_and_parallel():
         assert report["parallel"]["sha256"] == report["serial"]["sha256"], renderer
         hashes[renderer] = report["serial"]["sha256"]
     assert len(set(hashes.values())) == len(renderers)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (  # a lens whose image folds over: no ray for the image corners
+            ["evaluate", "--set", "camera.lens.distortion=[-3,0,0,0,0]"],
+            "camera.lens.distortion .* folds the image over",
+        ),
+        (  # a landmark estimator on an env without a camera would run as odometry
+            ["evaluate", "--estimators", "stsf", "--set", "camera.enabled=false"],
+            "pose source 'stsf' reads the camera, but camera.enabled is false",
+        ),
+        (  # two options setting one value: neither may win silently
+            ["demo", "--seconds", "5", "--set", "sim.max_episode_seconds=9"],
+            "--seconds and sim.max_episode_seconds .* both set the episode length",
+        ),
+        (  # a number where a number is meant, not a boolean
+            ["evaluate", "--set", "encoders.slip_std=true"],
+            "encoders.slip_std must be a number, got True",
+        ),
+    ],
+)
+def test_meaningless_combinations_are_refused_before_any_work(run_cli, tmp_path, argv, message):
+    out = tmp_path / "out"
+    code, err = run_cli(*argv, "--out", str(out))
+    assert code == 2 and re.search(message, err), err
+    assert "Traceback" not in err and not out.exists()
+
+
+def test_a_fault_that_could_never_act_is_refused(tmp_path, run_cli):
+    faults = tmp_path / "late.yaml"
+    faults.write_text("faults:\n  - {kind: kidnap, start: 500.0, shift: [0.3, 0.1], turn_deg: 8}\n")
+    code, err = run_cli("evaluate", "--faults", str(faults), "--out", str(tmp_path / "out"))
+    assert code == 2 and "late.yaml" in err
+    assert "faults[0].start must be before the episode ends" in err
+
+
+def test_a_generator_that_can_never_make_a_world_names_why(tmp_path):
+    from stsf_gym.envs.config import load_config
+    from stsf_gym.envs.worlds.generator import generate_world
+    from stsf_gym.envs.worlds.generator_config import load_generator_config
+
+    long = tmp_path / "long.yaml"
+    long.write_text("min_path_length: 100\n")
+    with pytest.raises(ConfigError, match=r"long\.yaml: generator\.min_path_length can never"):
+        load_generator_config(long)
+    narrow = load_generator_config({"width": [0.3, 0.4]})
+    with pytest.raises(ConfigError, match=r"generator\.width .* narrower than the robot needs"):
+        generate_world(1, narrow, load_config())
+
+
+@dataclass(frozen=True)
+class OptionalLimit:
+    """A setting typed ``X | None``: each member of the union is checked."""
+
+    limit: Positive | None = None
+
+
+def test_a_union_typed_setting_checks_each_member():
+    assert build(OptionalLimit, {"limit": None}, "x").limit is None
+    assert build(OptionalLimit, {"limit": 2}, "x").limit == 2.0
+    with pytest.raises(ConfigError, match=r"x\.limit must be a number, got True"):
+        build(OptionalLimit, {"limit": True}, "x")
+    with pytest.raises(ConfigError, match=r"x\.limit must be > 0, got -1"):
+        build(OptionalLimit, {"limit": -1}, "x")

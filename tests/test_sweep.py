@@ -3,6 +3,7 @@ reported and retried, and the same sweep on Ray giving the same table."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -11,6 +12,7 @@ import pytest
 import yaml
 
 from stsf_gym.envs.config import ConfigError
+from stsf_gym.estimators import estimator_settings
 from stsf_gym.experiments.sweep import cells as sweep_cells
 from stsf_gym.experiments.sweep.cells import CellKind
 from stsf_gym.experiments.sweep.run import load_sweep, run_sweep
@@ -63,7 +65,7 @@ def test_grid_and_one_at_a_time_cells(tmp_path):
     assert all(c["env"]["sim"]["max_episode_seconds"] == 9 for c in cells)  # base env kept
     noise = {c["env"]["camera"]["sensor"]["read_noise"] for c in cells if c not in slip}
     assert noise == {1.0, 4.0, 8.0}
-    assert cells[0]["options"] == {"mount_std": 0.0}  # odometry.yaml
+    assert cells[0]["options"] == dataclasses.asdict(estimator_settings("odometry"))
     assert cells[-1]["options"]["sigma_px"] > 0  # ekf.yaml
 
 

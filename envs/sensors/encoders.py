@@ -4,8 +4,8 @@ The robot's true wheel rotation comes from the simulator. The encoders report th
 change of each wheel per step; wheel slip perturbs the counted rotation (a random walk whose
 variance grows with the rotation). Calibration errors model a robot whose believed wheel radii
 and wheelbase are off from the true ones: :attr:`WheelEncoders.calibration` is what an
-odometry estimator must use, drawn anew at each reset. All draws come from the env's
-``np_random``.
+odometry estimator must use, drawn anew at each reset from the episode's calibration stream;
+slip comes from its encoder stream (:mod:`stsf_gym.envs.random_streams`).
 """
 
 from __future__ import annotations

@@ -17,10 +17,21 @@ would have found, with the detector's statistics fitted on rendered frames
 - **false detections**: a Poisson number per frame (mean ``false_detection_rate``) of phantom
   boards with a random map id, fronto-parallel 2-6 m ahead at a random place in the frame.
 
+- **what a track-aided search would find** (STSF's matching, :mod:`stsf_gym.vision.predicted`):
+  a board in view that the detector missed is findable, by a search where a track predicts it,
+  with probability ``1 / (1 + exp(-(s - aided_size_px) / aided_size_scale))``, fitted by the
+  same tool on the same rendered views (the predicted matcher given the board's corners off by
+  a track's error). Findable boards go to the ``aided_ids`` / ``aided_points`` slots (the image
+  holds them: a rendered frame would too); an estimator uses one only where its own prediction
+  puts the board within its search radius (:mod:`stsf_gym.estimators.frame_detector`). Their
+  draws come from a stream of their own (spawned from the episode's seed, so the plain
+  detections are drawn exactly as without it).
+
 The observation holds ``max_detections`` slots: ``landmark_ids`` (-1 for an empty slot) and
 ``landmark_points``, flat (slots x 2 grid^2): each slot's lit-square centres as ``x0, y0, x1,
 y1, ...`` in :func:`stsf_gym.vision.landmarks.square_centres` order, zero past the last square
-(``reshape(slots, -1, 2)`` gives the points; flat because SB3 policies take 1-D vectors).
+(``reshape(slots, -1, 2)`` gives the points; flat because SB3 policies take 1-D vectors); the
+same for ``aided_ids`` / ``aided_points``.
 """
 
 from __future__ import annotations
@@ -45,7 +56,16 @@ def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corne
 
 def detection_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.ndarray:
     """Probability that the detector finds a board of apparent size ``size_px``."""
-    z = (np.asarray(size_px, dtype=float) - cfg.detect_size_px) / cfg.detect_size_scale
+    return logistic(size_px, cfg.detect_size_px, cfg.detect_size_scale)
+
+
+def aided_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.ndarray:
+    """Probability that a track-aided search finds a board the detector missed."""
+    return logistic(size_px, cfg.aided_size_px, cfg.aided_size_scale)
+
+
+def logistic(size_px: np.ndarray | float, centre: float, width: float) -> np.ndarray:
+    z = (np.asarray(size_px, dtype=float) - centre) / width
     return 1.0 / (1.0 + np.exp(-np.clip(z, -50, 50)))
 
 
@@ -63,26 +83,54 @@ class SimulatedDetector:
         self.slots = cfg.max_detections
         self.values_per_slot = 2 * self.pattern.grid**2
         self.frame = self.empty()
+        self.aided = self.empty()
+        self.aided_rng = np.random.default_rng(0)
 
     def observation_space(self) -> dict[str, spaces.Space]:
         span = 2 * max(self.camera.width, self.camera.height)
+        ids = spaces.Box(-1, self.pattern.max_id, (self.slots,), np.int64)
+        points = spaces.Box(-span, span, (self.slots * self.values_per_slot,), np.float32)
         return {
-            "landmark_ids": spaces.Box(-1, self.pattern.max_id, (self.slots,), np.int64),
-            "landmark_points": spaces.Box(
-                -span, span, (self.slots * self.values_per_slot,), np.float32
-            ),
+            "landmark_ids": ids,
+            "landmark_points": points,
+            "aided_ids": ids,
+            "aided_points": points,
         }
 
     def reset(self, rng: np.random.Generator) -> None:
-        self.frame = self.empty()
+        self.frame = self.aided = self.empty()
+        # its own stream, spawned without a draw from ``rng``: the plain detections stay as
+        # they were drawn before track-aided slots existed
+        self.aided_rng = np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0])
 
     def capture(self, pose: np.ndarray, rng: np.random.Generator) -> None:
         visible = self.world.landmarks_in_view(self.camera, pose)
         self.frame = self.detect(pose, visible, rng)
+        found = set(self.frame[0].tolist())
+        self.aided = self.findable(pose, [i for i in visible if i not in found], self.aided_rng)
 
     def observe(self) -> dict[str, np.ndarray]:
-        ids, points = self.frame
-        return {"landmark_ids": ids.copy(), "landmark_points": points.copy()}
+        (ids, points), (aided_ids, aided_points) = self.frame, self.aided
+        return {
+            "landmark_ids": ids.copy(),
+            "landmark_points": points.copy(),
+            "aided_ids": aided_ids.copy(),
+            "aided_points": aided_points.copy(),
+        }
+
+    def findable(
+        self, world_from_camera: np.ndarray, missed_ids: list[int], rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The boards in view the detector missed that a track-aided search would find."""
+        found = []
+        for landmark_id in missed_ids:
+            landmark = self.landmarks[landmark_id]
+            size = apparent_size_px(self.camera, world_from_camera, landmark.board_corners)
+            if rng.random() < aided_probability(size, self.cfg):
+                found.append(
+                    (landmark_id, self.camera.project(world_from_camera, landmark.square_centres))
+                )
+        return self._slots(found, rng)
 
     def empty(self) -> tuple[np.ndarray, np.ndarray]:
         """Slots with nothing detected."""
@@ -95,7 +143,6 @@ class SimulatedDetector:
         self, world_from_camera: np.ndarray, visible_ids: list[int], rng: np.random.Generator
     ) -> tuple[np.ndarray, np.ndarray]:
         """``(landmark_ids, landmark_points)`` of one frame; ``visible_ids`` from ray tests."""
-        ids, points = self.empty()
         found = []
         for landmark_id in visible_ids:
             landmark = self.landmarks[landmark_id]
@@ -106,6 +153,11 @@ class SimulatedDetector:
                 )
         for _ in range(rng.poisson(self.cfg.false_detection_rate)):
             found.append(self._phantom(rng))
+        return self._slots(found, rng)
+
+    def _slots(self, found: list, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Slots of ``(id, true pixels)`` pairs, the pixels with the detector's noise."""
+        ids, points = self.empty()
         for slot, (landmark_id, uv) in enumerate(found[: self.slots]):
             noisy = uv + rng.normal(0.0, self.cfg.feature_noise_px, uv.shape)
             ids[slot] = landmark_id

@@ -7,13 +7,17 @@ import math
 import numpy as np
 
 from stsf_gym.envs.config import SonarConfig
+from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
 
 
 class SonarRing:
     """``count`` transducers evenly spaced around the body, transducer 0 facing forward and
     the rest counter-clockwise. Each reads the nearest hit among ``rays_per_beam`` rays fanned
-    across its ``beam_width_deg`` cone, plus range noise; a dropout reads ``max_range``.
+    across its ``beam_width_deg`` cone, plus range noise; a dropout reads ``max_range``. With
+    ``sonar.beam.enabled`` the beam model of :mod:`~stsf_gym.envs.sensors.sonar_beam` decides
+    which rays echo back (specular misses at shallow incidence), and adds random readings and
+    crosstalk.
     """
 
     def __init__(self, cfg: SonarConfig, body_radius: float) -> None:
@@ -36,26 +40,63 @@ class SonarRing:
         )
         self._directions = np.column_stack([np.cos(ray_angles), np.sin(ray_angles)])
 
-    def true_ranges(self, sim: Simulator, pose: np.ndarray) -> np.ndarray:
-        """Noise-free nearest-hit range per transducer from the ring (metres)."""
+    def true_ranges(
+        self, sim: Simulator, pose: np.ndarray, transducers: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Noise-free nearest-hit range (metres) of each of ``transducers`` (default all)."""
+        fractions, _ = self._cast(sim, pose, transducers)
+        return self.cfg.max_range * fractions.min(axis=1)
+
+    def _cast(
+        self, sim: Simulator, pose: np.ndarray, transducers: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Hit fraction of max range (1: no hit) and angle of incidence (rad from the hit
+        surface's normal) of every ray, ``(transducers, rays_per_beam)`` each."""
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         rotation = np.array([[c, -s], [s, c]])
-        starts = self._origins @ rotation.T + (x, y)
-        ends = starts + self.cfg.max_range * self._directions @ rotation.T
+        rays = self._rays(transducers)
+        starts = self._origins[rays] @ rotation.T + (x, y)
+        ends = starts + self.cfg.max_range * self._directions[rays] @ rotation.T
         z = np.full((len(starts), 1), self.cfg.height)
         hits = sim.client.rayTestBatch(
             np.hstack([starts, z]).tolist(), np.hstack([ends, z]).tolist()
         )
         fractions = np.array([hit[2] if hit[0] >= 0 else 1.0 for hit in hits])
-        return self.cfg.max_range * fractions.reshape(self.cfg.count, -1).min(axis=1)
+        normals = np.array([hit[4][:2] if hit[0] >= 0 else (0.0, 0.0) for hit in hits])
+        directions = self._directions[rays] @ rotation.T
+        incidence = np.arccos(np.clip(-np.sum(normals * directions, axis=1), -1.0, 1.0))
+        shape = (-1, self.cfg.rays_per_beam)
+        return fractions.reshape(shape), incidence.reshape(shape)
 
-    def read(self, sim: Simulator, pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Noisy float32 ranges, clipped to [min_range, max_range]."""
+    def _rays(self, transducers: np.ndarray | None) -> np.ndarray | slice:
+        if transducers is None:
+            return slice(None)
+        per_beam = self.cfg.rays_per_beam
+        return (np.asarray(transducers)[:, None] * per_beam + np.arange(per_beam)).ravel()
+
+    def read(
+        self,
+        sim: Simulator,
+        pose: np.ndarray,
+        rng: np.random.Generator,
+        transducers: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Noisy float32 ranges of ``transducers`` (default all), clipped to [min_range,
+        max_range]."""
         cfg = self.cfg
-        ranges = self.true_ranges(sim, pose)
+        if cfg.beam.enabled:
+            fractions, incidence = self._cast(sim, pose, transducers)
+            ranges = beam_ranges(fractions, incidence, cfg.max_range, cfg.beam, rng)
+            which = np.arange(cfg.count) if transducers is None else np.asarray(transducers)
+            limits = (cfg.min_range, cfg.max_range)
+            simultaneous = not cfg.firing_order
+            ranges = corrupt(ranges, which, cfg.count, limits, cfg.beam, simultaneous, rng)
+        else:
+            ranges = self.true_ranges(sim, pose, transducers)
+        count = len(ranges)
         hit = ranges < cfg.max_range
-        noisy = ranges + rng.normal(size=cfg.count) * (cfg.noise_std + cfg.noise_std_per_m * ranges)
+        noisy = ranges + rng.normal(size=count) * (cfg.noise_std + cfg.noise_std_per_m * ranges)
         noisy = np.where(hit, noisy, cfg.max_range)
-        noisy[rng.random(cfg.count) < cfg.dropout_prob] = cfg.max_range
+        noisy[rng.random(count) < cfg.dropout_prob] = cfg.max_range
         return np.clip(noisy, cfg.min_range, cfg.max_range).astype(np.float32)

@@ -103,6 +103,35 @@ def _check_on_wall(world: WorldConfig, index: int) -> None:
     )
 
 
+def path_arc_length(path, point) -> tuple[float, float]:
+    """Arc length along ``path`` of the path point nearest ``point``, and the distance to it."""
+    path, p = np.asarray(path, float), np.asarray(point, float)[:2]
+    a, d = path[:-1], np.diff(path, axis=0)
+    lengths = np.linalg.norm(d, axis=1)
+    t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.maximum(lengths**2, 1e-12), 0.0, 1.0)
+    gaps = np.linalg.norm(p - a - t[:, None] * d, axis=1)
+    i = int(np.argmin(gaps))
+    return float(np.sum(lengths[:i]) + t[i] * lengths[i]), float(gaps[i])
+
+
+def check_route(world: WorldConfig) -> None:
+    """Each route goal lies on the path, further along than the one before; the last is the
+    path's end (the route is what the ``declare`` task visits, in order)."""
+    previous = -math.inf
+    for i, goal in enumerate(world.route):
+        along, gap = path_arc_length(world.path, goal)
+        require(gap <= ON_WALL_TOLERANCE, f"route[{i}]", f"must lie on the path, {gap:.3f} m off")
+        require(along > previous, f"route[{i}]", "must lie further along the path than route[i-1]")
+        previous = along
+    if world.route:
+        end = np.asarray(world.path[-1], float)
+        require(
+            bool(np.allclose(world.route[-1], end, atol=ON_WALL_TOLERANCE)),
+            f"route[{len(world.route) - 1}]",
+            f"the last goal must be the path's end {end.tolist()}, got {list(world.route[-1])}",
+        )
+
+
 def check_clearance(world: WorldConfig, body_radius: float) -> None:
     """Start pose and path points inside the walls' bounds, a robot radius clear of walls.
 

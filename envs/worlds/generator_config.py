@@ -32,9 +32,22 @@ class VisibilityConfig:
     sample_step: Positive
     landmarks_in_view: Count
     candidate_step: Positive
+    #: the density dial: share of path points that see a board, [low, high]; 1: every one
+    coverage: tuple[Annotated[float, Range(gt=0, le=1)], Annotated[float, Range(gt=0, le=1)]] = (
+        1.0,
+        1.0,
+    )
+    dark_stretch: tuple[Positive, Positive] = (10.0, 20.0)  # m of path with no board in view
 
     def __post_init__(self) -> None:
         _ordered((self.min_range, self.max_range), "max_range")
+        _ordered(self.coverage, "coverage")
+        _ordered(self.dark_stretch, "dark_stretch")
+
+    @property
+    def sparse(self) -> bool:
+        """Dark stretches are planned (coverage below 1)."""
+        return self.coverage[0] < 1.0
 
 
 @dataclass(frozen=True)
@@ -75,10 +88,30 @@ class GeneratorConfig:
     clutter: ClutterConfig
     world: FixedWorldConfig
     splits: dict
+    goal_overrun: tuple[Positive, Positive] | None = (
+        None  # corridor past the goal; None: end_margin
+    )
+    halls: tuple[Annotated[int, Range(ge=0)], Annotated[int, Range(ge=0)]] = (0, 0)
+    hall_width: tuple[Positive, Positive] = (11.0, 14.0)  # open halls: wider than 2 sonar ranges
+    junction_arms: tuple[Annotated[int, Range(ge=0)], Annotated[int, Range(ge=0, le=2)]] = (0, 0)
+    arm_length: tuple[Positive, Positive] = (3.0, 6.0)  # look-alike corridors at a turn
+    route_goals: tuple[Annotated[int, Range(ge=0)], Annotated[int, Range(ge=0)]] = (0, 0)
+    route_spacing: Positive = 3.0  # m along the path between goals, and from the start
 
     def __post_init__(self) -> None:
-        for name in ("segments", "segment_length", "width", "branches", "branch_length"):
+        names = ("segments", "segment_length", "width", "branches", "branch_length", "halls")
+        names += ("hall_width", "junction_arms", "arm_length", "route_goals")
+        for name in names:
             _ordered(getattr(self, name), name)
+        longest = self.segments[1] * self.segment_length[1]
+        require(
+            self.min_path_length <= longest,
+            "min_path_length",
+            f"can never be reached: at most segments[1] x segment_length[1] = {longest:g} m, "
+            f"got {self.min_path_length:g}",
+        )
+        if self.goal_overrun is not None:
+            _ordered(self.goal_overrun, "goal_overrun")
         require(
             isinstance(self.splits, Mapping) and sorted(self.splits) == sorted(SPLITS),
             "splits",

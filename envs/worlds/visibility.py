@@ -73,6 +73,16 @@ def path_samples(path: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]
     return np.concatenate(points), np.concatenate(headings)
 
 
+def sample_arc_lengths(path: np.ndarray, step: float) -> np.ndarray:
+    """Arc length (m, from the path's start) of each sample of :func:`path_samples`."""
+    arcs, offset = [], 0.0
+    for a, b in itertools.pairwise(path):
+        length = float(np.linalg.norm(b - a))
+        arcs.append(offset + np.append(np.arange(0.0, length, step), length))
+        offset += length
+    return np.concatenate(arcs)
+
+
 def segment_distances(p0, p1, q0, q1) -> np.ndarray:
     """Distances between segments ``p0-p1`` (..., 2) and ``q0-q1`` (broadcast)."""
     d1, d2 = p1 - p0, q1 - q0

@@ -9,6 +9,8 @@
    to localise, and the detector beside OpenCV's ArUco ``detectMarkers`` on the same frames.
 4. ``AsyncVectorEnv`` throughput of the rendered STSF pipeline with 1 and 2 workers.
 5. Where the time goes: cProfile's top functions over the camera pipeline (case e).
+6. Recording (:mod:`.recording`): what ``--record`` adds to an episode's wall time, the files'
+   sizes, and how much faster a replay of a recorded episode runs than the episode itself.
 
 Writes ``bench.json`` and ``bench.md`` to the output folder.
 """
@@ -23,8 +25,10 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from stsf_gym.bench.recording import recording_costs
 from stsf_gym.bench.speed import CASES, FAST_CASES, render_latency, run_case, vector_scaling
 from stsf_gym.io import markdown_table, write_atomic, write_json
+from stsf_gym.results.provenance import provenance
 
 PAPER_MS = {"detect": 127.0, "localise": 332.0}  # sect. 4.3, 1 GHz Pentium IV
 PROFILED_CASE = "e: camera + detector + STSF"
@@ -75,8 +79,16 @@ def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, se
         speed.append(run_case(name, seconds, seed, profile=name == PROFILED_CASE))
     renders = render_latency()
     vector = vector_scaling(vector_steps, seed)
-    summary = {"machine": machine(), "speed": speed, "render": renders, "vector": vector}
+    recording = recording_costs(seed)
+    summary = {
+        "machine": machine(),
+        "speed": speed,
+        "render": renders,
+        "vector": vector,
+        "recording": recording,
+    }
     summary["targets"] = targets(summary)
+    summary["provenance"] = provenance({"sim_seconds": sim_seconds, "vector_steps": vector_steps})
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "bench.json", summary)
     write_atomic(out / "bench.md", to_markdown(summary))
@@ -118,6 +130,8 @@ def targets(summary: dict) -> list[dict]:
         ("MCL, ms per step (every stage)", mcl["estimator_ms_per_step"], "<=", 3.0),
         ("EKF, ms per step (every stage, no target)", fast_ekf["estimator_ms_per_step"], "<", 1e9),
     ]
+    if "recording" in summary:
+        checks += recording_checks(summary["recording"])
     return [
         {
             "target": name,
@@ -128,6 +142,34 @@ def targets(summary: dict) -> list[dict]:
             ),
         }
         for name, value, op, bound in checks
+    ]
+
+
+def recording_checks(recording: dict) -> list[tuple[str, float, str, float]]:
+    """The recording targets: overhead per sensor mode (the costliest format but PNG frames),
+    the JPEG MCAP's size, and the rendered replay's speed-up."""
+    rows = recording["recordings"]
+
+    def worst(mode: str) -> float:  # PNG frames, an option slow to encode, are not judged
+        return 100 * max(r["overhead"] for r in rows if r["mode"] == mode and r["frames"] != "png")
+
+    jpeg = next(r for r in rows if r["mode"] == "rendered" and r["frames"] == "jpeg")
+    replayed = next(r for r in recording["replays"] if r["mode"] == "rendered")
+    return [
+        ("recording overhead, fast mode (costlier of MCAP, Rerun), %", worst("fast"), "<=", 10),
+        (
+            "recording overhead, rendered (costliest of raw, JPEG, Rerun), %",
+            worst("rendered"),
+            "<=",
+            15,
+        ),
+        (
+            f"MCAP of a {jpeg['distance_m']:.0f} m rendered episode, JPEG, MB",
+            jpeg["size_mb"],
+            "<=",
+            50,
+        ),
+        ("rendered replay (STSF) / live episode speed", replayed["speed_up"], ">=", 3),
     ]
 
 
@@ -204,5 +246,17 @@ def to_markdown(summary: dict) -> str:
     if "profile" in stsf:
         rows = [{**p, "own_share": f"{100 * p['own_share']:.1f} %"} for p in stsf["profile"]]
         parts.append(f"## Where the time goes ({PROFILED_CASE})\n\n" + markdown_table(rows))
+    if "recording" in summary:
+        parts.append(
+            "## Recording (IRL corridor, follower on STSF; overhead: the recorder's CPU time "
+            "over the unrecorded episode's)\n\n"
+            + markdown_table(summary["recording"]["recordings"])
+            + "\nReplay of the lossless MCAP (reading and decoding included; speed-up in CPU "
+            "time):\n\n"
+            + markdown_table(summary["recording"]["replays"])
+            + "\nImport of the writers' libraries (once per process, CPU s): "
+            + ", ".join(f"{k} {v:.2f}" for k, v in summary["recording"]["import_cpu_s"].items())
+            + "\n"
+        )
     parts.append("## Targets\n\n" + markdown_table(summary["targets"]))
     return "\n".join(parts)

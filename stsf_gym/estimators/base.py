@@ -64,7 +64,7 @@ class SensorModel:
     camera_calibration_std: tuple[float, float]  # rad, relative: see below
     camera_matrix: np.ndarray
     image_size: tuple[int, int]  # width, height
-    robot_from_camera: Callable[[float, float], np.ndarray]
+    robot_from_camera: Callable[[float, float], np.ndarray]  # e.g. a PanTiltMount
     landmarks: dict[int, MapLandmark]
     pattern: LandmarkPattern
     walls: np.ndarray  # (K, 4) wall centre-line segments x1, y1, x2, y2 of the map
@@ -89,6 +89,9 @@ class PoseEstimator(ABC):
     """
 
     name: str = ""
+    #: The sensors the estimator reads: a pose source whose sensor is switched off in the env
+    #: is refused (:func:`stsf_gym.wrappers.check_sensors`), never run as something else.
+    sensors: tuple[str, ...] = ("encoders",)
 
     def __init__(self) -> None:
         self.timings: dict[str, float] = defaultdict(float)

@@ -78,6 +78,7 @@ class DegradedTruth(PoseEstimator):
 
     name = NAME
     settings_type: ClassVar[type] = DegradedTruthSettings
+    sensors = ()  # privileged: handed the true pose
 
     def __init__(self, settings: DegradedTruthSettings) -> None:
         super().__init__()

@@ -108,6 +108,8 @@ class EKFEstimator(OdometryEstimator):
         relocalise_inflation: factor on their covariance for the restarted state.
     """
 
+    sensors = ("encoders", "camera")
+
     name = "ekf"
     settings_type: ClassVar[type] = EKFSettings
 

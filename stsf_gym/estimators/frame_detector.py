@@ -7,10 +7,12 @@ records, so every estimator runs one code path in both modes.
 
 With ``predictions`` (:class:`~stsf_gym.vision.predicted.BoardPrediction`, from an estimator's
 landmark tracks), a predicted board the detector did not find is searched where and at the size
-predicted (track-aided matching, :class:`~stsf_gym.vision.predicted.PredictedMatcher`). That
-needs the image: the fast mode simulates the plain detector's output only, so there the
-predictions change nothing (its statistics, ``camera.fast``, were fitted to the plain detector).
-Either way the image points are then
+predicted (track-aided matching, :class:`~stsf_gym.vision.predicted.PredictedMatcher`). In the
+fast mode the env lists the boards such a search would find (``obs["aided_ids"]``, drawn with
+the matcher's fitted rate by size, :mod:`stsf_gym.envs.sensors.fast_camera`); a prediction takes
+one when it is of that id, at least the matcher's smallest board size, and its centre lies
+within its search radius of the board's (as the matcher's search window). Either way the image
+points are then
 undistorted with the calibration the robot believes it has
 (:attr:`~stsf_gym.estimators.base.SensorModel.camera_calibration`): the estimators work with
 an ideal pinhole camera of that calibration's K.
@@ -46,16 +48,24 @@ class FrameDetector:
         self.calibration, self.matcher = calibration, matcher
         #: Detections of the last call that only the predicted search found.
         self.aided: list[Detection] = []
+        #: The last call's detections in the image's own (distorted) pixels, and the boards it
+        #: was told to expect (for recordings: :mod:`stsf_gym.recording`).
+        self.found: list[Detection] = []
+        self.predictions: list[BoardPrediction] = []
 
     def __call__(self, obs: dict, predictions: list[BoardPrediction] = ()) -> list[Detection]:
-        self.aided = []
+        self.aided, self.predictions = [], list(predictions)
         if "landmark_ids" in obs:
             found = self._unpack(obs["landmark_ids"], obs["landmark_points"])
+            if self.matcher is not None and predictions and "aided_ids" in obs:
+                self.aided = self._simulated_search(obs, predictions, found)
+                found = found + self.aided
         else:
             found = _detect(self.pattern, self.valid_ids, obs["image"])
             if self.matcher is not None and predictions:
                 self.aided = self._search(obs["image"], predictions, found)
                 found = found + self.aided
+        self.found = found
         if self.calibration is None or not self.calibration.distorted:
             return found
         return [self._undistorted(d) for d in found]
@@ -74,6 +84,27 @@ class FrameDetector:
             if match is not None:
                 matches.append(match)
                 have.add(match.landmark_id)
+        return matches
+
+    def _simulated_search(
+        self, obs: dict, predictions: list[BoardPrediction], found: list[Detection]
+    ) -> list[Detection]:
+        """The fast mode's track-aided matches: findable boards a prediction covers."""
+        findable = {d.landmark_id: d for d in self._unpack(obs["aided_ids"], obs["aided_points"])}
+        have = {d.landmark_id for d in found}
+        matches = []
+        for prediction in predictions:
+            board = findable.get(prediction.landmark_id)
+            if board is None or prediction.landmark_id in have:
+                continue
+            if prediction.size_px < self.matcher.min_board_px:
+                continue
+            # the board's centre: its homography maps the pattern's origin there
+            centre = board.homography @ np.array([0.0, 0.0, 1.0])
+            offset = centre[:2] / centre[2] - prediction.corners.mean(axis=0)
+            if np.hypot(*offset) <= prediction.search_px:
+                matches.append(board)
+                have.add(board.landmark_id)
         return matches
 
     def _undistorted(self, detection: Detection) -> Detection:

@@ -91,6 +91,8 @@ class LandmarkFusionEstimator(OdometryEstimator):
     tracks of at most ``max_track_frames`` frames, fused with ``weights`` (eq. 2-5); the rest of
     the settings in ``configs/estimators/conventional.yaml``."""
 
+    sensors = ("encoders", "camera")
+
     def __init__(self, settings: ConventionalSettings, max_track_frames: int, weights: str) -> None:
         super().__init__(settings)
         self.max_track_frames, self.weights = max_track_frames, weights

@@ -34,9 +34,16 @@ Inflation = Annotated[float, Range(ge=1)]
 
 @dataclass(frozen=True)
 class OdometrySettings:
-    """Dead reckoning (``odometry.yaml``)."""
+    """Dead reckoning (``odometry.yaml``), and the noise every estimator believes in: its own
+    nominal values, apart from the env's true noise (``encoders`` and ``camera`` sections of
+    the env config), so that a robot's model can be wrong as a real robot's is."""
 
     mount_std: NonNegative  # m, the camera mount's unknown position error (a camera's estimators)
+    slip_std: NonNegative  # believed wheel slip, rad per sqrt(rad) of wheel rotation
+    radius_error_std: NonNegative  # believed relative wheel-radius calibration error
+    wheelbase_error_std: NonNegative  # believed relative wheelbase calibration error
+    principal_point_std_px: NonNegative  # believed camera principal point error (px)
+    focal_std: NonNegative  # believed relative focal length error
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,13 @@
 """Run many jobs (in processes), keeping each finished result in its own JSON file.
 
-A rerun skips every job whose file holds the same job description, so an interrupted run
-resumes where it stopped and a changed config recomputes; files are written atomically, and a
-file that cannot be read back counts as not done. A job whose worker raises or dies is
-reported on stderr (name and error) and run once more; a job failing twice is reported in
-:class:`JobsFailed` once every other job has finished and been saved.
+A rerun skips every job whose file holds the same job description and the same
+:func:`~stsf_gym.results.provenance.fingerprint` (the code's digest and the job's fully resolved
+configuration), so an interrupted run resumes where it stopped, while a result made by other
+code or settings (an edited default, a changed module) is stale: it is recomputed, and the run
+says so. Files are written atomically, and a file that cannot be read back counts as not done.
+A job whose worker raises or dies is reported on stderr (name and error) and run once more; a
+job failing twice is reported in :class:`JobsFailed` once every other job has finished and been
+saved.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ from __future__ import annotations
 import json
 import sys
 import threading
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, is_dataclass
@@ -22,6 +25,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from stsf_gym.io import write_json
+from stsf_gym.results.provenance import fingerprint
 
 ATTEMPTS = 2  # runs of a job before it is given up
 
@@ -64,28 +68,46 @@ def run_cached(
     workers: int = 1,
     desc: str = "jobs",
     runner: Runner | None = None,
+    config: Callable[[dict], Mapping] | None = None,
 ) -> list[dict]:
     """``fn(job)`` for every job (a JSON-friendly dict), its result as a dict, in job order.
 
     ``runner`` executes the jobs still to do (default: :func:`process_runner` of ``workers``);
-    each result is saved as soon as the runner yields it.
+    each result is saved as soon as the runner yields it. ``config(job)`` is the job's fully
+    resolved configuration (every value, not only the job's overrides): part of the
+    fingerprint a saved result must match to be reused.
     """
     folder = Path(folder)
     jobs = [json.loads(json.dumps(job)) for job in jobs]
+    made_by = {name(job): fingerprint(config(job) if config else None) for job in jobs}
+    stale = []
 
-    def load(job: dict) -> dict | None:
+    def load(job: dict, note_stale: bool = False) -> dict | None:
         path = folder / f"{name(job)}.json"
         try:
             data = json.loads(path.read_text())
         except (OSError, ValueError):  # not there yet, or not readable: run the job again
             return None
-        return data["result"] if isinstance(data, dict) and data.get("job") == job else None
+        if not isinstance(data, dict) or data.get("job") != job:
+            return None
+        if data.get("made_by") != made_by[name(job)]:
+            if note_stale:
+                stale.append(name(job))
+            return None
+        return data["result"]
 
     def save(job: dict, result: object) -> None:
         result = asdict(result) if is_dataclass(result) else result
-        write_json(folder / f"{name(job)}.json", {"job": job, "result": result})
+        record = {"job": job, "made_by": made_by[name(job)], "result": result}
+        write_json(folder / f"{name(job)}.json", record)
 
-    todo = [job for job in jobs if load(job) is None]
+    todo = [job for job in jobs if load(job, note_stale=True) is None]
+    if stale:
+        print(
+            f"{desc}: {len(stale)} saved result(s) in {folder} were made by other code or "
+            f"settings (e.g. {stale[0]}); recomputing them",
+            file=sys.stderr,
+        )
     run = runner or process_runner(workers)
     errors: dict[str, str] = {}
     with tqdm(total=len(jobs), initial=len(jobs) - len(todo), desc=desc) as progress:

@@ -15,13 +15,14 @@ from pathlib import Path
 
 import numpy as np
 
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
-    estimator_options,
     run_episodes,
+    specs_config,
 )
-from stsf_gym.experiments.plots import pyplot
+from stsf_gym.experiments.plotting.maps import pyplot
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms, summarise
 from stsf_gym.io import markdown_table, save_figure
@@ -91,7 +92,14 @@ def compare(
     }
     table = markdown_table([rendered(row, SUMMARY_COLUMNS) for row in rows])
     write_report(
-        out, summary, f"Agents x pose sources on {world}", table, "comparison.json", "comparison.md"
+        out,
+        summary,
+        f"Agents x pose sources on {world}",
+        table,
+        "comparison.json",
+        "comparison.md",
+        config=specs_config(specs),
+        seeds=range(seed, seed + seeds),
     )
     summary["figures"] = [str(plot_comparison(by_pair, out / "comparison.png"))]
     return summary

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.episode_video import record_videos
 from stsf_gym.experiments.episodes import EpisodeSpec
-from stsf_gym.experiments.evaluate import estimator_options, evaluate
+from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.figures import PATH_ONLY
 
 DEMO_ESTIMATORS = ["odometry", "conventional", "conventional-filter", "stsf", "ekf"]
@@ -36,20 +37,24 @@ def run_demo(
     workers: int = 2,
     env: dict | None = None,
     video_seconds: float | None = None,
+    seeds: int = 1,
+    record: dict | None = None,
 ) -> dict:
-    """One episode per estimator on the IRL corridor; results.md/json, trajectories.png,
-    errors.png, nees.png and, unless ``video_seconds`` is 0, a video of each episode's first
-    ``video_seconds`` (default :data:`VIDEO_SECONDS`) in ``videos/``."""
+    """``seeds`` episodes per estimator on the IRL corridor; results.md/json, trajectories.png,
+    errors.png, nees.png and, unless ``video_seconds`` is 0, a video of each estimator's first
+    episode's first ``video_seconds`` (default :data:`VIDEO_SECONDS`) in ``videos/``; with
+    ``record`` each episode recorded (:func:`~stsf_gym.experiments.episodes.run_episode`)."""
     video_seconds = VIDEO_SECONDS if video_seconds is None else video_seconds
     summary, _ = evaluate(
         out,
         DEMO_ESTIMATORS,
-        1,
+        seeds,
         seed,
         "irl_corridor",
         workers=workers,
         env=env,
         agent_options=PATH_ONLY,
+        record=record,
     )
     if video_seconds > 0:
         specs = [

@@ -14,10 +14,12 @@ from collections.abc import Iterator
 import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration
+from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
 
 LANDMARK_ID = 77
 DISTANCES = (1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0)
 ANGLES = (0.0, 15.0, 30.0, 45.0, 60.0)
+TRACK_ERROR_PX = 2.0  # a track's prediction error per axis (benchmarks/track_aided_matching.py)
 
 
 def room_world() -> dict:
@@ -75,7 +77,12 @@ def landmark_views(
 
 
 def detection_records(
-    env, rng: np.random.Generator, distances=DISTANCES, angles=ANGLES, repeats: int = 3
+    env,
+    rng: np.random.Generator,
+    distances=DISTANCES,
+    angles=ANGLES,
+    repeats: int = 3,
+    aided_rng: np.random.Generator | None = None,
 ) -> list[dict]:
     """What the env's camera pipeline detects of the board in each of :func:`landmark_views`.
 
@@ -87,14 +94,19 @@ def detection_records(
     through the true K and distortion: the sensor's error; empty when not detected) and
     ``calibrated_residuals`` (the same points as the estimators see them: undistorted with the
     episode's believed calibration, minus the true square centres projected through the believed K:
-    the sensor's and the calibration's error).
+    the sensor's and the calibration's error). With ``aided_rng``, a view the detector missed
+    is searched as STSF's track-aided matching does (its ``configs/estimators/stsf.yaml``
+    settings), given the board's true corners off by a track's error (``TRACK_ERROR_PX`` per
+    axis, drawn from ``aided_rng``): ``aided`` (None where the detector found it).
     """
     from stsf_gym.envs.sensors.fast_camera import apparent_size_px
     from stsf_gym.estimators.frame_detector import FrameDetector
 
     u = env.unwrapped
     landmark = next(lm for lm in u.landmarks if lm.id == LANDMARK_ID)
-    detector = FrameDetector(u.config.world.landmark_pattern, {lm.id for lm in u.landmarks})
+    pattern, ids = u.config.world.landmark_pattern, {lm.id for lm in u.landmarks}
+    detector = FrameDetector(pattern, ids)
+    aided_detector, search_px = _aided_detector(pattern, ids)
     records = []
     for distance, angle, obs, info in landmark_views(env, rng, distances, angles, repeats):
         pose = info["camera_pose"]
@@ -108,18 +120,36 @@ def detection_records(
             pinhole = CameraCalibration(believed.K, np.zeros(5))
             camera_points = world_to_camera(pose, landmark.square_centres)
             calibrated = believed.undistort_pixels(points) - pinhole.project(camera_points)[rows]
+        aided = None
+        if aided_rng is not None and not good:
+            corners = u.camera.project(pose, landmark.board_corners)
+            shifted = corners + aided_rng.normal(0.0, TRACK_ERROR_PX, 2)
+            prediction = BoardPrediction(LANDMARK_ID, shifted, search_px)
+            aided_detector(obs, [prediction])
+            aided = any(d.landmark_id == LANDMARK_ID for d in aided_detector.aided)
         records.append(
             {
                 "distance": distance,
                 "angle": angle,
                 "size_px": apparent_size_px(u.camera, pose, landmark.board_corners),
                 "detected": bool(good),
+                "aided": aided,
                 "wrong_ids": len(detections) - len(good),
                 "residuals": residuals,
                 "calibrated_residuals": calibrated,
             }
         )
     return records
+
+
+def _aided_detector(pattern, ids):
+    """A frame detector with STSF's predicted matcher, and STSF's search radius (px)."""
+    from stsf_gym.estimators import estimator_settings
+    from stsf_gym.estimators.frame_detector import FrameDetector
+
+    settings = estimator_settings("stsf")
+    matcher = PredictedMatcher(pattern, settings.aided_min_correlation, settings.aided_min_board_px)
+    return FrameDetector(pattern, ids, matcher=matcher), settings.aided_search_px
 
 
 def world_to_camera(world_from_camera: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -145,9 +175,14 @@ def summarise_records(records: list[dict]) -> dict:
         if len(residuals)
         else None,
         "wrong_ids_per_view": float(np.mean([r["wrong_ids"] for r in records])),
+        "aided_rate_of_missed": _mean([r["aided"] for r in records if r.get("aided") is not None]),
         "rate_vs_distance": _rates(records, "distance"),
         "rate_vs_angle": _rates(records, "angle"),
     }
+
+
+def _mean(values: list) -> float | None:
+    return float(np.mean(values)) if values else None
 
 
 def _rates(records: list[dict], key: str) -> dict[str, float]:

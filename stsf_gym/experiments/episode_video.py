@@ -59,5 +59,6 @@ def record_videos(
         lambda job: EpisodeSpec(**job["spec"]).key,
         workers,
         "videos",
+        config=lambda job: EpisodeSpec(**job["spec"]).resolved(),
     )
     return {spec.estimator: result["file"] for spec, result in zip(specs, results, strict=True)}

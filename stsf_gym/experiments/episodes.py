@@ -15,13 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from stsf_gym.episode_env import make_episode_env
+from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
-from stsf_gym.wrappers import TRUTH, sensor_model
+from stsf_gym.wrappers import sensor_model
 
 RESULT_VERSION = 6  # bumped when EpisodeResult changes, so older episode files are rerun
 
@@ -42,6 +42,12 @@ class EpisodeSpec:
     def key(self) -> str:
         return f"{self.world}-{self.estimator}-{agent_label(self.agent)}-{self.seed}"
 
+    def resolved(self) -> dict:
+        """Every value this episode runs with: the env's and pose source's settings
+        (:func:`~stsf_gym.episode_env.resolved_config`) and the agent's."""
+        config = resolved_config(self.world, self.estimator, self.env, self.options)
+        return {**config, "agent": agent_config(self.agent, self.agent_options)}
+
 
 @dataclass
 class EpisodeResult:
@@ -49,7 +55,7 @@ class EpisodeResult:
     with the pose the estimator starts from at reset (time 0)."""
 
     spec: dict
-    outcome: str  # goal | collision | time
+    outcome: str  # goal (every goal reached) | collision | missed (a declared stop off) | time
     distance: float  # metres driven (true)
     sim_time: float
     steps: int
@@ -70,6 +76,10 @@ class EpisodeResult:
     finite: bool  # pose and covariance finite at every step
     min_cov_eigenvalue: float  # smallest eigenvalue of the covariance over the steps
     stage_ms_per_step: dict[str, float]
+    #: the declared stops (``task.protocol: declare``; ``info["stops"]``), in order
+    stops: list[dict] = field(default_factory=list)
+    goals: int = 1  # goals of the route
+    route_length: float = 0.0  # m along the path from its start to the last goal (SPL's l)
     #: [x, y, yaw] per record of the episode's floor: the batch smoother over all of its
     #: measurements (:mod:`stsf_gym.estimators.references.floor`); None with the camera off
     floor_estimates: list[list[float]] | None = None
@@ -126,12 +136,6 @@ class EpisodeResult:
 FLOOR_SETTINGS = "smoother"
 
 
-def estimator_options(source: str) -> dict:
-    """The settings of pose source ``source`` (``configs/estimators/<name>.yaml``) as plain
-    values, recorded with every episode (part of its cache key); ``truth`` has none."""
-    return {} if source == TRUTH else asdict(estimator_settings(source))
-
-
 def agent_label(agent: str) -> str:
     """``follower``, or a saved model's file stem and content digest (a file-name part)."""
     if agent == "follower":
@@ -139,6 +143,18 @@ def agent_label(agent: str) -> str:
     from stsf_gym.agents.sb3_agent import model_digest
 
     return f"{Path(agent).stem}-{model_digest(agent)}"
+
+
+def agent_config(name: str, options: dict | None = None) -> dict:
+    """The resolved settings of agent ``name``: the follower's config with ``options`` over
+    it, or a saved model's path and content digest."""
+    if name == "follower":
+        from stsf_gym.agents.follower import load_follower_config
+
+        return {"follower": asdict(load_follower_config(**(options or {})))}
+    from stsf_gym.agents.sb3_agent import model_digest
+
+    return {"model": name, "digest": model_digest(name)}
 
 
 def make_agent(name: str, env, options: dict | None = None):
@@ -156,16 +172,30 @@ def make_agent(name: str, env, options: dict | None = None):
     raise ValueError(f"unknown agent {name!r}; known: follower or a saved model (.zip)")
 
 
-def run_episode(spec: EpisodeSpec) -> EpisodeResult:
-    """Drive one episode to its end; record the estimate and the true pose at every step."""
-    env = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
+def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
+    """Drive one episode to its end; record the estimate and the true pose at every step.
+    With ``record`` (``{"format": "mcap" | "rerun", "frames": ..., "folder": ...}``) the
+    episode is also written as ``folder/<episode>.mcap`` (or ``.rrd``,
+    :class:`~stsf_gym.recording.wrapper.RecordEpisode`); it runs the same either way."""
+    env = estimating = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
+    if record:
+        from stsf_gym.recording.wrapper import RecordEpisode
+
+        env = RecordEpisode(
+            env,
+            record["folder"],
+            record["format"],
+            record.get("frames", "raw"),
+            spec.key,
+            meta={"spec": asdict(spec)},
+        )
     try:
         obs, info = env.reset(seed=spec.seed)  # first: a generated world is drawn here
         act = make_agent(spec.agent, env, spec.agent_options)
         floor = None
         if "image_new" in obs:  # the floor needs the camera
             floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
-            floor.reset(sensor_model(env), env.start, env.start_cov)
+            floor.reset(sensor_model(env), estimating.start, estimating.start_cov)
         path = np.asarray(env.unwrapped.config.world.path, dtype=float)
         record: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
         frames, in_view, terminated, truncated = 0, 0, False, False
@@ -190,8 +220,11 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             if obs["image_new"]:
                 frames += 1
                 in_view += bool(env.unwrapped.landmarks_in_view())
-        counters = env.estimator.counters
-        outcome = "collision" if info["collision"] else "goal" if terminated else "time"
+        counters = estimating.estimator.counters
+        outcome = "collision" if info["collision"] else "time"
+        if terminated and not info["collision"]:
+            outcome = "goal" if info["success"] else "missed"
+        task = env.unwrapped.task
         return EpisodeResult(
             spec=asdict(spec),
             outcome=outcome,
@@ -203,7 +236,7 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             true_poses=record["true"],
             estimates=record["est"],
             covariances=record["cov"],
-            nis=[list(value) for value in env.estimator.innovations()],
+            nis=[list(value) for value in estimating.estimator.innovations()],
             path_errors=distance_to_path(np.array(record["true"])[:, :2], path).tolist(),
             frames=counters.get("frames", 0),
             camera_frames=frames,
@@ -214,7 +247,12 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
             relocalised=counters.get("relocalised", 0),
             finite=finite,
             min_cov_eigenvalue=min_eig,
-            stage_ms_per_step={k: 1000 * v / steps for k, v in env.estimator.timings.items()},
+            stage_ms_per_step={
+                k: 1000 * v / steps for k, v in estimating.estimator.timings.items()
+            },
+            stops=[{**stop, "position": list(stop["position"])} for stop in info["stops"]],
+            goals=len(task.goals),
+            route_length=task.path.project(task.goals[-1]),
             floor_estimates=None if floor is None else batch_floor(floor.data)[0].tolist(),
         )
     finally:
@@ -231,24 +269,48 @@ def write_trajectories(episode: EpisodeResult, folder: Path) -> Path:
 
 
 def _spec(job: dict) -> EpisodeSpec:
-    return EpisodeSpec(**{k: v for k, v in job.items() if k != "version"})
+    return EpisodeSpec(**{k: v for k, v in job.items() if k not in ("version", "record")})
 
 
 def _run(job: dict) -> EpisodeResult:
-    return run_episode(_spec(job))
+    record = job.get("record")
+    return run_episode(_spec(job), record) if record else run_episode(_spec(job))
 
 
 def _name(job: dict) -> str:
     return _spec(job).key
 
 
+def _resolved(job: dict) -> dict:
+    return _spec(job).resolved()
+
+
+def specs_config(specs: list[EpisodeSpec]) -> dict:
+    """The resolved configurations of ``specs`` by world, pose source and agent (what a results
+    file's provenance records: every value, once per distinct combination)."""
+    resolved: dict[str, dict] = {}
+    for spec in specs:
+        key = f"{spec.world} / {spec.estimator} / {agent_label(spec.agent)}"
+        if key not in resolved:
+            resolved[key] = spec.resolved()
+    return resolved
+
+
 def run_episodes(
-    specs: list[EpisodeSpec], folder: Path, workers: int = 1, desc: str = "episodes"
+    specs: list[EpisodeSpec],
+    folder: Path,
+    workers: int = 1,
+    desc: str = "episodes",
+    record: dict | None = None,
 ) -> list[EpisodeResult]:
     """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``; the
-    TUM trajectories of each go to ``folder/trajectories/<episode>/``."""
-    jobs = [{"version": RESULT_VERSION, **asdict(spec)} for spec in specs]
-    results = [EpisodeResult(**r) for r in run_cached(_run, jobs, folder, _name, workers, desc)]
+    TUM trajectories of each go to ``folder/trajectories/<episode>/``. With ``record`` (see
+    :func:`run_episode`) each episode is recorded too: a saved episode without that recording
+    is run again."""
+    extra = {"record": record} if record else {}
+    jobs = [{"version": RESULT_VERSION, **asdict(spec), **extra} for spec in specs]
+    done = run_cached(_run, jobs, folder, _name, workers, desc, config=_resolved)
+    results = [EpisodeResult(**r) for r in done]
     for episode in results:
         write_trajectories(episode, Path(folder) / "trajectories")
     return results

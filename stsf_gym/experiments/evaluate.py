@@ -14,15 +14,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from stsf_gym.experiments.consistency_plot import plot_nees
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
-    estimator_options,
     run_episodes,
+    specs_config,
 )
 from stsf_gym.experiments.fault_runs import evaluate_faults
-from stsf_gym.experiments.plots import plot_errors, plot_trajectories
+from stsf_gym.experiments.plotting.consistency import plot_nees
+from stsf_gym.experiments.plotting.maps import plot_errors, plot_trajectories
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import summarise
 from stsf_gym.io import markdown_table
@@ -40,13 +41,17 @@ def evaluate(
     env: dict | None = None,
     faults: list[str | Path] | None = None,
     agent_options: dict | None = None,
+    record: dict | None = None,
 ) -> tuple[dict, dict[str, list[EpisodeResult]]]:
     """Run ``seeds`` episodes per estimator; write the table and figures to ``out``.
 
     Returns the summary (as written to results.json) and the episodes per estimator. With
-    ``faults`` (fault files), the episodes run per fault set and estimator instead.
+    ``faults`` (fault files), the episodes run per fault set and estimator instead. With
+    ``record`` (:func:`~stsf_gym.experiments.episodes.run_episode`) every episode is recorded.
     """
     if faults:
+        if record:
+            raise ValueError("recording (--record) is not available with --faults")
         return evaluate_faults(
             out, estimators, seeds, seed, world, agent, workers, env or {}, faults
         )
@@ -58,7 +63,7 @@ def evaluate(
         for estimator in estimators
         for s in range(seed, seed + seeds)
     ]
-    results = run_episodes(specs, out / "episodes", workers, desc=f"evaluate {world}")
+    results = run_episodes(specs, out / "episodes", workers, f"evaluate {world}", record)
     by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
     rows = [summarise(name, episodes, agent) for name, episodes in by_estimator.items()]
     summary = {
@@ -75,7 +80,14 @@ def evaluate(
         summary["trained"] = training_record(agent)
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
     table = markdown_table([rendered(row) for row in rows])
-    write_report(out, summary, f"Evaluation: {title} on {world}", table)
+    write_report(
+        out,
+        summary,
+        f"Evaluation: {title} on {world}",
+        table,
+        config=specs_config(specs),
+        seeds=(spec.seed for spec in specs),
+    )
     summary["figures"] = [
         str(plot_trajectories(world, by_estimator, out / "trajectories.png")),
         str(plot_errors(by_estimator, out / "errors.png")),

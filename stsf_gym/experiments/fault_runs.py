@@ -27,13 +27,14 @@ import numpy as np
 
 from stsf_gym.envs.config import ConfigError, load_config, read_yaml
 from stsf_gym.envs.fault_spec import fault_span
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
-    estimator_options,
     run_episodes,
+    specs_config,
 )
-from stsf_gym.experiments.plots import plot_errors
+from stsf_gym.experiments.plotting.maps import plot_errors
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, rendered, stat
@@ -74,7 +75,7 @@ def evaluate_faults(
     fault_sets = dict(load_fault_set(path, world, env) for path in fault_files)
     if len(fault_sets) != len(fault_files):
         raise ConfigError("fault files must have different names (their stems name the sets)")
-    rows, runs, figures = [], {}, []
+    rows, runs, figures, configs = [], {}, [], {}
     for name, faults in fault_sets.items():
         spans = fault_span(load_config({**env, "faults": faults}, world=world).faults)
         specs = [
@@ -83,6 +84,7 @@ def evaluate_faults(
             for s in range(seed, seed + seeds)
         ]
         results = run_episodes(specs, out / "episodes" / name, workers, desc=f"faults {name}")
+        configs[name] = specs_config(specs)
         by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
         for estimator, episodes in by_estimator.items():
             rows.append(summarise_faults(name, estimator, episodes, *spans))
@@ -97,7 +99,14 @@ def evaluate_faults(
         "rows": rows,
     }
     table = markdown_table([rendered(row, headers=HEADERS) for row in rows])
-    write_report(out, summary, f"Fault runs: {agent} on {world}", table)
+    write_report(
+        out,
+        summary,
+        f"Fault runs: {agent} on {world}",
+        table,
+        config=configs,
+        seeds=range(seed, seed + seeds),
+    )
     summary["figures"] = figures
     return summary, runs
 

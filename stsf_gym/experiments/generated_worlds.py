@@ -38,7 +38,7 @@ def plot_world_grid(seeds: list[int], out: str | Path, env: dict | None = None) 
 
     from stsf_gym.envs.task import Polyline
     from stsf_gym.envs.worlds.generator import generate_world
-    from stsf_gym.experiments.plots import draw_world_config
+    from stsf_gym.experiments.plotting.maps import draw_world_config
 
     gen, env_cfg = load_generator_config(), load_config(**(env or {}))
     columns = min(4, len(seeds))

@@ -19,14 +19,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, deep_merge, load_config
+from stsf_gym.envs.generated_env import parse_world
+from stsf_gym.episode_env import NOT_CONFIG, estimator_options
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.curve.plot import plot_curve
-from stsf_gym.experiments.episodes import estimator_options
 from stsf_gym.experiments.sweep.backends import make_runner
-from stsf_gym.experiments.sweep.cells import run_cell
+from stsf_gym.experiments.sweep.cells import cell_config, run_cell
 from stsf_gym.experiments.sweep.run import cell_name, forget_failures
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
+from stsf_gym.results.provenance import by_digest, provenance
 
 DIAL = "degraded-truth"
 DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
@@ -103,27 +105,44 @@ def accuracy_curve(
     address: str | None = None,
     env: dict | None = None,
     dial: dict | None = None,
+    suite: str | None = None,
 ) -> dict:
-    """Run (or resume) every cell of the curve; write curve.json, curve.md and curve.png."""
+    """Run (or resume) every cell of the curve; write curve.json, curve.md and curve.png.
+    ``suite`` names the benchmark suite whose worlds and task ``world`` and ``env`` hold."""
     out, env, dial = Path(out), env or {}, dial or {}
     if not levels or any(not level > 0 for level in levels):
         raise ConfigError(f"levels must be positive numbers, got {levels!r}")
-    load_config(env, world=world)  # a bad world or env key fails before anything runs
+    generated = parse_world(world) is not None
+    config = {k: v for k, v in env.items() if k not in NOT_CONFIG}
+    # a bad world or env key fails before anything runs
+    task = load_config(config, world=None if generated else world).task
     cells = curve_cells(
         agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
     )
     forget_failures(cells, out / "cells")
     runner = make_runner(backend, workers, address)
+    configs = {cell_name(cell): cell_config(cell) for cell in cells}
     results = run_cached(
-        run_cell, cells, out / "cells", cell_name, workers, "accuracy curve", runner
+        run_cell,
+        cells,
+        out / "cells",
+        cell_name,
+        workers,
+        "accuracy curve",
+        runner,
+        config=lambda cell: configs[cell_name(cell)],
     )
     summary = summarise_curve(cells, results)
     summary.update(
         schema_version=SCHEMA_VERSION,
         world=world,
+        suite=suite,
+        protocol=task.protocol,
+        goal_radius_m=task.goal_radius if task.protocol == "declare" else None,
         seeds=[seed, seed + seeds - 1],
         dial={**estimator_options(DIAL), **dial},
     )
+    summary["provenance"] = provenance(by_digest(configs), (cell["seed"] for cell in cells))
     write_json(out / "curve.json", summary)
     write_atomic(out / "curve.md", curve_markdown(summary))
     summary["figures"] = [str(plot_curve(summary, out / "curve.png"))]
@@ -193,7 +212,15 @@ def tolerated_ate(levels: list[dict]) -> float | None:
 
 def curve_markdown(summary: dict) -> str:
     """The reading, then one table per agent's dial and one of the estimators' points."""
-    text = f"# Accuracy curve on {summary['world']}\n\n"
+    where = f"suite `{summary['suite']}`" if summary.get("suite") else summary["world"]
+    text = f"# Accuracy curve on {where}\n\n"
+    if summary.get("protocol") == "declare":
+        text += (
+            f"Declared arrival: a success is a declared stop within "
+            f"{summary['goal_radius_m']} m of every goal.\n\n"
+        )
+    else:
+        text += "Reach-the-goal protocol (the paper's): the true pose entering the goal circle.\n\n"
     for curve in summary["curves"]:
         ate = curve["tolerated_ate_m"]
         reading = "not even at the smallest level" if ate is None else f"up to ATE {ate:.3f} m"

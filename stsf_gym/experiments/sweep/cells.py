@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import traceback
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, deep_merge
@@ -64,6 +64,11 @@ def evaluate_cell(cell: dict) -> dict:
         "outcome": episode.outcome,
         "distance": episode.distance,
         "metrics": episode_metrics(episode),
+        "navigation": {  # what the declared-stop task scores (stsf_gym.experiments.benchmark)
+            "goals": episode.goals,
+            "route_length_m": episode.route_length,
+            "stops": episode.stops,
+        },
     }
 
 
@@ -98,6 +103,25 @@ def train_cell(cell: dict) -> dict:
     if "success_rate" in last:
         evaluation["metrics"]["training_eval_success_rate"] = last["success_rate"]
     return {**evaluation, "model": summary["model"], "train_wall_time_s": summary["wall_time_s"]}
+
+
+def cell_config(cell: dict) -> dict:
+    """Every value ``cell`` runs with (the configuration its saved result must match): the
+    episode's resolved env and pose-source settings, and the agent's settings or, for a
+    training cell, its training arguments and hyper-parameters as resolved from their files."""
+    from stsf_gym.episode_env import resolved_config
+    from stsf_gym.experiments.episodes import agent_config
+
+    resolved = resolved_config(cell["world"], cell["estimator"], cell["env"], cell["options"])
+    if cell["kind"] != "train":
+        return {**resolved, "agent": agent_config(cell["agent"])}
+    from stsf_gym.agents.hyperparams import load_hyperparams
+    from stsf_gym.agents.train import env_id_for
+
+    arguments, hyperparams = _train_arguments(cell)
+    env_id = env_id_for(cell["world"], cell["estimator"])
+    hp = load_hyperparams(arguments["algo"], env_id, arguments["config"], hyperparams)
+    return {**resolved, "train": {"arguments": arguments, "hyperparams": asdict(hp)}}
 
 
 def check_train_cell(cell: dict) -> None:

@@ -18,6 +18,7 @@ import numpy as np
 
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
 from stsf_gym.results import METRICS, SCHEMA_VERSION, render, stats
+from stsf_gym.results.provenance import by_digest, provenance
 
 if TYPE_CHECKING:
     from stsf_gym.experiments.sweep.run import Sweep
@@ -26,8 +27,10 @@ FINAL, RMS = "final_error_m", "ate_rmse_m"
 FIGURE = "errors.png"
 
 
-def write_report(sweep: Sweep, results: list[dict], out: Path) -> dict:
-    """Summarise the cells' ``results``; write the files to ``out``; return the summary."""
+def write_report(sweep: Sweep, results: list[dict], out: Path, configs: dict[str, dict]) -> dict:
+    """Summarise the cells' ``results``; write the files to ``out``; return the summary. Its
+    provenance holds each distinct resolved configuration once (by digest) and, per cell
+    file name, the digest of the configuration it ran with (``configs``: by cell name)."""
     groups = [_group(label, members) for label, members in _by_group(sweep.cells, results)]
     failed = [
         {"cell": cell["values"], "error": result["error"]}
@@ -46,6 +49,8 @@ def write_report(sweep: Sweep, results: list[dict], out: Path) -> dict:
         "groups": groups,
         "figures": [FIGURE] if figure else [],
     }
+    seeds = (cell["seed"] for cell in sweep.cells)
+    summary["provenance"] = provenance(by_digest(configs), seeds)
     write_json(out / "results.json", summary)
     write_atomic(out / "results.md", markdown(sweep.name, groups, failed))
     return summary

@@ -5,10 +5,13 @@ A sweep file (``configs/sweeps/<name>.yaml``) holds:
 - ``base``: what every cell starts from: ``kind`` (``evaluate``, the default, or ``train``),
   ``world`` (irl_corridor), ``agent`` (follower), ``estimator``, ``seed`` (0), ``faults``
   (a fault set: ``configs/faults/<name>.yaml`` or a fault file; ``none``), ``env`` (overrides
-  merged over ``configs/default.yaml``) and, for training cells, ``train``.
+  merged over ``configs/default.yaml``), for evaluate cells ``options`` (estimator options over
+  ``configs/estimators/``) and, for training cells, ``train``.
 - ``grid``: keys mapped to lists of values; every combination is a cell. Keys: ``estimator``,
   ``agent``, ``world``, ``faults``, ``seed`` (a list) or ``seeds`` (a count, from the base
-  seed on), and dotted ``env.<section>.<key>`` (any env config key) or ``train.<key>``.
+  seed on), and dotted ``env.<section>.<key>`` (any env config key: the TRUE noise),
+  ``options.<key>`` (an estimator option, e.g. the BELIEVED noise ``options.radius_error_std``
+  of ``configs/estimators/odometry.yaml``; evaluate cells) or ``train.<key>``.
 - ``one_at_a_time`` (optional): keys like ``grid``'s, each swept on its own while the others
   keep their base value, every value crossed with the whole grid (two one-dimensional noise
   studies instead of their full product).
@@ -34,10 +37,10 @@ from stsf_gym.envs.config import (
     overrides_to_tree,
     read_yaml,
 )
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.cache import run_cached
-from stsf_gym.experiments.episodes import estimator_options
 from stsf_gym.experiments.sweep.backends import make_runner
-from stsf_gym.experiments.sweep.cells import cell_kind, run_cell
+from stsf_gym.experiments.sweep.cells import cell_config, cell_kind, run_cell
 from stsf_gym.experiments.sweep.report import write_report
 
 CELL_VERSION = 1  # bumped when a cell's result changes meaning, so older cell files are rerun
@@ -50,7 +53,7 @@ BASE_DEFAULTS = {
     "faults": "none",
 }
 PLAIN_KEYS = ("estimator", "agent", "world", "seed", "faults")
-SECTIONS = {"evaluate": ("env",), "train": ("env", "train")}
+SECTIONS = {"evaluate": ("env", "options"), "train": ("env", "train")}
 
 
 @dataclass(frozen=True)
@@ -86,7 +89,12 @@ def load_sweep(path: str | Path, seed: int = 0, env: dict | None = None) -> Swee
     if shared := sorted(grid.keys() & single.keys()):
         raise ConfigError(f"{path}: {shared[0]!r} is swept in both grid and one_at_a_time")
     points = _points(grid, single)
-    cells = [_cell(base, point, sections, seed) for point in points]
+    cells = []
+    for point in points:
+        try:
+            cells.append(_cell(base, point, sections, seed))
+        except ConfigError as err:  # an estimator option swept over estimators of the grid
+            raise ConfigError(f"{path}: cell {json.dumps(point)}: {err}") from err
     check = cell_kind(kind).check
     for cell in cells if check else []:
         try:
@@ -112,8 +120,18 @@ def run_sweep(
     folder = out / "cells"
     cells = [_with_run_folder(cell, out) for cell in sweep.cells]
     forget_failures(cells, folder)
-    results = run_cached(run_cell, cells, folder, cell_name, workers, f"sweep {sweep.name}", runner)
-    return write_report(sweep, results, out)
+    configs = {cell_name(cell): cell_config(cell) for cell in cells}
+    results = run_cached(
+        run_cell,
+        cells,
+        folder,
+        cell_name,
+        workers,
+        f"sweep {sweep.name}",
+        runner,
+        config=lambda cell: configs[cell_name(cell)],
+    )
+    return write_report(sweep, results, out, configs)
 
 
 def cell_name(cell: dict) -> str:
@@ -190,6 +208,8 @@ def _checked(path: Path, label: str, base: dict, point: dict, sections: tuple[st
         if agent != "follower" and not (isinstance(agent, str) and Path(agent).is_file()):
             raise ConfigError(f"agent must be follower or a model file, got {agent!r}")
         load_config(cell["env"], world=cell["world"])
+        if cell.get("options") and estimator is not None:
+            estimator_options(estimator, **cell["options"])
     except ConfigError as err:
         raise ConfigError(f"{path}: {label}: {err}") from err
 
@@ -239,5 +259,5 @@ def _cell(base: dict, point: dict, sections: tuple[str, ...], seed_offset: int) 
     cell = _apply(base, point, sections)
     cell["seed"] += seed_offset
     values = {**point, "seed": cell["seed"]} if "seed" in point else point
-    options = estimator_options(cell["estimator"])
+    options = estimator_options(cell["estimator"], **cell.get("options", {}))
     return {**cell, "options": options, "values": values, "version": CELL_VERSION}

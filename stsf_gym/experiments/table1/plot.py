@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stsf_gym.experiments.plots import pyplot
+from stsf_gym.experiments.plotting.maps import pyplot
 from stsf_gym.io import save_figure
 
 

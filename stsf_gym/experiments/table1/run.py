@@ -14,19 +14,22 @@ stereo bound ``sqrt(2) Z^2 sigma_px / (f b)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Annotated
 
 import numpy as np
 
 from stsf_gym.envs.config import (
     CONFIG_DIR,
+    ConfigError,
     build,
     deep_merge,
     load_config,
     overrides_to_tree,
     read_yaml,
 )
+from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms
@@ -38,6 +41,8 @@ from stsf_gym.fusion import stereo_range_bound
 from stsf_gym.geometry import wrap_angle
 from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, finite_or_none, stat
+from stsf_gym.validation import Count, Positive, Range, require
+from stsf_gym.yaml_layers import shown
 
 #: Table I of the paper: world distance, conventional estimate and error, STSF estimate and error.
 PAPER_TABLE1 = [
@@ -56,26 +61,35 @@ METHODS = ("conventional", "stsf", "stsf_gls", "stsf_joint")
 
 @dataclass(frozen=True)
 class Table1Config:
-    env: dict
-    start_distance: float
-    distances: tuple[float, ...]
-    frames_per_place: int
-    speed: float
-    approach_deg: float
-    sigma_px: float
-    seeds: int
+    env: dict  # over configs/default.yaml, checked as an env config
+    start_distance: Positive
+    distances: tuple[Positive, ...]
+    frames_per_place: Count
+    speed: Positive
+    approach_deg: Annotated[float, Range(gt=-90, lt=90)]  # off the board's normal
+    sigma_px: Positive
+    seeds: Count
+
+    def __post_init__(self) -> None:
+        require(len(self.distances) > 0, "distances", "must list at least one place")
+        speed = load_config(self.env).robot.max_speed
+        require(
+            self.speed <= speed,
+            "speed",
+            f"must be at most the robot's max_speed ({speed:g} m/s), got {self.speed:g}",
+        )
 
 
 def load_table1_config(path: str | Path | None = None, **overrides) -> Table1Config:
     """``configs/experiments/table1.yaml`` (or ``path``) with overrides such as
-    ``seeds=5`` or ``env__camera__width=800``; unknown keys fail by name."""
-    data = read_yaml(path or CONFIG_DIR / "experiments" / "table1.yaml")
-    cfg = build(Table1Config, deep_merge(data, overrides_to_tree(overrides)), "table1")
-    if not cfg.distances or min(cfg.start_distance, *cfg.distances) <= 0:
-        raise ValueError(f"table1.distances: need positive distances, got {cfg.distances}")
-    if cfg.frames_per_place < 1 or cfg.seeds < 1:
-        raise ValueError("table1.frames_per_place and table1.seeds must be at least 1")
-    return cfg
+    ``seeds=5`` or ``env__camera__width=800``; unknown keys and values out of range fail by
+    name, naming the file (the env section is checked as an env config)."""
+    path = Path(path or CONFIG_DIR / "experiments" / "table1.yaml")
+    data = deep_merge(read_yaml(path), overrides_to_tree(overrides))
+    try:
+        return build(Table1Config, data, "table1")
+    except ConfigError as err:
+        raise ConfigError(err.message, err.key, shown(path)) from err
 
 
 @dataclass
@@ -116,6 +130,16 @@ def run_seed(cfg: Table1Config, seed: int) -> SeedResult:
     )
 
 
+def resolved_table1(cfg: Table1Config) -> dict:
+    """Every value Table I runs with: its protocol, the rig's env config after all layers and
+    the settings of the estimators whose code it uses."""
+    return {
+        "table1": cfg.__dict__,
+        "env": asdict(load_config(cfg.env)),
+        "estimators": {name: estimator_options(name) for name in ("odometry", "stsf")},
+    }
+
+
 def _run_seed(job: dict) -> SeedResult:
     return run_seed(load_table1_config(**job["config"]), job["seed"])
 
@@ -131,12 +155,17 @@ def run_table1(
     cfg = load_table1_config(config, **overrides)
     out = Path(out)
     jobs = [{"config": cfg.__dict__, "seed": s} for s in range(seed, seed + cfg.seeds)]
-    results = [
-        SeedResult(**r)
-        for r in run_cached(
-            _run_seed, jobs, out / "seeds", lambda job: f"seed_{job['seed']}", workers, "table1"
-        )
-    ]
+    resolved = resolved_table1(cfg)
+    done = run_cached(
+        _run_seed,
+        jobs,
+        out / "seeds",
+        lambda job: f"seed_{job['seed']}",
+        workers,
+        "table1",
+        config=lambda job: resolved,
+    )
+    results = [SeedResult(**r) for r in done]
     rows = summarise(cfg, results)
     summary = {
         "schema_version": SCHEMA_VERSION,
@@ -145,7 +174,15 @@ def run_table1(
         "rows": rows,
     }
     title = "Table I reproduced: distance to a landmark, conventional fusion vs STSF"
-    write_report(out, summary, title, _markdown(rows, cfg), markdown_name="table1.md")
+    write_report(
+        out,
+        summary,
+        title,
+        _markdown(rows, cfg),
+        markdown_name="table1.md",
+        config=resolved,
+        seeds=range(seed, seed + cfg.seeds),
+    )
     summary["figure"] = str(plot_table1(rows, out / "table1.png"))
     return summary
 

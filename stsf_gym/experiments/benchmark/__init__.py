@@ -1,0 +1,1 @@
+"""``stsf-gym benchmark``: agents x pose sources on a suite's test worlds, declared arrival."""

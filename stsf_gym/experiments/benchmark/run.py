@@ -1,0 +1,171 @@
+"""``stsf-gym benchmark --suite NAME``: agents x pose sources x a suite's test worlds.
+
+Every episode is a sweep cell (``kind: evaluate``, :mod:`stsf_gym.experiments.sweep.cells`) on
+world ``generated:test`` with the suite's generator and env (the declared-stop task, the fast
+sensor mode): episode seed ``s`` drives test world ``first + s``, the same world and seed for
+every agent and pose source, so pose sources are compared **paired**. The cells run on the
+sweep's local or Ray backend and resume (each finished cell is a JSON file in
+``<out>/cells/``). Writes ``results.json`` (the results schema: one row per agent and pose
+source, per-episode values kept; the paired differences; the worlds' measured landmark
+coverage), ``leaderboard.md`` and ``leaderboard.png``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+from stsf_gym.envs.config import load_config
+from stsf_gym.envs.generated_env import world_seed_for
+from stsf_gym.envs.suite import Suite, load_suite
+from stsf_gym.envs.task import Polyline
+from stsf_gym.envs.worlds.coverage import landmark_coverage
+from stsf_gym.envs.worlds.generator import generate_world
+from stsf_gym.episode_env import estimator_options
+from stsf_gym.experiments.benchmark.intervals import newcombe_paired, paired_bootstrap
+from stsf_gym.experiments.benchmark.report import leaderboard_markdown, plot_leaderboard
+from stsf_gym.experiments.benchmark.scores import episode_scores, leaderboard_row
+from stsf_gym.experiments.cache import run_cached
+from stsf_gym.experiments.sweep.backends import make_runner
+from stsf_gym.experiments.sweep.cells import cell_config, run_cell
+from stsf_gym.experiments.sweep.run import cell_name, forget_failures
+from stsf_gym.io import write_atomic, write_json
+from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
+from stsf_gym.results.provenance import by_digest, provenance
+
+BENCHMARK_VERSION = 1  # bumped when a cell changes meaning, so older cell files are rerun
+WORLD = "generated:test"
+DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf", "ekf")
+
+
+def benchmark_cells(suite: Suite, agents: list[str], estimators: list[str], seeds: list[int]):
+    """One evaluate cell per agent, pose source and episode seed; seed by seed, so a run cut
+    short has every pose source on the same worlds (``--worlds`` fewer then resumes)."""
+    cells = []
+    for agent, seed, estimator in itertools.product(agents, seeds, estimators):
+        agent = str(Path(agent).resolve()) if agent.endswith(".zip") else agent
+        cells.append(
+            {
+                "kind": "evaluate",
+                "world": WORLD,
+                "estimator": estimator,
+                "agent": agent,
+                "seed": seed,
+                "faults": "none",
+                "env": suite.episode_env,
+                "options": estimator_options(estimator),
+                "values": {"suite": suite.name, "agent": agent, "estimator": estimator},
+                "version": BENCHMARK_VERSION,
+            }
+        )
+    return cells
+
+
+def benchmark(
+    out: str | Path,
+    suite: str,
+    agents: list[str] = ("follower",),
+    estimators: list[str] = DEFAULT_ESTIMATORS,
+    worlds: int = 100,
+    seed: int = 0,
+    backend: str = "local",
+    workers: int = 2,
+    address: str | None = None,
+) -> dict:
+    """Run (or resume) the benchmark; write results.json, leaderboard.md and .png."""
+    out, loaded = Path(out), load_suite(suite)
+    if worlds < 1:
+        raise ValueError(f"--worlds must be at least 1, got {worlds}")
+    seeds = list(range(seed, seed + worlds))
+    cells = benchmark_cells(loaded, list(agents), list(estimators), seeds)
+    forget_failures(cells, out / "cells")
+    configs = {cell_name(cell): cell_config(cell) for cell in cells}
+    results = run_cached(
+        run_cell,
+        cells,
+        out / "cells",
+        cell_name,
+        workers,
+        f"benchmark {loaded.name}",
+        make_runner(backend, workers, address),
+        config=lambda cell: configs[cell_name(cell)],
+    )
+    summary = summarise_benchmark(loaded, cells, results)
+    summary["worlds"] = worlds_summary(loaded, seeds)
+    summary["provenance"] = provenance(by_digest(configs), seeds)
+    check_rows(summary["rows"])
+    write_json(out / "results.json", summary)
+    write_atomic(out / "leaderboard.md", leaderboard_markdown(summary))
+    summary["figures"] = [str(plot_leaderboard(summary, out / "leaderboard.png"))]
+    return summary
+
+
+def summarise_benchmark(suite: Suite, cells: list[dict], results: list[dict]) -> dict:
+    """Rows per (agent, pose source), paired differences of every pair of pose sources per
+    agent (on the seeds both finished), and the cells that failed to run."""
+    scores: dict[tuple[str, str], dict[int, dict]] = {}
+    failed = []
+    for cell, result in zip(cells, results, strict=True):
+        if "error" in result:
+            failed.append(
+                {"cell": cell["values"] | {"seed": cell["seed"]}, "error": result["error"]}
+            )
+            continue
+        scores.setdefault((cell["agent"], cell["estimator"]), {})[cell["seed"]] = episode_scores(
+            result
+        )
+    rows = [
+        leaderboard_row(agent, estimator, list(by_seed.values()), list(by_seed))
+        for (agent, estimator), by_seed in scores.items()
+    ]
+    paired = []
+    for (agent, first), (agent_b, second) in itertools.combinations(scores, 2):
+        if agent != agent_b:
+            continue
+        common = sorted(set(scores[agent, first]) & set(scores[agent_b, second]))
+        a = [scores[agent, first][s] for s in common]
+        b = [scores[agent, second][s] for s in common]
+        success = newcombe_paired([x["success"] for x in a], [y["success"] for y in b])
+        paired.append(
+            {
+                "agent": agent,
+                "first": first,
+                "second": second,
+                "success_difference": success,
+                "success_differs": success["low"] > 0 or success["high"] < 0,
+                "spl_difference": paired_bootstrap([x["spl"] for x in a], [y["spl"] for y in b]),
+            }
+        )
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "suite": suite.name,
+        "protocol": "declare",
+        "world": WORLD,
+        "goal_radius_m": load_config(suite.env).task.goal_radius,
+        "seeds": [min(c["seed"] for c in cells), max(c["seed"] for c in cells)],
+        "rows": rows,
+        "paired": paired,
+        "failed": failed,
+    }
+
+
+def worlds_summary(suite: Suite, seeds: list[int]) -> dict:
+    """The test worlds' measured landmark coverage, longest dark stretch and route."""
+    gen, env = suite.generator_config(), load_config(suite.env)
+    split = gen.split_range("test")
+    coverage, dark, goals, length = [], [], [], []
+    for seed in seeds:
+        world = generate_world(world_seed_for(split, seed), gen, env)
+        measured = landmark_coverage(world, gen, env)
+        coverage.append(measured.fraction)
+        dark.append(measured.longest_dark_m)
+        goals.append(len(world.goals))
+        length.append(Polyline(world.path).length)
+    return {
+        "world_seeds": [split[seeds[0] % len(split)], split[seeds[-1] % len(split)]],
+        "coverage_configured": list(gen.visibility.coverage),
+        "coverage": stat(coverage),
+        "longest_dark_m": stat(dark),
+        "goals": stat(goals),
+        "path_length_m": stat(length),
+    }

@@ -1,0 +1,1 @@
+"""Figures of the experiments (matplotlib PNG): maps and trajectories, error curves, NEES."""

@@ -1,0 +1,167 @@
+"""What made a result: the code, the packages, the resolved configuration, the seeds, the command.
+
+Every ``results.json``, ``train.json``, model file and recording carries a :func:`provenance`
+record, and every cached unit of work (an episode, a sweep cell, a Table I seed, a training
+checkpoint) is stamped with a :func:`fingerprint` of the code and of its resolved configuration,
+so a rerun reuses it only when both are unchanged.
+
+The code is identified three ways: the package version, the git commit with a ``dirty`` flag
+(only when the package runs from a git checkout, e.g. an editable install), and
+``source_digest``, a SHA-256 over every module and package config file of the installed
+package. The digest is what the caches compare: it changes with any edit, committed or not,
+and is the same for a wheel and the checkout it was built from.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.metadata
+import importlib.util
+import json
+import platform
+import shlex
+import subprocess
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+#: Distributions whose versions shape results (those installed are listed).
+RESULT_PACKAGES = (
+    "gymnasium",
+    "pybullet",
+    "numpy",
+    "scipy",
+    "opencv-python-headless",
+    "moderngl",
+    "stable-baselines3",
+    "torch",
+    "gtsam",
+)
+#: The import packages whose files make the code (``stsf_gym`` and the folders mapped into it).
+CODE_PACKAGES = ("stsf_gym", "stsf_gym.envs", "stsf_gym.agents", "stsf_gym.configs")
+CODE_SUFFIXES = (".py", ".yaml")
+
+_command: list[str] | None = None
+
+
+def set_command(argv: Sequence[str]) -> None:
+    """Record the command line of this run (the CLI calls it; default ``sys.argv``)."""
+    global _command
+    _command = list(argv)
+
+
+def command_line() -> str:
+    """The command of this run, as a shell would take it."""
+    return shlex.join(_command if _command is not None else sys.argv)
+
+
+def _package_folders() -> list[Path]:
+    folders = []
+    for name in CODE_PACKAGES:
+        spec = importlib.util.find_spec(name)
+        folders += [Path(p) for p in (spec.submodule_search_locations or [])] if spec else []
+    return folders
+
+
+@functools.cache
+def source_digest() -> str:
+    """SHA-256 (hex, 16 digits) over the relative path and bytes of every ``.py`` and ``.yaml``
+    file of the package folders, in sorted order."""
+    digest = hashlib.sha256()
+    for folder in _package_folders():
+        files = sorted(p for p in folder.rglob("*") if p.suffix in CODE_SUFFIXES)
+        for path in files:
+            if "__pycache__" in path.parts:
+                continue
+            digest.update(str(path.relative_to(folder.parent)).encode() + b"\0")
+            digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
+
+
+def _git(*args: str, cwd: Path) -> str | None:
+    try:
+        done = subprocess.run(
+            ["git", *args], cwd=cwd, capture_output=True, text=True, timeout=10, check=True
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return done.stdout.strip()
+
+
+@functools.cache
+def git_state() -> dict[str, Any]:
+    """``{"commit", "dirty"}`` of the checkout the package runs from; both ``None`` when it is
+    not a git checkout (an installed wheel: its files are not tracked by any repository)."""
+    here = Path(__file__).resolve().parent
+    if _git("ls-files", "--error-unmatch", "__init__.py", cwd=here) is None:
+        return {"commit": None, "dirty": None}
+    commit = _git("rev-parse", "HEAD", cwd=here)
+    status = _git("status", "--porcelain", "--untracked-files=no", cwd=here)
+    return {"commit": commit, "dirty": bool(status) if status is not None else None}
+
+
+def package_versions(names: Iterable[str] = RESULT_PACKAGES) -> dict[str, str]:
+    """Installed versions of ``names`` (those not installed are left out)."""
+    versions = {}
+    for name in names:
+        try:
+            versions[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            continue
+    return versions
+
+
+def code_version() -> dict[str, Any]:
+    """The package version, git commit and dirty flag, and the source digest."""
+    try:
+        version = importlib.metadata.version("stsf-gym")
+    except importlib.metadata.PackageNotFoundError:
+        version = None
+    return {"version": version, **git_state(), "source_digest": source_digest()}
+
+
+def _canonical(value: Any) -> Any:
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"cannot identify a {type(value).__name__} in a configuration")
+
+
+def config_digest(config: Mapping[str, Any]) -> str:
+    """SHA-256 (hex, 16 digits) of ``config`` as canonical JSON (sorted keys)."""
+    text = json.dumps(config, sort_keys=True, default=_canonical, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def by_digest(configs: Mapping[str, Mapping[str, Any]]) -> dict[str, dict]:
+    """Resolved configurations of many units (by unit name) as a provenance records them:
+    each distinct one once under its :func:`config_digest`, and each unit's digest."""
+    digests = {name: config_digest(config) for name, config in configs.items()}
+    return {
+        "configs": {digests[name]: dict(config) for name, config in configs.items()},
+        "units": digests,
+    }
+
+
+def fingerprint(config: Mapping[str, Any] | None = None) -> dict[str, str]:
+    """What a cached unit of work is reused for: the code's digest and its configuration's."""
+    return {"code": source_digest(), "config": config_digest(config or {})}
+
+
+def provenance(
+    config: Mapping[str, Any] | None = None, seeds: Iterable[int] | None = None
+) -> dict[str, Any]:
+    """The record a results file carries: code, packages, Python, platform, the fully resolved
+    ``config``, the ``seeds`` and the command line."""
+    return {
+        "stsf_gym": code_version(),
+        "packages": package_versions(),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "command": command_line(),
+        "seeds": sorted(set(seeds)) if seeds is not None else None,
+        "config": json.loads(json.dumps(config or {}, default=_canonical)),
+    }

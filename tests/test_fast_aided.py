@@ -1,0 +1,72 @@
+"""The fast mode keeps STSF's track-aided matching: boards the detector missed that a
+predicted search would find are simulated, and taken only where a prediction covers them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stsf_gym.envs.config import load_config
+from stsf_gym.envs.sensors.fast_camera import aided_probability, detection_probability
+from stsf_gym.estimators.frame_detector import FrameDetector
+from stsf_gym.vision.landmarks import board_corners, square_centres
+from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
+
+PATTERN = load_config().world.landmark_pattern
+
+
+def findable_obs(landmark_id: int, centre: np.ndarray, scale: float) -> tuple[dict, np.ndarray]:
+    """A fast-mode frame that detected nothing but lists one findable board (fronto-parallel,
+    ``scale`` px per m, centred at ``centre``); and that board's corners in pixels."""
+    squares = centre + square_centres(landmark_id, PATTERN) * [scale, -scale]
+    values = 2 * PATTERN.grid**2
+    points = np.zeros(4 * values, np.float32)
+    points[: squares.size] = squares.ravel()
+    obs = {
+        "landmark_ids": np.full(4, -1),
+        "landmark_points": np.zeros(4 * values, np.float32),
+        "aided_ids": np.array([landmark_id, -1, -1, -1]),
+        "aided_points": points,
+    }
+    return obs, centre + board_corners(PATTERN) * [scale, -scale]
+
+
+def test_a_prediction_within_its_search_radius_finds_the_board():
+    detector = FrameDetector(PATTERN, {5, 6}, matcher=PredictedMatcher(PATTERN))
+    obs, corners = findable_obs(5, np.array([160.0, 120.0]), 40.0)  # a 24 px board
+    near = BoardPrediction(5, corners + np.array([3.0, -2.0]), 6.0)
+    found = detector(obs, [near])
+    assert [d.landmark_id for d in found] == [5] and detector.aided == found
+    assert (
+        detector(obs, [BoardPrediction(5, corners + np.array([8.0, 0.0]), 6.0)]) == []
+    )  # too far off
+    assert detector(obs, [BoardPrediction(6, corners, 6.0)]) == []  # another id
+    assert detector(obs, []) == []  # nothing predicted: the detector's output only
+    plain = FrameDetector(PATTERN, {5, 6})  # conventional fusion: no predicted search
+    assert plain(obs, [near]) == []
+
+
+def test_the_search_finds_smaller_boards_than_the_detector():
+    cfg = load_config().camera.fast  # the paper profile's fitted numbers
+    sizes = np.array([12.0, 14.0, 18.0, 22.0])
+    assert np.all(aided_probability(sizes, cfg) > detection_probability(sizes, cfg))
+    assert cfg.aided_size_px < cfg.detect_size_px
+
+
+def test_fast_frames_list_findable_boards_only_when_the_detector_missed_them():
+    import gymnasium as gym
+
+    import stsf_gym  # noqa: F401
+
+    env = gym.make("stsf_gym/Corridor-v0", camera__mode="fast", camera__control="pan")
+    obs, _ = env.reset(seed=0)
+    seen_aided = 0
+    for _ in range(300):
+        obs, *_ = env.step(np.array([0.5, 0.0, 0.0]))
+        if obs["image_new"]:
+            plain = set(obs["landmark_ids"].tolist()) - {-1}
+            aided = set(obs["aided_ids"].tolist()) - {-1}
+            assert not plain & aided
+            assert aided <= set(env.unwrapped.landmarks_in_view())
+            seen_aided += bool(aided)
+    env.close()
+    assert seen_aided > 0

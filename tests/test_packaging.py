@@ -1,0 +1,129 @@
+"""Installable like a library: the sdist builds a wheel with every module and config inside one
+``stsf_gym`` namespace, and that wheel, installed (not editable) into a fresh virtual environment,
+works from a folder that holds its own ``envs`` and ``agents`` packages."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import sysconfig
+import tarfile
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+#: Repository folder -> the import package it installs as (pyproject's package-dir).
+FOLDERS = {"stsf_gym": "stsf_gym", "envs": "stsf_gym/envs", "agents": "stsf_gym/agents"}
+
+USER_SCRIPT = """
+import json, sys
+import gymnasium as gym
+import numpy as np
+import envs, agents  # the user's own packages, not ours
+import stsf_gym
+from stsf_gym.wrappers import PoseEstimateWrapper
+
+env = PoseEstimateWrapper(gym.make("stsf_gym/Corridor-v0", camera__mode="fast"), "stsf")
+obs, info = env.reset(seed=0)
+for _ in range(20):
+    obs, reward, terminated, truncated, info = env.step(np.array([0.5, 0.0], np.float32))
+print(json.dumps({
+    "user_envs": envs.MINE, "user_agents": agents.MINE,
+    "stsf_gym": stsf_gym.__file__, "envs": sys.modules["stsf_gym.envs"].__file__,
+    "pose": obs["pose"].tolist(), "cov_finite": bool(np.isfinite(obs["pose_cov"]).all()),
+}))
+"""
+
+
+def _run(*args: str | Path, cwd: Path = ROOT, timeout: int = 600) -> str:
+    done = subprocess.run(
+        [str(a) for a in args], cwd=cwd, capture_output=True, text=True, timeout=timeout
+    )
+    assert done.returncode == 0, f"{args}: {done.stdout[-2000:]}\n{done.stderr[-4000:]}"
+    return done.stdout
+
+
+def _build(hook: str, source: Path, dist: Path) -> Path:
+    """Run setuptools' PEP 517 ``hook`` (build_sdist or build_wheel) in ``source``."""
+    code = f"from setuptools import build_meta; print(build_meta.{hook}({str(dist)!r}))"
+    name = _run(sys.executable, "-c", code, cwd=source).strip().splitlines()[-1]
+    return dist / name
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory) -> dict[str, Path]:
+    """The sdist of the checkout, and the wheel built from that unpacked sdist (so the sdist is
+    shown complete)."""
+    dist = tmp_path_factory.mktemp("dist")
+    sdist = _build("build_sdist", ROOT, dist)
+    with tarfile.open(sdist) as tar:
+        tar.extractall(dist / "unpacked", filter="data")
+    wheel = _build("build_wheel", next((dist / "unpacked").iterdir()), dist)
+    return {"sdist": sdist, "wheel": wheel}
+
+
+def test_the_wheel_holds_one_namespace_with_every_module_and_config(built):
+    names = zipfile.ZipFile(built["wheel"]).namelist()
+    tops = {name.split("/")[0] for name in names}
+    assert tops == {"stsf_gym", built["wheel"].name.split("-")[0] + "-0.1.0.dist-info"}, tops
+    expected = {
+        f"{package}/{path.relative_to(ROOT / folder).as_posix()}"
+        for folder, package in FOLDERS.items()
+        for path in (ROOT / folder).rglob("*.py")
+        if "__pycache__" not in path.parts
+    }
+    expected |= {
+        f"stsf_gym/configs/{path.relative_to(ROOT / 'configs').as_posix()}"
+        for path in (ROOT / "configs").rglob("*")
+        if path.suffix in (".yaml", ".py")
+    }
+    missing = expected - set(names)
+    assert not missing, f"not in the wheel: {sorted(missing)[:10]}"
+    assert "stsf_gym/configs/default.yaml" in names
+
+
+def test_the_sdist_holds_the_repository_folders(built):
+    names = tarfile.open(built["sdist"]).getnames()
+    root = names[0].split("/")[0]
+    for path in ("pyproject.toml", "configs/default.yaml", "envs/corridor_env.py", "agents/zoo.py"):
+        assert f"{root}/{path}" in names, path
+
+
+@pytest.fixture(scope="module")
+def installed(built, tmp_path_factory) -> Path:
+    """A fresh virtual environment with the wheel installed (no editable install, no access
+    to the checkout); the dependencies come from this test's environment, read only."""
+    venv = tmp_path_factory.mktemp("venv")
+    _run(sys.executable, "-m", "venv", venv)
+    python = venv / "bin" / "python"
+    _run(python, "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", built["wheel"])
+    site = _run(python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])")
+    # the dependencies, appended after the venv's own site-packages (a .pth file adds a path;
+    # the .pth files inside that path, such as this checkout's editable install, are not read)
+    Path(site.strip(), "dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    return venv
+
+
+def test_the_installed_wheel_works_beside_a_users_own_envs_and_agents(installed, tmp_path):
+    for package in ("envs", "agents"):
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text(f"MINE = {package!r}\n")
+        (tmp_path / package / "corridor_env.py").write_text("raise ImportError('the user')\n")
+    out = json.loads(_run(installed / "bin" / "python", "-c", USER_SCRIPT, cwd=tmp_path))
+    assert (out["user_envs"], out["user_agents"]) == ("envs", "agents")
+    for module in ("stsf_gym", "envs"):
+        assert out[module].startswith(str(installed)), out[module]  # the wheel, not the checkout
+    assert out["pose"][0] > 0 and out["cov_finite"]
+
+    demo = tmp_path / "demo"
+    args = ["demo", "--seeds", "1", "--out", demo, "--seconds", "3", "--video-seconds", "0"]
+    args += ["--workers", "1", "--set", "camera.mode=fast", "--json"]
+    summary = json.loads(_run(installed / "bin" / "stsf-gym", *args, cwd=tmp_path))
+    assert len(summary["rows"]) == 5
+    made_by = json.loads((demo / "results.json").read_text())["provenance"]
+    assert made_by["stsf_gym"]["version"] == "0.1.0"
+    assert made_by["stsf_gym"]["commit"] is None  # an installed wheel is no git checkout
+    assert made_by["command"].startswith("stsf-gym demo --seeds 1")
