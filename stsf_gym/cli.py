@@ -105,14 +105,10 @@ def _recording(args: argparse.Namespace, out: Path | None = None) -> dict | None
 
 def _replay(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.replay import replay_logs
-    from stsf_gym.wrappers import POSE_SOURCES
 
     if args.config or args.overrides:
         raise ConfigError("replay runs the logs as recorded: it takes no --config or --set")
-    estimators = _names(args.estimators)
-    for name in estimators:
-        if name not in POSE_SOURCES:
-            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    estimators = _pose_sources(args.estimators)
     if not estimators:
         raise ConfigError("--estimators names no pose source")
     summary = replay_logs(args.files, estimators, args.out)
@@ -186,12 +182,9 @@ def _world_cmd(args: argparse.Namespace) -> dict:
 
 def _evaluate(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.evaluate import evaluate
-    from stsf_gym.wrappers import check_pose_source
 
     _check_counts(args)
-    estimators = [e.strip() for e in args.estimators.split(",") if e.strip()]
-    for name in estimators:
-        check_pose_source(name)
+    estimators = _pose_sources(args.estimators)
     args.world = _world(args)
     agents = [a.strip() for a in args.agent.split(",") if a.strip()]
     models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
@@ -302,13 +295,10 @@ def _sweep(args: argparse.Namespace) -> dict:
 def _accuracy_curve(args: argparse.Namespace) -> dict:
     from stsf_gym.estimators import make_estimator
     from stsf_gym.experiments.curve.run import accuracy_curve
-    from stsf_gym.wrappers import check_pose_source
 
     _check_counts(args)
     agents = _names(args.agent)
-    estimators = _names(args.estimators)
-    for name in estimators:
-        check_pose_source(name)
+    estimators = _pose_sources(args.estimators)
     models = [a for a in agents if a != "follower"]
     if models:
         from stsf_gym.agents.sb3_agent import model_metadata
@@ -351,17 +341,13 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
 
 def _benchmark(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.benchmark.run import benchmark
-    from stsf_gym.wrappers import POSE_SOURCES
 
     _check_counts(args)
     if args.worlds < 1:
         raise ConfigError(f"--worlds must be at least 1, got {args.worlds}")
     if args.config or args.overrides:
         raise ConfigError("benchmark runs a suite as written: edit or copy its configs/suites file")
-    estimators = _names(args.estimators)
-    for name in estimators:
-        if name not in POSE_SOURCES:
-            raise ConfigError(f"unknown estimator {name!r}; known: {', '.join(POSE_SOURCES)}")
+    estimators = _pose_sources(args.estimators)
     agents = _names(args.agents)
     for model in (a for a in agents if a != "follower"):
         from stsf_gym.agents.sb3_agent import model_metadata
@@ -387,6 +373,17 @@ def _benchmark(args: argparse.Namespace) -> dict:
 
 def _names(text: str) -> list[str]:
     return [name.strip() for name in text.split(",") if name.strip()]
+
+
+def _pose_sources(text: str) -> list[str]:
+    """The comma-separated pose sources of ``text``, each checked: a registered name or a
+    ``package.module:Class`` estimator."""
+    from stsf_gym.wrappers import check_pose_source
+
+    names = _names(text)
+    for name in names:
+        check_pose_source(name)
+    return names
 
 
 def _bench(args: argparse.Namespace) -> dict:
