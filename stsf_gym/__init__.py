@@ -77,30 +77,20 @@ def _register_suites() -> None:
                 entry_point="stsf_gym.envs.generated_env:GeneratedCorridorEnv",
                 kwargs={"generator": generator, **env},
             )
-        for suffix, estimator in ESTIMATOR_IDS.items():
-            estimating_id = env_id.replace("-v0", f"-{suffix}-v0")
-            if estimating_id not in registry:
-                register(
-                    id=estimating_id,
-                    entry_point="stsf_gym.episode_env:make_episode_env",
-                    kwargs={
-                        "world": "generated",
-                        "estimator": estimator,
-                        "env": {**env, "generator": generator},
-                    },
-                )
+        _register_estimating(env_id, "generated", {**env, "generator": generator})
 
 
-def _register_estimating(env_id: str, world: str) -> None:
-    """``<env_id minus -v0>-<Estimator>-v0`` for every estimator: the env of ``world`` with
-    the pose estimate wrapper."""
+def _register_estimating(env_id: str, world: str, env: dict | None = None) -> None:
+    """``<env_id minus -v0>-<Estimator>-v0`` for every estimator: the env of ``world`` (with
+    the env settings ``env``, if any) with the pose estimate wrapper."""
     for suffix, estimator in ESTIMATOR_IDS.items():
         estimating_id = env_id.replace("-v0", f"-{suffix}-v0")
         if estimating_id not in registry:
+            kwargs = {"world": world, "estimator": estimator}
             register(
                 id=estimating_id,
                 entry_point="stsf_gym.episode_env:make_episode_env",
-                kwargs={"world": world, "estimator": estimator},
+                kwargs={**kwargs, "env": env} if env is not None else kwargs,
             )
 
 

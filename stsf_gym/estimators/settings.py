@@ -90,16 +90,13 @@ class STSFSettings(ConventionalSettings):
 
 
 @dataclass(frozen=True)
-class EKFSettings(RelocalisationSettings, OdometrySettings):
-    """The range/bearing EKF (``ekf.yaml``)."""
+class BoardMeasurementSettings(RelocalisationSettings, OdometrySettings):
+    """What the board-measuring estimators share: pixel noise, gate, boards used in range."""
 
     sigma_px: Positive
     gate_probability: OpenProbability
     min_range: NonNegative
     max_range: Positive
-    range_std_floor: NonNegative
-    range_std_fraction: NonNegative
-    bearing_std_floor: NonNegative
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -111,24 +108,21 @@ class EKFSettings(RelocalisationSettings, OdometrySettings):
 
 
 @dataclass(frozen=True)
-class LandmarkPoseSettings(RelocalisationSettings, OdometrySettings):
+class EKFSettings(BoardMeasurementSettings):
+    """The range/bearing EKF (``ekf.yaml``)."""
+
+    range_std_floor: NonNegative
+    range_std_fraction: NonNegative
+    bearing_std_floor: NonNegative
+
+
+@dataclass(frozen=True)
+class LandmarkPoseSettings(BoardMeasurementSettings):
     """The landmark pose measurement of the graph smoothers (:mod:`.references.measurements`)."""
 
-    sigma_px: Positive
-    gate_probability: OpenProbability
-    min_range: NonNegative
-    max_range: Positive
     position_std_floor: NonNegative
     position_std_per_m: NonNegative
     orientation_std_floor: NonNegative
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        require(
-            self.min_range < self.max_range,
-            "max_range",
-            f"must be > min_range ({self.min_range:g}), got {self.max_range:g}",
-        )
 
 
 @dataclass(frozen=True)
