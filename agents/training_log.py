@@ -123,7 +123,8 @@ def plot_learning_curve(out: Path, title: str) -> Path:
     ax_s.set(xlabel="timesteps", ylabel="success rate", ylim=(-0.05, 1.05), title="goal reached")
     for ax in (ax_r, ax_s):
         ax.grid(alpha=0.3)
-        ax.legend()
+        if ax.lines:  # nothing finished yet: no legend
+            ax.legend()
     try:
         return save_figure(fig, out / "learning_curve.png")
     finally:

@@ -318,13 +318,17 @@ class RewardConfig:
 @dataclass(frozen=True)
 class TaskConfig:
     """When an episode succeeds (:mod:`stsf_gym.envs.task`): ``reach`` (the paper's protocol) or
-    ``declare`` (the agent stops to declare arrival at each goal of the route)."""
+    ``declare`` (the agent stops to declare arrival at each goal of the route); and where it
+    starts (:mod:`stsf_gym.envs.start_pose`: the world's ``start`` when every ``start_*`` is 0)."""
 
     protocol: Literal["reach", "declare"]
     goal_radius: Positive  # declare: success radius around each goal at the declared stop (m)
     stop_speed: Positive  # declare: a commanded |forward speed| below this (m/s) ...
     stop_yaw_rate: Positive  # ... and |yaw rate| below this (rad/s) is standing still
     stop_seconds: Positive  # declare: standing still this long declares arrival
+    start_along: NonNegative  # m: the start drawn uniformly this far along the path (0: fixed)
+    start_lateral: NonNegative  # m: ... and uniformly within +- this across it
+    start_yaw_deg: Annotated[float, Range(ge=0, le=180)]  # deg: heading +- this off the path's
 
 
 @dataclass(frozen=True)

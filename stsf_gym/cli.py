@@ -157,7 +157,7 @@ def _world(args: argparse.Namespace) -> str:
 
     if args.world == GENERATED:
         if args.split is None:
-            raise ConfigError("--world generated needs --split train or --split test")
+            raise ConfigError("--world generated needs --split train, val or test")
         return generated_label(args.split)
     if args.split is not None:
         raise ConfigError(f"--split is for --world generated, not --world {args.world}")
@@ -249,33 +249,40 @@ def _train(args: argparse.Namespace) -> dict:
     from stsf_gym.agents.train import train
 
     args.world = _world(args)
-    try:
-        summary = train(
-            args.algo,
-            args.estimator,
-            args.out,
-            args.timesteps,
-            args.seed,
-            args.world,
-            args.config,
-            parse_overrides(args.overrides),
-            args.n_envs,
-            progress_bar=not args.json,
-        )
-    except KeyboardInterrupt:
-        print(
-            f"interrupted: checkpoint saved in {args.out}/checkpoints; rerun to resume",
-            file=sys.stderr,
-        )
-        raise SystemExit(130) from None
-    if not args.json:
-        evaluation = summary["last_evaluation"] or {}
-        print(
-            f"{summary['timesteps']} timesteps in {summary['wall_time_s']:.0f} s; last evaluation: "
-            f"success rate {evaluation.get('success_rate', float('nan')):.2f}. "
-            f"Wrote {summary['model']}, {summary['learning_curve']}, {args.out}/train.json"
-        )
-    return summary
+    if args.seeds < 1:
+        raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+    runs = []
+    for seed in range(args.seed, args.seed + args.seeds):
+        out = args.out / f"seed-{seed}" if args.seeds > 1 else args.out
+        try:
+            summary = train(
+                args.algo,
+                args.estimator,
+                out,
+                args.timesteps,
+                seed,
+                args.world,
+                args.config,
+                parse_overrides(args.overrides),
+                args.n_envs,
+                progress_bar=not args.json,
+                suite=args.suite,
+            )
+        except KeyboardInterrupt:
+            print(
+                f"interrupted: checkpoint saved in {out}/checkpoints; rerun to resume",
+                file=sys.stderr,
+            )
+            raise SystemExit(130) from None
+        runs.append(summary)
+        if not args.json:
+            rate = (summary["last_evaluation"] or {}).get("success_rate", float("nan"))
+            print(
+                f"seed {seed}: {summary['timesteps']} timesteps in {summary['wall_time_s']:.0f} s; "
+                f"last evaluation: success rate {rate:.2f}. "
+                f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
+            )
+    return runs[0] if len(runs) == 1 else {"runs": runs}
 
 
 def _sweep(args: argparse.Namespace) -> dict:
@@ -485,7 +492,15 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
     train.add_argument("--timesteps", type=int, help="total env steps (hyper-parameter file)")
     train.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
+    train.add_argument(
+        "--seeds", type=int, default=1, help="training seeds SEED.. (1); each in OUT/seed-<s>/"
+    )
     _world_args(train)
+    train.add_argument(
+        "--suite",
+        choices=suite_names(),
+        help="train on a benchmark suite's train worlds and task, evaluate on its val worlds",
+    )
     train.set_defaults(run=_train)
     sweep = commands.add_parser("sweep", help="a grid of evaluation or training cells")
     sweep.add_argument("file", type=Path, help="sweep YAML, e.g. configs/sweeps/noise.yaml")

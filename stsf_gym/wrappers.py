@@ -148,7 +148,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     privileged, for reference runs only; ``"degraded-truth"`` corrupts it with a configurable
     error model (:mod:`stsf_gym.estimators.degraded_truth`), seeded by ``reset(seed=...)``.
     The real estimators never see ``info``: each starts an episode at the commanded start
-    pose (the world's ``start`` or ``options["start_pose"]``) with standard deviations
+    pose (``options["start_pose"]``, the one drawn from ``task.start_*`` or the world's ``start``;
+    ``env.unwrapped.start_pose``) with standard deviations
     ``start_std``; ``reset(options={"unknown_start": True})`` gives an estimator that
     localizes globally (``mcl``) no start at all: its prior spreads over the map's free space.
     When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
@@ -206,8 +207,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         options = dict(options or {})
         unknown_start = bool(options.pop("unknown_start", False))  # the wrapper's, not the env's
         obs, info = self.env.reset(seed=seed, options=options or None)
-        start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
-        self.start = np.asarray(start, dtype=float)  # the commanded start (a floor starts there)
+        start = self.env.unwrapped.start_pose  # where the env put the robot (start_pose option,
+        self.start = np.asarray(start, dtype=float)  # drawn or the world's); a floor starts there
         settings = getattr(self.estimator, "settings", None)
         model = sensor_model(self.env, settings if isinstance(settings, OdometrySettings) else None)
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws

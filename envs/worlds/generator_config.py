@@ -6,6 +6,7 @@ name the file and the key, as for env configs (:mod:`stsf_gym.validation`).
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,7 +17,7 @@ from stsf_gym.vision.landmarks import LandmarkPattern
 from stsf_gym.yaml_layers import CONFIG_DIR, deep_merge, read_yaml, shown
 
 DEFAULT_GENERATOR = CONFIG_DIR / "generator" / "default.yaml"
-SPLITS = ("train", "test")
+SPLITS = ("train", "val", "test")  # val: model selection while training, never benchmarked
 
 
 def _ordered(pair: tuple, field: str) -> None:
@@ -125,15 +126,18 @@ class GeneratorConfig:
                 f"splits.{name}",
                 f"must be [first world seed >= 0, count >= 1], got {value!r}",
             )
-        (a0, an), (b0, bn) = (self.splits[s] for s in SPLITS)
-        require(
-            a0 + an <= b0 or b0 + bn <= a0,
-            "splits",
-            f"train {[a0, a0 + an - 1]} and test {[b0, b0 + bn - 1]} world seeds must not overlap",
-        )
+        ranges = {name: range(v[0], v[0] + v[1]) for name, v in self.splits.items()}
+        for a, b in itertools.combinations(SPLITS, 2):
+            first, second = ranges[a], ranges[b]
+            require(
+                first.stop <= second.start or second.stop <= first.start,
+                "splits",
+                f"{a} [{first.start}, {first.stop - 1}] and {b} [{second.start}, "
+                f"{second.stop - 1}] world seeds must not overlap",
+            )
 
     def split_range(self, split: str) -> range:
-        """World seeds of ``split`` (``"train"`` or ``"test"``)."""
+        """World seeds of ``split`` (``"train"``, ``"val"`` or ``"test"``)."""
         if split not in SPLITS:
             raise ValueError(f"split must be one of {list(SPLITS)}, got {split!r}")
         first, count = self.splits[split]

@@ -133,7 +133,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if estimator is not None:
             pose, cov = estimator.mean.copy(), estimator.cov.copy()
         else:
-            pose = np.asarray((options or {}).get("start_pose", cfg.world.start), float)
+            pose = np.asarray(u.start_pose, float)
             cov = np.diag(np.square(START_STD))
         layout = RobotLayout(
             body_radius=cfg.robot.body_radius,
