@@ -354,11 +354,12 @@ def _benchmark(args: argparse.Namespace) -> dict:
         raise ConfigError(f"--worlds must be at least 1, got {args.worlds}")
     if args.config or args.overrides:
         raise ConfigError("benchmark runs a suite as written: edit or copy its configs/suites file")
-    estimators = _pose_sources(args.estimators)
-    agents = _names(args.agents)
-    for model in (a for a in agents if a != "follower"):
-        from stsf_gym.agents.sb3_agent import model_metadata
+    from stsf_gym.agents.sb3_agent import model_metadata
+    from stsf_gym.experiments.benchmark.trained import FOLLOWER, expand_agents
 
+    estimators = _pose_sources(args.estimators)
+    agents = expand_agents(_names(args.agents))
+    for model in (a for a in agents if a != FOLLOWER):
         model_metadata(model)  # a missing or foreign model file fails here, clearly
     summary = benchmark(
         args.out / args.suite,
@@ -546,7 +547,10 @@ def build_parser() -> argparse.ArgumentParser:
     _common(bench_suite, "out/benchmark")
     bench_suite.add_argument("--suite", required=True, choices=suite_names(), help="difficulty")
     bench_suite.add_argument(
-        "--agents", default="follower", help="follower and/or saved models, comma-separated"
+        "--agents",
+        default="follower",
+        help="follower, saved models and/or training folders (train --seeds N), comma-separated;"
+        " a model drives on the pose source it was trained on",
     )
     bench_suite.add_argument(
         "--estimators",
