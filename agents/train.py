@@ -75,6 +75,16 @@ def env_id_for(world: str, estimator: str, suite: str | None = None) -> str | No
     return base.replace("-v0", f"-{suffix}-v0") if base and suffix else None
 
 
+def check_training_env(world: str, estimator: str, env: dict, seed: int) -> None:
+    """Make and reset the first training env here, so a setting only an env can check (a start
+    range wider than the corridor, say) fails before any file is written or worker started."""
+    probe = make_episode_env(world, estimator, env, {})
+    try:
+        probe.reset(seed=seed)
+    finally:
+        probe.close()
+
+
 def make_training_env(
     world: str, estimator: str, env: dict, observation: dict, monitor_file: str, in_worker: bool
 ) -> gym.Env:
@@ -265,6 +275,7 @@ def train(
         raise ConfigError(f"--n-envs and --timesteps must be at least 1, got {n_envs}, {total}")
     check_timesteps(hp, n_envs, total)
     torch.set_num_threads(1)
+    check_training_env(world, estimator, env_settings, seed)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     observation = asdict(observation_config(cfg.observation))

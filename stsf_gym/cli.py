@@ -248,6 +248,8 @@ def _reproduce(args: argparse.Namespace) -> dict:
 def _train(args: argparse.Namespace) -> dict:
     from stsf_gym.agents.train import train
 
+    if args.suite is not None and (args.world != "irl_corridor" or args.split is not None):
+        raise ConfigError("--suite picks the worlds (its train split): drop --world/--split")
     args.world = _world(args)
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
