@@ -91,7 +91,7 @@ def check_timesteps(hp: Hyperparams, n_envs: int, total: int) -> None:
         below, above = total // size * size, (total // size + 1) * size
         raise ConfigError(
             f"timesteps {total} is not a multiple of {what} = {size}: the run would end at "
-            f"{above}; ask for {below or above} or {above}"
+            f"{above}; ask for {f'{below} or ' if below else ''}{above}"
         )
 
 

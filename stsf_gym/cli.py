@@ -186,7 +186,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
     _check_counts(args)
     estimators = _pose_sources(args.estimators)
     args.world = _world(args)
-    agents = [a.strip() for a in args.agent.split(",") if a.strip()]
+    agents = _names(args.agent)
     models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
     if models:
         from stsf_gym.agents.sb3_agent import model_metadata
@@ -382,7 +382,13 @@ def _benchmark(args: argparse.Namespace) -> dict:
 
 
 def _names(text: str) -> list[str]:
-    return [name.strip() for name in text.split(",") if name.strip()]
+    """The comma-separated names of ``text``; one named twice is an error (its episodes would
+    be run and counted twice)."""
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise ConfigError(f"{twice[0]!r} is named twice in {text!r}")
+    return names
 
 
 def _pose_sources(text: str) -> list[str]:
@@ -615,6 +621,8 @@ def main(argv: list[str] | None = None) -> int:
     set_command(["stsf-gym", *(sys.argv[1:] if argv is None else argv)])
     error = f"stsf-gym {args.command}: error:"
     try:
+        if getattr(args, "seed", 0) < 0:  # seeds seed a numpy SeedSequence: non-negative
+            raise ConfigError(f"--seed must be at least 0, got {args.seed}")
         if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
             folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
             _check_writable(folder.absolute())
