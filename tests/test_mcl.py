@@ -20,6 +20,14 @@ def test_global_localization_from_a_uniform_prior():
     assert run["final_error_m"] < 0.10
 
 
+def test_global_localization_with_the_follower_on_its_own_estimate():
+    # seed 1: the sonar alone settles the particles on the corridor's other end within a second;
+    # the robot wanders until a board confirms a narrow estimate, then follows the path on it
+    run = localize(seed=1, drive="estimate", max_distance=3.0)
+    assert run["first_within_m"] is not None and run["first_within_m"] <= 3.0, run
+    assert run["within_for_good_from_m"] is not None and run["final_error_m"] < 0.10, run
+
+
 def test_kidnap_recovered_without_a_restart():
     faults = read_yaml(CONFIG_DIR / "faults" / "kidnap.yaml")["faults"]
     env = gym.make(

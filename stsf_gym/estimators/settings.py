@@ -159,6 +159,7 @@ class MCLSettings(OdometrySettings):
     position_std_per_m: NonNegative  # and this fraction of its range
     orientation_std_floor: NonNegative  # rad, std added to its orientation
     landmark_outlier: OpenProbability  # likelihood floor of a board (a misread id)
+    gate_probability: OpenProbability  # an unknown start is confirmed by a board inside it
     min_range: NonNegative
     max_range: Positive
     prior: Literal["start", "free-space"]  # the start pose, or uniform over the free space

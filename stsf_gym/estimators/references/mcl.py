@@ -49,7 +49,10 @@ until their number reaches the KLD bound for the number ``k`` of occupied bins
 **Output**: the weighted mean (heading by its mean sine and cosine) and weighted covariance.
 **Unknown start**: ``prior: free-space``, or the wrapper's ``reset(options={"unknown_start":
 True})`` (:meth:`spread_prior`), spreads the particles uniformly over the free space and every
-heading. ``counters``: ``frames``, ``frames_matched``, ``landmark_updates``, ``updates``,
+heading. The sonar alone can settle such a cloud on the wrong one of two places that echo
+alike (the corridor's two ends), as narrow as a right one, so ``confirmed`` says whether a map
+board has agreed with the estimate since: its own pose within the chi-square gate
+(``gate_probability``, 3 dof) of the estimate, their covariances added. ``counters``: ``frames``, ``frames_matched``, ``landmark_updates``, ``updates``,
 ``resampled``, ``injected``.
 """
 
@@ -61,7 +64,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 from scipy.special import ndtri
 
-from stsf_gym.estimators.base import PoseEstimator, SensorModel
+from stsf_gym.estimators.base import PoseEstimator, SensorModel, chi_square_gate
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import observe, robot_pose_from_landmark
 from stsf_gym.estimators.references.likelihood_field import LikelihoodField
@@ -105,6 +108,8 @@ class MonteCarloLocalization(PoseEstimator):
         self.rng = np.random.default_rng(0)
         self.field: LikelihoodField | None = None
         self._field_key: tuple | None = None
+        self.gate = chi_square_gate(settings.gate_probability, dof=3)
+        self.confirmed = True
 
     def seed(self, seed: int | None) -> None:
         """Seed the particles' draws (the wrapper passes ``reset(seed=...)``'s)."""
@@ -122,6 +127,7 @@ class MonteCarloLocalization(PoseEstimator):
         self.considered_cov = considered_cov(model, s.mount_std)
         self.w_slow = self.w_fast = EXPECTED_BOARD_LIKELIHOOD
         self.moved = np.zeros(2)
+        self.confirmed = True
         if s.prior == "free-space":
             self.spread_prior()
         else:
@@ -130,6 +136,7 @@ class MonteCarloLocalization(PoseEstimator):
     def spread_prior(self) -> None:
         """Forget the start: particles uniform over the free space and every heading."""
         self._set(self.field.sample_free(self.settings.particles, self.rng))
+        self.confirmed = False
 
     def _set(self, poses: np.ndarray) -> None:
         n = len(poses)
@@ -228,6 +235,14 @@ class MonteCarloLocalization(PoseEstimator):
         if depleted or (boards and self.w_fast < self.w_slow):  # or particles to inject
             self.resample(boards)
         self._estimate()
+        if boards and not self.confirmed:
+            self.confirmed = any(self._agrees(board) for board in boards)
+
+    def _agrees(self, board: Board) -> bool:
+        """The board's own robot pose within the gate of the estimate."""
+        offset = board.pose - self.mean
+        offset[2] = wrap_angle(offset[2])
+        return float(offset @ np.linalg.solve(board.cov + self.cov, offset)) <= self.gate
 
     def _sonar_log_likelihood(self, ranges: np.ndarray) -> np.ndarray:
         """Log likelihood (particles x readings) of the readings that echoed."""
