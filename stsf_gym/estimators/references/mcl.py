@@ -52,7 +52,8 @@ True})`` (:meth:`spread_prior`), spreads the particles uniformly over the free s
 heading. The sonar alone can settle such a cloud on the wrong one of two places that echo
 alike (the corridor's two ends), as narrow as a right one, so ``confirmed`` says whether a map
 board has agreed with the estimate since: its own pose within the chi-square gate
-(``gate_probability``, 3 dof) of the estimate, their covariances added. ``counters``: ``frames``, ``frames_matched``, ``landmark_updates``, ``updates``,
+(``gate_probability``, 3 dof) of the estimate, their covariances added.
+``counters``: ``frames``, ``frames_matched``, ``landmark_updates``, ``updates``,
 ``resampled``, ``injected``.
 """
 
