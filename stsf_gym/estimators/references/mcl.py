@@ -44,7 +44,12 @@ until their number reaches the KLD bound for the number ``k`` of occupied bins
     n = (k - 1) / (2 eps) (1 - 2 / (9 (k - 1)) + sqrt(2 / (9 (k - 1))) z)^3
 
 (``eps`` = ``kld_error``, ``z`` the ``kld_quantile`` of the normal), within
-``[min_particles, particles]``.
+``[min_particles, particles]``. **Roughening** (Gordon, Salmond and Smith 1993): the drawn
+particles are then jittered by ``N(0, diag(sigma^2))``, ``sigma_j = K E_j n^(-1/3)`` with
+``K`` = ``roughening``, ``E_j`` the drawn cloud's extent (max - min) in ``x``, ``y`` and heading
+and ``n`` their count: the slip between two frames spreads copies of one particle by well
+under a millimetre, less than the boards' information narrows the cloud, so without it the
+cloud holds few distinct poses and its covariance understates the error.
 
 **Output**: the weighted mean (heading by its mean sine and cosine) and weighted covariance.
 **Unknown start**: ``prior: free-space``, or the wrapper's ``reset(options={"unknown_start":
@@ -276,8 +281,22 @@ class MonteCarloLocalization(PoseEstimator):
         count = self._kld_count(poses)
         self.counters["resampled"] += 1
         self.counters["injected"] += int(random[:count].sum())
-        self.poses, self.considered = poses[:count], considered[:count]
+        poses, drawn_here = poses[:count], ~random[:count]
+        poses[drawn_here] = self._roughened(poses[drawn_here])
+        self.poses, self.considered = poses, considered[:count]
         self.log_w = np.full(count, -math.log(count))
+
+    def _roughened(self, poses: np.ndarray) -> np.ndarray:
+        """Gordon's roughening of the drawn poses (heading extent taken around the mean)."""
+        if not self.settings.roughening or len(poses) < 2:
+            return poses
+        offsets = poses - self.mean
+        offsets[:, 2] = wrap_angle(offsets[:, 2])
+        extent = offsets.max(axis=0) - offsets.min(axis=0)
+        sigma = self.settings.roughening * extent * len(poses) ** (-1 / 3)
+        poses = poses + self.rng.normal(size=poses.shape) * sigma
+        poses[:, 2] = wrap_angle(poses[:, 2])
+        return poses
 
     def _sample_boards(self, boards: list[Board], count: int) -> np.ndarray:
         """``count`` poses, each from a random board's robot pose and covariance."""
