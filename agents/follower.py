@@ -57,6 +57,10 @@ class PathFollower:
     ``min_speed``), and once that is within ``arrival.tolerance`` (or the estimate has passed
     the goal) it commands ``[0, 0]`` for ``hold_steps`` steps (the task's ``stop_seconds``),
     then heads for the next goal. It turns where its estimate says the turn is, as always.
+
+    Before its pose is known (an unknown start the estimator has not localized yet), a path
+    follower has nowhere to steer to: :meth:`explore` wanders instead, straight ahead at
+    ``speed`` with the sonar avoidance turning it from walls, so the camera gets to see boards.
     """
 
     def __init__(
@@ -101,6 +105,13 @@ class PathFollower:
             goals,
             hold,
         )
+
+    def explore(self, sonar: np.ndarray | None = None) -> np.ndarray:
+        """Action [v, w] that wanders without a pose: ahead, around what the sonar sees."""
+        v, w = self.cfg.speed, 0.0
+        if sonar is not None and self.avoidance is not None:
+            v, w = self.avoidance.adjust(sonar, 0.0, v, w, self.cfg.max_yaw_rate)
+        return np.clip(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)
 
     def act(self, pose: np.ndarray, sonar: np.ndarray | None = None) -> np.ndarray:
         """Action [v, w] in [-1, 1] for the robot at ``pose`` = [x, y, yaw].

@@ -8,12 +8,20 @@ of the path follower driving on each estimator:
   and orientation errors by range, beside the model's standard deviations (pixels, slip,
   wheel calibration and mount, without the floors) and the floors of
   ``configs/estimators/conventional.yaml``. What the floors were set from.
+- ``boards``: every map board's pose measurement of the smoother and MCL
+  (:class:`~stsf_gym.estimators.references.measurements.LandmarkPose`: PnP pose in the robot
+  frame) against the board's true pose from the robot, radial / tangential / orientation by
+  range, beside the model's standard deviations without and with the floors of
+  ``configs/estimators/smoother.yaml`` (``--set`` to try others), the considered camera and
+  mount errors included, and the mean normalised squared error (3 dof: 3 when consistent).
+  What the smoother's and MCL's board floors were set from.
 - ``nees``: per estimator, the 3-dof NEES and its position (2-dof) and heading (1-dof) parts,
   RMS errors beside the mean model standard deviations, updates, gated measurements, and the
   seeds that needed a re-localisation or were ever more than 10 cm off. What the floors and
   ``mount_std`` were checked with.
 
     python benchmarks/estimator_noise.py pairs --world irl_corridor --mode fast
+    python benchmarks/estimator_noise.py boards --seeds 10
     python benchmarks/estimator_noise.py nees --estimators odometry,conventional,stsf,ekf
     python benchmarks/estimator_noise.py nees --estimators stsf --set mount_std=0.005
 """
@@ -29,7 +37,7 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
-RANGE_BINS = [(0, 2), (2, 3), (3, 4), (4, 6), (6, 9)]
+RANGE_BINS = [(0, 2), (2, 3), (3, 4), (4, 6), (6, 9), (9, 15)]
 
 
 def _env(world: str, estimator: str, mode: str, options: dict):
@@ -89,6 +97,46 @@ def pair_errors(job: tuple) -> np.ndarray:
         measured.clear()
     env.close()
     return np.array(rows).reshape(-1, 9)
+
+
+def board_errors(job: tuple) -> np.ndarray:
+    """Rows: range, radial, tangential and orientation error, the model's variances without
+    the floors (radial, tangential, orientation) and the normalised squared error with them,
+    for each board the smoother measures."""
+    from stsf_gym.estimators.references import smoother as smoother_module
+    from stsf_gym.geometry import compose, inverse
+
+    world, seed, mode, options = job
+    env, follower = _env(world, "smoother", mode, options)
+    estimator, measured, rows = env.estimator, [], []
+    landmark_pose = smoother_module.landmark_pose
+
+    def recorded(observation, *floors):
+        out = landmark_pose(observation, *floors)
+        measured.append((observation.cov, out))
+        return out
+
+    smoother_module.landmark_pose = recorded
+    obs, info, done = *env.reset(seed=seed), False
+    k_cov = estimator.k_cov  # the considered errors' prior (camera, mount, wheels)
+    while not done:
+        obs, _, terminated, truncated, info = env.step(follower.act(obs["pose"], obs["sonar"]))
+        done = terminated or truncated
+        for pnp_cov, board in measured:
+            considered = board.by_considered @ k_cov @ board.by_considered.T
+            truth = compose(inverse(info["true_pose"]), board.landmark_pose)
+            error = board.z - truth
+            error[2] = math.remainder(error[2], math.tau)
+            bearing = math.atan2(truth[1], truth[0])
+            c, s = math.cos(bearing), math.sin(bearing)
+            to_ray = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+            model = to_ray @ (pnp_cov + considered) @ to_ray.T
+            d2 = error @ np.linalg.solve(board.noise + considered, error)
+            rows.append([math.hypot(*truth[:2]), *(to_ray @ error), *np.diag(model), d2])
+        measured.clear()
+    smoother_module.landmark_pose = landmark_pose
+    env.close()
+    return np.array(rows).reshape(-1, 8)
 
 
 def nees_parts(job: tuple) -> dict:
@@ -151,6 +199,30 @@ def report_pairs(rows: np.ndarray) -> None:
         )
 
 
+def report_boards(rows: np.ndarray) -> None:
+    rng, radial, tangential, orientation, var_r, var_t, var_o, d2 = rows.T
+    print(f"{len(rows)} board measurements; normalised squared error (3 dof) {d2.mean():.2f}")
+    print(
+        "| range (m) | n | radial RMS / model (cm) | tangential RMS / model (cm) | "
+        "orientation RMS / model (deg) | normalised (3) |"
+    )
+    print("|---|---|---|---|---|---|")
+    for low, high in RANGE_BINS:
+        m = (rng >= low) & (rng < high)
+        if m.sum() < 5:
+            continue
+
+        def rms(x, m=m):
+            return math.sqrt(np.mean(x[m] ** 2))
+
+        print(
+            f"| {low}-{high} | {m.sum()} | {100 * rms(radial):.2f} / "
+            f"{100 * math.sqrt(var_r[m].mean()):.2f} | {100 * rms(tangential):.2f} / "
+            f"{100 * math.sqrt(var_t[m].mean()):.2f} | {math.degrees(rms(orientation)):.2f} / "
+            f"{math.degrees(math.sqrt(var_o[m].mean())):.2f} | {d2[m].mean():.2f} |"
+        )
+
+
 def report_nees(results: list[dict], estimators: list[str]) -> None:
     print(
         "| estimator | NEES (3) | position (2) | heading (1) | RMS x / std (cm) | "
@@ -178,7 +250,7 @@ def report_nees(results: list[dict], estimators: list[str]) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("report", choices=["pairs", "nees"])
+    parser.add_argument("report", choices=["pairs", "boards", "nees"])
     parser.add_argument("--world", default="irl_corridor")
     parser.add_argument("--mode", default="fast", choices=["fast", "rendered"])
     parser.add_argument("--seeds", type=int, default=20)
@@ -200,9 +272,12 @@ def main() -> None:
             parser.error(f"--set needs KEY=VALUE, got {item!r}")
         options[key] = yaml.safe_load(value)
     seeds = range(args.seed0, args.seed0 + args.seeds)
-    if args.report == "pairs":
+    if args.report in ("pairs", "boards"):
         jobs = [(args.world, seed, args.mode, options) for seed in seeds]
-        report_pairs(np.concatenate(_map(pair_errors, jobs, args.workers)))
+        if args.report == "pairs":
+            report_pairs(np.concatenate(_map(pair_errors, jobs, args.workers)))
+        else:
+            report_boards(np.concatenate(_map(board_errors, jobs, args.workers)))
     else:
         estimators = args.estimators.split(",")
         jobs = [(args.world, s, args.mode, options, e) for e in estimators for s in seeds]

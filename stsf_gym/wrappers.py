@@ -33,8 +33,9 @@ from stsf_gym.validation import ConfigError
 START_STD = (0.01, 0.01, 0.005)
 COV_LIMIT = 1e4
 #: With an unknown start the pan camera sweeps (a sine of this period, s) until the estimate's
-#: position standard deviation first falls below ``FOUND_STD`` (m): pointed from a pose that
-#: is not known yet, it would look at walls.
+#: position standard deviation first falls below ``FOUND_STD`` (m) with a map board confirming
+#: it (the estimator's ``confirmed``, where it has one): pointed from a pose that is not known
+#: yet, it would look at walls, and the sonar alone can settle on the wrong end of a corridor.
 SWEEP_PERIOD_S, FOUND_STD = 4.0, 0.2
 #: The privileged pose source: the true pose from ``info``, for reference runs only.
 TRUTH = "truth"
@@ -228,6 +229,12 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             self.pointer.reset()
         return self._with_pose(obs, self.estimator.mean, self.estimator.cov), info
 
+    @property
+    def searching(self) -> bool:
+        """An unknown start not localized yet (the pan camera sweeps): an agent should not
+        trust the pose (:meth:`~stsf_gym.agents.follower.PathFollower.explore`)."""
+        return self.searching_since is not None
+
     def _forget_start(self) -> None:
         spread = getattr(self.estimator, "spread_prior", None)
         if spread is None:
@@ -240,7 +247,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def step(self, action):
         if self.searching_since is not None:
             cov = self.estimator.cov
-            if math.sqrt(max(cov[0, 0], cov[1, 1])) < FOUND_STD:
+            narrow = math.sqrt(max(cov[0, 0], cov[1, 1])) < FOUND_STD
+            if narrow and getattr(self.estimator, "confirmed", True):
                 self.searching_since = None
             else:
                 self.searching_since += self.env.unwrapped.dt

@@ -109,3 +109,12 @@ def test_bad_sonar_and_bad_config_are_named(avoidance):
         load_follower_config(avoidance__margn=0.1)
     with pytest.raises(ConfigError, match="stop_distance"):
         load_follower_config(avoidance__stop_distance=1.0)
+
+
+def test_exploring_without_a_pose_drives_ahead_and_turns_from_a_wall(make_env):
+    env = make_env()
+    follower = PathFollower.for_env(env)
+    v, w = follower.explore(readings())
+    assert v == pytest.approx(0.122 / env.unwrapped.config.robot.max_speed) and w == 0.0
+    v, w = follower.explore(readings(t0=0.15))  # a wall right ahead: stop and turn
+    assert v == 0.0 and abs(w) > 0

@@ -20,6 +20,14 @@ def test_global_localization_from_a_uniform_prior():
     assert run["final_error_m"] < 0.10
 
 
+def test_global_localization_with_the_follower_on_its_own_estimate():
+    # seed 1: the sonar alone settles the particles on the corridor's other end within a second;
+    # the robot wanders until a board confirms a narrow estimate, then follows the path on it
+    run = localize(seed=1, drive="estimate", max_distance=3.0)
+    assert run["first_within_m"] is not None and run["first_within_m"] <= 3.0, run
+    assert run["within_for_good_from_m"] is not None and run["final_error_m"] < 0.10, run
+
+
 def test_kidnap_recovered_without_a_restart():
     faults = read_yaml(CONFIG_DIR / "faults" / "kidnap.yaml")["faults"]
     env = gym.make(
@@ -61,3 +69,14 @@ def test_unknown_start_needs_a_global_estimator():
     with pytest.raises(ValueError, match="unknown_start"):
         env.reset(seed=0, options={"unknown_start": True})
     env.close()
+
+
+def test_roughening_spreads_copies_by_gordons_rule():
+    mcl = make_estimator("mcl", roughening=0.2)
+    mcl.mean = np.zeros(3)
+    copies = np.repeat([[0.0, 0.0, 0.0], [0.01, 0.02, 0.004]], 500, axis=0)  # two poses
+    roughened = mcl._roughened(copies.copy())
+    assert len(np.unique(roughened, axis=0)) == 1000  # every copy its own pose
+    expected = 0.2 * np.array([0.01, 0.02, 0.004]) * 1000 ** (-1 / 3)  # K E n^(-1/3)
+    assert np.allclose((roughened - copies).std(axis=0), expected, rtol=0.1)
+    assert np.array_equal(make_estimator("mcl", roughening=0.0)._roughened(copies), copies)

@@ -149,6 +149,7 @@ class MCLSettings(OdometrySettings):
     update_min_a: NonNegative  # rad turned between them (update_min_a)
     board_updates: Literal["every-frame", "with-sonar"]  # every frame's boards, or only those
     resample_threshold: OpenProbability  # resample when the effective sample size falls below
+    roughening: NonNegative  # Gordon's K: jitter of K E N^(-1/3) after resampling (0: none)
     odometry_inflation: Inflation  # factor on the wheel slip the particles are spread by
     sonar_std: Positive  # m, the likelihood field's Gaussian
     sonar_random: OpenProbability  # weight of a random sonar reading (z_rand)
@@ -159,6 +160,7 @@ class MCLSettings(OdometrySettings):
     position_std_per_m: NonNegative  # and this fraction of its range
     orientation_std_floor: NonNegative  # rad, std added to its orientation
     landmark_outlier: OpenProbability  # likelihood floor of a board (a misread id)
+    gate_probability: OpenProbability  # an unknown start is confirmed by a board inside it
     min_range: NonNegative
     max_range: Positive
     prior: Literal["start", "free-space"]  # the start pose, or uniform over the free space

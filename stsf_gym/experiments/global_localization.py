@@ -5,9 +5,13 @@ prior spread over the map's free space, :class:`~stsf_gym.wrappers.PoseEstimateW
 the path follower drives until ``max_distance`` metres. Recorded per seed: the distance driven
 when the position error first falls under ``tolerance`` and the distance after which it stays
 under it (``None``: not within the run). By default the follower drives on the *true* pose,
-so the figure is the localization's alone (on the estimate, ``--drive estimate``, the follower
-turns about where a wrong pose sends it; the IRL start sees no board within 65 degrees of its
-normal until about 0.7 m down the corridor). Writes ``global_localization.json``.
+so the figure is the localization's alone. On the estimate (``--drive estimate``) the robot
+does what a robot that does not know where it is would: while the wrapper is still
+``searching`` (no board has confirmed a narrow estimate) it wanders
+(:meth:`~stsf_gym.agents.follower.PathFollower.explore`: ahead, the sonar turning it from
+walls) with the pan camera sweeping, then follows the path on its estimate. (The IRL start
+sees no board until about 0.7 m down the corridor; the sonar alone can settle the particles
+on the corridor's other end.) Writes ``global_localization.json``.
 """
 
 from __future__ import annotations
@@ -40,8 +44,13 @@ def localize(
         follower = PathFollower.for_env(wrapped)
         first, last_out, distance, steps = None, 0.0, 0.0, 0
         while distance < max_distance:
-            pose = info["true_pose"] if drive == "truth" else obs["pose"]
-            obs, _, terminated, truncated, info = wrapped.step(follower.act(pose, obs["sonar"]))
+            if drive == "truth":
+                action = follower.act(info["true_pose"], obs["sonar"])
+            elif wrapped.searching:
+                action = follower.explore(obs["sonar"])
+            else:
+                action = follower.act(obs["pose"], obs["sonar"])
+            obs, _, terminated, truncated, info = wrapped.step(action)
             distance, steps = float(info["distance_travelled"]), steps + 1
             error = float(np.hypot(*(obs["pose"] - info["true_pose"])[:2]))
             if error < tolerance and first is None:

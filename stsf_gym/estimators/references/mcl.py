@@ -44,12 +44,21 @@ until their number reaches the KLD bound for the number ``k`` of occupied bins
     n = (k - 1) / (2 eps) (1 - 2 / (9 (k - 1)) + sqrt(2 / (9 (k - 1))) z)^3
 
 (``eps`` = ``kld_error``, ``z`` the ``kld_quantile`` of the normal), within
-``[min_particles, particles]``.
+``[min_particles, particles]``. **Roughening** (Gordon, Salmond and Smith 1993): the drawn
+particles are then jittered by ``N(0, diag(sigma^2))``, ``sigma_j = K E_j n^(-1/3)`` with
+``K`` = ``roughening``, ``E_j`` the drawn cloud's extent (max - min) in ``x``, ``y`` and heading
+and ``n`` their count: the slip between two frames spreads copies of one particle by well
+under a millimetre, less than the boards' information narrows the cloud, so without it the
+cloud holds few distinct poses and its covariance understates the error.
 
 **Output**: the weighted mean (heading by its mean sine and cosine) and weighted covariance.
 **Unknown start**: ``prior: free-space``, or the wrapper's ``reset(options={"unknown_start":
 True})`` (:meth:`spread_prior`), spreads the particles uniformly over the free space and every
-heading. ``counters``: ``frames``, ``frames_matched``, ``landmark_updates``, ``updates``,
+heading. The sonar alone can settle such a cloud on the wrong one of two places that echo
+alike (the corridor's two ends), as narrow as a right one, so ``confirmed`` says whether a map
+board has agreed with the estimate since: its own pose within the chi-square gate
+(``gate_probability``, 3 dof) of the estimate, their covariances added.
+``counters``: ``frames``, ``frames_matched``, ``landmark_updates``, ``updates``,
 ``resampled``, ``injected``.
 """
 
@@ -61,7 +70,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 from scipy.special import ndtri
 
-from stsf_gym.estimators.base import PoseEstimator, SensorModel
+from stsf_gym.estimators.base import PoseEstimator, SensorModel, chi_square_gate
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import observe, robot_pose_from_landmark
 from stsf_gym.estimators.references.likelihood_field import LikelihoodField
@@ -105,6 +114,8 @@ class MonteCarloLocalization(PoseEstimator):
         self.rng = np.random.default_rng(0)
         self.field: LikelihoodField | None = None
         self._field_key: tuple | None = None
+        self.gate = chi_square_gate(settings.gate_probability, dof=3)
+        self.confirmed = True
 
     def seed(self, seed: int | None) -> None:
         """Seed the particles' draws (the wrapper passes ``reset(seed=...)``'s)."""
@@ -122,6 +133,7 @@ class MonteCarloLocalization(PoseEstimator):
         self.considered_cov = considered_cov(model, s.mount_std)
         self.w_slow = self.w_fast = EXPECTED_BOARD_LIKELIHOOD
         self.moved = np.zeros(2)
+        self.confirmed = True
         if s.prior == "free-space":
             self.spread_prior()
         else:
@@ -130,6 +142,7 @@ class MonteCarloLocalization(PoseEstimator):
     def spread_prior(self) -> None:
         """Forget the start: particles uniform over the free space and every heading."""
         self._set(self.field.sample_free(self.settings.particles, self.rng))
+        self.confirmed = False
 
     def _set(self, poses: np.ndarray) -> None:
         n = len(poses)
@@ -228,6 +241,14 @@ class MonteCarloLocalization(PoseEstimator):
         if depleted or (boards and self.w_fast < self.w_slow):  # or particles to inject
             self.resample(boards)
         self._estimate()
+        if boards and not self.confirmed:
+            self.confirmed = any(self._agrees(board) for board in boards)
+
+    def _agrees(self, board: Board) -> bool:
+        """The board's own robot pose within the gate of the estimate."""
+        offset = board.pose - self.mean
+        offset[2] = wrap_angle(offset[2])
+        return float(offset @ np.linalg.solve(board.cov + self.cov, offset)) <= self.gate
 
     def _sonar_log_likelihood(self, ranges: np.ndarray) -> np.ndarray:
         """Log likelihood (particles x readings) of the readings that echoed."""
@@ -260,8 +281,22 @@ class MonteCarloLocalization(PoseEstimator):
         count = self._kld_count(poses)
         self.counters["resampled"] += 1
         self.counters["injected"] += int(random[:count].sum())
-        self.poses, self.considered = poses[:count], considered[:count]
+        poses, drawn_here = poses[:count], ~random[:count]
+        poses[drawn_here] = self._roughened(poses[drawn_here])
+        self.poses, self.considered = poses, considered[:count]
         self.log_w = np.full(count, -math.log(count))
+
+    def _roughened(self, poses: np.ndarray) -> np.ndarray:
+        """Gordon's roughening of the drawn poses (heading extent taken around the mean)."""
+        if not self.settings.roughening or len(poses) < 2:
+            return poses
+        offsets = poses - self.mean
+        offsets[:, 2] = wrap_angle(offsets[:, 2])
+        extent = offsets.max(axis=0) - offsets.min(axis=0)
+        sigma = self.settings.roughening * extent * len(poses) ** (-1 / 3)
+        poses = poses + self.rng.normal(size=poses.shape) * sigma
+        poses[:, 2] = wrap_angle(poses[:, 2])
+        return poses
 
     def _sample_boards(self, boards: list[Board], count: int) -> np.ndarray:
         """``count`` poses, each from a random board's robot pose and covariance."""
