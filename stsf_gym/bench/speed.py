@@ -208,30 +208,81 @@ def _render_latency(renderer: str, frames: int, cpu: int | None) -> dict:
         for _ in range(frames):
             u.sim.render(width, height, view, projection)
         row[f"ms_{width}x{height}"] = (time.perf_counter() - start) / frames * 1e3
+        if renderer == "gl":
+            row[f"camera_frame_ms_{width}x{height}"] = _camera_frame_ms(width, height, frames)
     row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     env.close()
     return row
 
 
-def vector_scaling(steps: int, seed: int = 0) -> dict:
-    """Throughput of ``AsyncVectorEnv`` with 1 and 2 workers (rendered STSF pipeline)."""
+#: vector-env throughput cases: label -> (env id, overrides)
+VECTOR_PIPELINES = {
+    "rendered STSF": ("stsf_gym/Corridor-STSF-v0", {}),
+    "fast mode STSF": ("stsf_gym/Corridor-STSF-v0", {"camera__mode": "fast"}),
+}
+VECTOR_KINDS = ("AsyncVectorEnv", "SubprocVecEnv")
+
+
+def _camera_frame_ms(width: int, height: int, frames: int) -> float:
+    """ms per whole camera frame (render, lens, defocus, sensor) of a still camera of this
+    size, the paper's camera profile."""
+    import gymnasium as gym
+
+    env = gym.make("stsf_gym/Corridor-v0", camera__width=width, camera__height=height)
+    u = env.unwrapped
+    env.reset(seed=0)
+    pose, rng = u.robot.camera_pose(), np.random.default_rng(0)
+    u.camera_sensor.capture(pose, rng)  # warm-up
+    start = time.perf_counter()
+    for _ in range(frames):
+        u.camera_sensor.capture(pose, rng)
+    elapsed = time.perf_counter() - start
+    env.close()
+    return elapsed / frames * 1e3
+
+
+def vector_scaling(steps: int, seed: int = 0) -> list[dict]:
+    """Throughput with 1 and 2 workers of Gymnasium's ``AsyncVectorEnv`` and stable-baselines3's
+    ``SubprocVecEnv`` (each worker a ``spawn`` process), on the rendered and the fast-mode STSF
+    pipelines: steps per second of all workers together and the 2-worker speed-up."""
+    rows = []
+    for pipeline, (env_id, overrides) in VECTOR_PIPELINES.items():
+        for kind in VECTOR_KINDS:
+            rates = {w: _vector_rate(kind, env_id, overrides, w, steps, seed) for w in (1, 2)}
+            rows.append(
+                {
+                    "pipeline": pipeline,
+                    "vector env": kind,
+                    "steps_per_s_1_worker": rates[1],
+                    "steps_per_s_2_workers": rates[2],
+                    "speed_up": rates[2] / rates[1],
+                }
+            )
+    return rows
+
+
+def _vector_rate(
+    kind: str, env_id: str, overrides: dict, workers: int, steps: int, seed: int
+) -> float:
     import gymnasium as gym
 
     import stsf_gym  # noqa: F401
 
-    rows = {}
-    for workers in (1, 2):
-        fns = [lambda: gym.make("stsf_gym/Corridor-STSF-v0") for _ in range(workers)]
+    fns = [lambda: gym.make(env_id, **overrides) for _ in range(workers)]
+    actions = np.tile(np.array([0.5, 0.05], np.float32), (workers, 1))
+    if kind == "AsyncVectorEnv":
         envs = gym.vector.AsyncVectorEnv(fns, context="spawn")
         envs.reset(seed=seed)
-        actions = np.tile(np.array([0.5, 0.05], np.float32), (workers, 1))
-        start = time.perf_counter()
-        for _ in range(steps):
-            envs.step(actions)
-        rows[workers] = steps * workers / (time.perf_counter() - start)
-        envs.close()
-    return {
-        "steps_per_s_1_worker": rows[1],
-        "steps_per_s_2_workers": rows[2],
-        "speed_up": rows[2] / rows[1],
-    }
+    else:
+        from stable_baselines3.common.vec_env import SubprocVecEnv
+
+        envs = SubprocVecEnv(fns, start_method="spawn")
+        envs.seed(seed)
+        envs.reset()
+    envs.step(actions)  # warm-up: the first frame builds the GL objects
+    start = time.perf_counter()
+    for _ in range(steps):
+        envs.step(actions)
+    rate = steps * workers / (time.perf_counter() - start)
+    envs.close()
+    return rate
