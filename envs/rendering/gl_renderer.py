@@ -121,6 +121,7 @@ class GLRenderer:
         self._geometry: list = []  # (vertex array, its buffer, vertex count) per material
         self._textures = None
         self._targets: dict[tuple[int, int], object] = {}
+        self._read: dict[tuple[int, int], bytearray] = {}  # read-back buffer per image size
 
     def _build_programs(self) -> None:
         self.programs = [
@@ -179,7 +180,8 @@ class GLRenderer:
             program["view_projection"].write(view_projection)
             if count:
                 vao.render(vertices=count)
-        data = target.read(components=3, alignment=1)
+        data = self._read.setdefault((width, height), bytearray(width * height * 3))
+        target.read_into(data, components=3, alignment=1)
         return np.frombuffer(data, np.uint8).reshape(height, width, 3)[::-1].copy()
 
     def _release_geometry(self) -> None:
