@@ -22,6 +22,7 @@ from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 #: case -> (env overrides, pose source); "truth" drives on info["true_pose"].
 CASES: dict[str, tuple[dict, str]] = {
@@ -246,18 +247,19 @@ def vector_scaling(steps: int, seed: int = 0) -> list[dict]:
     ``SubprocVecEnv`` (each worker a ``spawn`` process), on the rendered and the fast-mode STSF
     pipelines: steps per second of all workers together and the 2-worker speed-up."""
     rows = []
-    for pipeline, (env_id, overrides) in VECTOR_PIPELINES.items():
-        for kind in VECTOR_KINDS:
-            rates = {w: _vector_rate(kind, env_id, overrides, w, steps, seed) for w in (1, 2)}
-            rows.append(
-                {
-                    "pipeline": pipeline,
-                    "vector env": kind,
-                    "steps_per_s_1_worker": rates[1],
-                    "steps_per_s_2_workers": rates[2],
-                    "speed_up": rates[2] / rates[1],
-                }
-            )
+    runs = [(p, k) for p in VECTOR_PIPELINES for k in VECTOR_KINDS]
+    for pipeline, kind in tqdm(runs, desc="vector envs", unit="run"):
+        env_id, overrides = VECTOR_PIPELINES[pipeline]
+        rates = {w: _vector_rate(kind, env_id, overrides, w, steps, seed) for w in (1, 2)}
+        rows.append(
+            {
+                "pipeline": pipeline,
+                "vector env": kind,
+                "steps_per_s_1_worker": rates[1],
+                "steps_per_s_2_workers": rates[2],
+                "speed_up": rates[2] / rates[1],
+            }
+        )
     return rows
 
 
