@@ -156,11 +156,13 @@ def targets(summary: dict) -> list[dict]:
             "lens remap, defocus and sensor on the CPU",
         ),
         (
-            "detection with track-aided matching / ArUco detectMarkers",
-            frame.get("detect", nan) / aruco.get("aruco_ms", nan),
+            "detection with track-aided matching / ArUco detectMarkers, same frames",
+            aruco.get("pipeline_ratio", nan),
             "<=",
             1.0,
-            f"plain detector alone {aruco.get('detector_ms', nan):.2f} ms",
+            f"{aruco.get('pipeline_ms', nan):.2f} ms against ArUco's "
+            f"{aruco.get('aruco_ms', nan):.2f} ms; the plain detector alone "
+            f"{aruco.get('detector_ms', nan):.2f} ms",
         ),
         (
             "g: fast sensor mode + STSF / camera off",
@@ -335,8 +337,10 @@ def to_markdown(summary: dict) -> str:
     if "detector_vs_aruco" in stsf:
         a = stsf["detector_vs_aruco"]
         parts.append(
-            f"Detector {a['detector_ms']:.3f} ms vs ArUco detectMarkers {a['aruco_ms']:.3f} ms "
-            f"per frame on the same {a['frames']} frames: ratio {a['ratio']:.2f}.\n"
+            f"Detector {a['detector_ms']:.3f} ms, STSF's whole detection stage (track-aided "
+            f"matching, undistortion) {a['pipeline_ms']:.3f} ms, ArUco detectMarkers "
+            f"{a['aruco_ms']:.3f} ms per frame on the same {a['frames']} frames: ratios "
+            f"{a['ratio']:.2f} and {a['pipeline_ratio']:.2f}.\n"
         )
     parts.append(
         "## Vector envs, 1 and 2 workers (steps/s of all workers together)\n\n"
