@@ -583,7 +583,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--seconds", type=float, default=60.0, help="simulated seconds per camera case (60)"
     )
     bench.add_argument(
-        "--vector-steps", type=int, default=1000, help="AsyncVectorEnv steps per worker count"
+        "--vector-steps",
+        type=int,
+        default=1000,
+        help="vector-env steps per worker count (AsyncVectorEnv, SubprocVecEnv; rendered, fast)",
     )
     bench.set_defaults(run=_bench)
     return parser

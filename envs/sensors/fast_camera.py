@@ -47,11 +47,14 @@ from stsf_gym.vision.landmarks import square_centres
 PHANTOM_DEPTH = (2.0, 6.0)  # m, range of a false detection's depth
 
 
-def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corners) -> float:
-    """The shorter of a board's mean projected width and height (pixels)."""
-    uv = camera.project(world_from_camera, corners)  # top-left, top-right, bottom-right, ...
-    sides = np.linalg.norm(uv - np.roll(uv, -1, axis=0), axis=1)
-    return float(min(sides[0] + sides[2], sides[1] + sides[3]) / 2)
+def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corners):
+    """The shorter of a board's mean projected width and height (pixels): a float for one
+    board's corners (4, 3), an array (N,) for N boards' (N, 4, 3), projected at once."""
+    corners = np.asarray(corners, float)
+    uv = camera.project(world_from_camera, corners.reshape(-1, 3)).reshape(-1, 4, 2)
+    sides = np.linalg.norm(uv - np.roll(uv, -1, axis=1), axis=2)  # top, right, bottom, left
+    sizes = np.minimum(sides[:, 0] + sides[:, 2], sides[:, 1] + sides[:, 3]) / 2
+    return float(sizes[0]) if corners.ndim == 2 else sizes
 
 
 def detection_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.ndarray:
@@ -123,9 +126,9 @@ class SimulatedDetector:
     ) -> tuple[np.ndarray, np.ndarray]:
         """The boards in view the detector missed that a track-aided search would find."""
         found = []
-        for landmark_id in missed_ids:
+        sizes = self._sizes(world_from_camera, missed_ids)
+        for landmark_id, size in zip(missed_ids, sizes, strict=True):
             landmark = self.landmarks[landmark_id]
-            size = apparent_size_px(self.camera, world_from_camera, landmark.board_corners)
             if rng.random() < aided_probability(size, self.cfg):
                 found.append(
                     (landmark_id, self.camera.project(world_from_camera, landmark.square_centres))
@@ -144,9 +147,9 @@ class SimulatedDetector:
     ) -> tuple[np.ndarray, np.ndarray]:
         """``(landmark_ids, landmark_points)`` of one frame; ``visible_ids`` from ray tests."""
         found = []
-        for landmark_id in visible_ids:
+        sizes = self._sizes(world_from_camera, visible_ids)
+        for landmark_id, size in zip(visible_ids, sizes, strict=True):
             landmark = self.landmarks[landmark_id]
-            size = apparent_size_px(self.camera, world_from_camera, landmark.board_corners)
             if rng.random() < detection_probability(size, self.cfg):
                 found.append(
                     (landmark_id, self.camera.project(world_from_camera, landmark.square_centres))
@@ -154,6 +157,13 @@ class SimulatedDetector:
         for _ in range(rng.poisson(self.cfg.false_detection_rate)):
             found.append(self._phantom(rng))
         return self._slots(found, rng)
+
+    def _sizes(self, world_from_camera: np.ndarray, landmark_ids: list[int]) -> list[float]:
+        """The apparent sizes (pixels) of these landmarks' boards, projected at once."""
+        if not landmark_ids:
+            return []
+        corners = np.array([self.landmarks[i].board_corners for i in landmark_ids])
+        return apparent_size_px(self.camera, world_from_camera, corners).tolist()
 
     def _slots(self, found: list, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """Slots of ``(id, true pixels)`` pairs, the pixels with the detector's noise."""
