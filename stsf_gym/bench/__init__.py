@@ -35,6 +35,7 @@ PROFILED_CASE = "e: camera + detector + STSF"
 
 
 def machine() -> dict:
+    """The machine: CPU model, cores, Python version and the reference workload's time (ms)."""
     cpu = platform.processor() or platform.machine()
     cpuinfo = Path("/proc/cpuinfo")
     if cpuinfo.is_file():
@@ -174,6 +175,7 @@ def recording_checks(recording: dict) -> list[tuple[str, float, str, float]]:
 
 
 def to_markdown(summary: dict) -> str:
+    """``bench.md``: the bench summary as Markdown tables, figures beside their targets."""
     m = summary["machine"]
     speed_rows = [
         {

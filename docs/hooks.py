@@ -1,0 +1,128 @@
+"""MkDocs hooks: the API reference, generated from the package's folders, and the docstring check.
+
+The repository keeps ``envs/`` and ``agents/`` beside ``stsf_gym/`` and maps them into the one
+namespace (``pyproject.toml``, ``package-dir``), which a static reader such as griffe cannot
+follow. the hooks therefore lay the namespace out as it is installed, in symbolic links
+under ``build/api-src/`` (read by mkdocstrings through its ``paths`` option), and add one page per
+package to the navigation: the packages and modules are :func:`stsf_gym.layers.packages`, the
+same that ``python -m stsf_gym.layers --tree`` prints, so a new module or folder is documented
+without an edit here.
+
+:func:`on_pre_build` fails a strict build (a warning) for every public module, class, function
+or method without a docstring. A method that overrides a documented method of a base class in
+the package counts as documented (the base class's docstring is the contract).
+"""
+
+from __future__ import annotations
+
+import logging
+import shutil
+from pathlib import Path
+
+import griffe
+from mkdocs.structure.files import File
+
+from stsf_gym.layers import PACKAGE_DIRS, ROOT, packages
+
+log = logging.getLogger("mkdocs.plugins.stsf_gym")
+STAGE = ROOT / "build" / "api-src"
+REFERENCE = "reference"
+
+
+def stage_namespace(stage: Path = STAGE) -> Path:
+    """``stage/stsf_gym``: the installed layout of the package as links into the checkout."""
+    if stage.exists():
+        shutil.rmtree(stage)
+    for package, folder in PACKAGE_DIRS.items():
+        target = stage.joinpath(*package.split("."))
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if package == "stsf_gym":
+            target.mkdir()
+            for entry in (ROOT / folder).iterdir():
+                if entry.name != "__pycache__":
+                    (target / entry.name).symlink_to(entry)
+        else:
+            target.symlink_to(ROOT / folder, target_is_directory=True)
+    return stage
+
+
+def reference_pages() -> dict[str, str]:
+    """Page path -> Markdown: one page per package, a section per module of its folder."""
+    pages = {}
+    for package, modules in packages(ROOT).items():
+        lines = [f"# `{package}`", ""]
+        for module in modules:
+            name = package if module == "__init__" else f"{package}.{module}"
+            lines += [f"::: {name}", "    options:", "      show_submodules: false", ""]
+        pages[f"{REFERENCE}/{package}.md"] = "\n".join(lines)
+    return pages
+
+
+def on_startup(command, dirty):
+    """Stage the namespace (``paths: [build/api-src]`` in mkdocs.yml) before any plugin reads it."""
+    stage_namespace()
+
+
+def on_config(config):
+    """Add the API reference to the navigation."""
+    nav = [{Path(page).stem: page} for page in reference_pages()]
+    config["nav"].append({"API reference": nav})
+    return config
+
+
+def on_files(files, config):
+    """Add the generated reference pages."""
+    for path, text in reference_pages().items():
+        files.append(File.generated(config, path, content=text))
+    return files
+
+
+def _documented_in_base(method: griffe.Object) -> bool:
+    try:
+        bases = method.parent.mro()
+    except ValueError:  # a base class outside the package
+        return False
+    for base in bases:
+        found = base.members.get(method.name)
+        if found is not None and not found.is_alias and found.has_docstring:
+            return True
+    return False
+
+
+def undocumented(package: griffe.Module) -> list[str]:
+    """Public names of ``package`` (recursively) without a docstring."""
+    missing: list[str] = []
+
+    def public(name: str) -> bool:
+        return not name.startswith("_")
+
+    def visit(module: griffe.Module) -> None:
+        if not module.has_docstring:
+            missing.append(f"module {module.path}")
+        for name, member in module.members.items():
+            if member.is_alias or not (public(name) or member.is_module):
+                continue
+            if member.is_module:
+                visit(member)
+            elif member.is_class:
+                if not member.has_docstring:
+                    missing.append(f"class {member.path}")
+                for method_name, method in member.members.items():
+                    if method.is_alias or not public(method_name) or not method.is_function:
+                        continue
+                    if not method.has_docstring and not _documented_in_base(method):
+                        missing.append(f"method {method.path}")
+            elif member.is_function and not member.has_docstring:
+                missing.append(f"function {member.path}")
+
+    visit(package)
+    return missing
+
+
+def on_pre_build(config):
+    """Warn (a failure under ``--strict``) for every public name without a docstring."""
+    package = griffe.load(
+        "stsf_gym", search_paths=[str(STAGE)], allow_inspection=False, resolve_aliases=True
+    )
+    for name in undocumented(package):
+        log.warning("no docstring: %s", name)
