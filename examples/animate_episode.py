@@ -30,16 +30,14 @@ def frames(seconds: float, every: float, camera: str, seed: int) -> list[np.ndar
     env = gym.make("stsf_gym/Corridor-STSF-v0", render_mode="rgb_array", camera__mode=camera)
     try:
         follower = PathFollower.for_env(env)
-        obs, info = env.reset(seed=seed)
+        obs, _ = env.reset(seed=seed)
         view, dt = env.unwrapped.view, env.unwrapped.dt
         odometry = make_estimator("odometry")
         odometry.reset(sensor_model(env), obs["pose"], np.diag(np.square(START_STD)))
         shown, step_every = [], max(1, round(every / dt))
         for step in range(round(seconds / dt) + 1):
             if step:
-                obs, _, terminated, truncated, info = env.step(
-                    follower.act(obs["pose"], obs["sonar"])
-                )
+                obs, _, terminated, truncated, _ = env.step(follower.act(obs["pose"], obs["sonar"]))
                 mean, cov = odometry.update(obs, dt)
                 view.show_estimate("odometry", mean, cov)
                 if terminated or truncated:

@@ -54,8 +54,8 @@ def test_animation_of_an_episode(tmp_path):
 
 
 def test_animation_frames_show_both_estimates():
-    from stsf_gym.envs.rendering.map_view import ESTIMATE_COLOURS
     from examples.animate_episode import frames
+    from stsf_gym.envs.rendering.map_view import ESTIMATE_COLOURS
 
     last = frames(2.0, 1.0, "fast", seed=0)[-1].astype(int)
     for colour in ESTIMATE_COLOURS[:2]:  # STSF's (the wrapper's) and odometry's
