@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import logging
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import griffe
@@ -27,6 +29,7 @@ from stsf_gym.layers import PACKAGE_DIRS, ROOT, packages
 log = logging.getLogger("mkdocs.plugins.stsf_gym")
 STAGE = ROOT / "build" / "api-src"
 REFERENCE = "reference"
+LAYERS_MARK = "<!-- layers: the output of python -m stsf_gym.layers -->"
 
 
 def stage_namespace(stage: Path = STAGE) -> Path:
@@ -66,7 +69,7 @@ def on_startup(command, dirty):
 def on_config(config):
     """Add the API reference to the navigation."""
     nav = [{Path(page).stem: page} for page in reference_pages()]
-    config["nav"].append({"API reference": nav})
+    config["nav"].append({"API reference": [{"Layout and layers": f"{REFERENCE}/index.md"}, *nav]})
     return config
 
 
@@ -75,6 +78,18 @@ def on_files(files, config):
     for path, text in reference_pages().items():
         files.append(File.generated(config, path, content=text))
     return files
+
+
+def on_page_markdown(markdown, page, config, files):
+    """Put the live output of ``python -m stsf_gym.layers`` where a page asks for it."""
+    if LAYERS_MARK not in markdown:
+        return markdown
+    done = subprocess.run(
+        [sys.executable, "-m", "stsf_gym.layers"], capture_output=True, text=True, cwd=ROOT
+    )
+    if done.returncode != 0:
+        log.warning("python -m stsf_gym.layers failed:\n%s%s", done.stdout, done.stderr)
+    return markdown.replace(LAYERS_MARK, f"```text\n{done.stdout.rstrip()}\n```")
 
 
 def _documented_in_base(method: griffe.Object) -> bool:
