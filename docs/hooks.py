@@ -15,7 +15,9 @@ the package counts as documented (the base class's docstring is the contract).
 
 from __future__ import annotations
 
+import functools
 import logging
+import re
 import shutil
 import subprocess
 import sys
@@ -42,23 +44,65 @@ def stage_namespace(stage: Path = STAGE) -> Path:
         if package == "stsf_gym":
             target.mkdir()
             for entry in (ROOT / folder).iterdir():
-                if entry.name != "__pycache__":
+                if entry.name == "__init__.py":  # a copy: a reader resolving a link to it
+                    shutil.copy(entry, target / entry.name)  # would list stsf_gym/ instead
+                elif entry.name != "__pycache__":
                     (target / entry.name).symlink_to(entry)
         else:
             target.symlink_to(ROOT / folder, target_is_directory=True)
     return stage
 
 
+@functools.cache
+def load_package() -> griffe.Module:
+    """The staged package, read statically (nothing is imported)."""
+    return griffe.load(
+        "stsf_gym",
+        search_paths=[str(STAGE)],
+        try_relative_path=False,
+        allow_inspection=False,
+        resolve_aliases=True,
+    )
+
+
+def defined_here(module: griffe.Module) -> list[str]:
+    """The public names ``module`` defines itself (not those it imports)."""
+    return [
+        name
+        for name, member in module.members.items()
+        if not (member.is_alias or member.is_module or name.startswith("_"))
+    ]
+
+
 def reference_pages() -> dict[str, str]:
-    """Page path -> Markdown: one page per package, a section per module of its folder."""
-    pages = {}
+    """Page path -> Markdown: one page per package, a section per module of its folder. A
+    package's own section shows only what its ``__init__`` defines, not what it re-exports
+    (that is in its module's section)."""
+    root, pages = load_package(), {}
     for package, modules in packages(ROOT).items():
         lines = [f"# `{package}`", ""]
         for module in modules:
             name = package if module == "__init__" else f"{package}.{module}"
-            lines += [f"::: {name}", "    options:", "      show_submodules: false", ""]
+            lines += [f"::: {name}", "    options:", "      show_submodules: false"]
+            if module == "__init__":
+                own = defined_here(
+                    root[name.removeprefix("stsf_gym").lstrip(".")] if name != "stsf_gym" else root
+                )
+                lines.append(f"      members: {own or 'false'}")
+            lines.append("")
         pages[f"{REFERENCE}/{package}.md"] = "\n".join(lines)
     return pages
+
+
+class SphinxRoles(griffe.Extension):
+    """Griffe extension (mkdocs.yml): reST roles in docstrings (``:func:`name```) as code."""
+
+    ROLE = re.compile(r":(?:func|class|meth|mod|attr|data|exc|obj|const):`~?\.?([^`]+)`")
+
+    def on_object(self, *, obj: griffe.Object, **kwargs) -> None:
+        """Rewrite the roles of ``obj``'s docstring."""
+        if obj.docstring is not None:
+            obj.docstring.value = self.ROLE.sub(r"`\1`", obj.docstring.value)
 
 
 def on_startup(command, dirty):
@@ -136,8 +180,5 @@ def undocumented(package: griffe.Module) -> list[str]:
 
 def on_pre_build(config):
     """Warn (a failure under ``--strict``) for every public name without a docstring."""
-    package = griffe.load(
-        "stsf_gym", search_paths=[str(STAGE)], allow_inspection=False, resolve_aliases=True
-    )
-    for name in undocumented(package):
+    for name in undocumented(load_package()):
         log.warning("no docstring: %s", name)

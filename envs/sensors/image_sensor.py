@@ -37,6 +37,7 @@ class ImageSensor:
         self.bank = np.zeros(0, np.float32)
 
     def reset(self, rng: np.random.Generator) -> None:
+        """Draw this episode's bank of noise from ``rng``."""
         if self.noisy:
             self.bank = rng.standard_normal(BANK_FRAMES * self.size, dtype=np.float32)
 
