@@ -65,6 +65,10 @@ class TrainingConfig:
 
 @dataclass(frozen=True)
 class Hyperparams:
+    """An algorithm's hyper-parameters for one env id: the ``default`` section with the id's
+    section merged over it, split into training settings and the algorithm's own arguments.
+    """
+
     algo: str
     section: str  # the env id section merged over ``default`` ("default" if none)
     training: TrainingConfig
@@ -96,6 +100,7 @@ def check_timesteps(hp: Hyperparams, n_envs: int, total: int) -> None:
 
 
 def algorithm_class(algo: str) -> type:
+    """The stable-baselines3 class of ``algo`` (``ppo`` or ``sac``); ConfigError otherwise."""
     if algo not in ALGORITHMS:
         raise ConfigError(f"unknown algorithm {algo!r}; known: {', '.join(ALGORITHMS)}")
     module, _, name = ALGORITHMS[algo].partition(":")

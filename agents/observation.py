@@ -72,12 +72,14 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         self.observation_space = spaces.Box(-FEATURE_LIMIT, FEATURE_LIMIT, (size,), np.float32)
 
     def step(self, action):
+        """Step the env: the policy's flat input, and ``info["is_success"]`` at the end."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         if terminated or truncated:
             info["is_success"] = bool(info["success"])
         return self.observation(obs), reward, terminated, truncated, info
 
     def observation(self, obs: dict) -> np.ndarray:
+        """The policy's input (:attr:`observation_space`) from the wrapped env's observation."""
         world = self.env.unwrapped.config.world
         if world is not self._world:  # a generated world per episode: follow the new path
             self._world, self.path = world, Polyline(world.path)

@@ -114,6 +114,7 @@ def make_vec_env(n_envs: int, out: Path, tag: str, **spec) -> VecEnv:
 
 
 def latest_checkpoint(out: Path) -> tuple[Path, int] | None:
+    """The newest checkpoint in ``out/checkpoints`` and its timesteps, or None."""
     found = [
         (path, int(match.group(1)))
         for path in (out / "checkpoints").glob(f"{PREFIX}_*_steps.zip")

@@ -18,6 +18,7 @@ SMOOTHING = 20  # training episodes in the rolling mean of the curves
 
 
 def append_row(path: Path, header: list[str], row: list) -> None:
+    """Append ``row`` to the CSV file ``path``, writing ``header`` first when the file is new."""
     new = not path.is_file()
     with path.open("a", newline="") as f:
         writer = csv.writer(f)
@@ -87,6 +88,7 @@ class EvalLog(BaseCallback):
 
 
 def last_evaluation(out: Path) -> dict | None:
+    """The last evaluation of the run in ``out`` (timesteps, mean reward, success rate), or None."""
     rows = read_rows(Path(out) / EVAL_CSV)
     if not len(rows):
         return None

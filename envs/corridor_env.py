@@ -321,6 +321,7 @@ class CorridorEnv(gym.Env):
         )
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode; ``options``: ``start_pose`` ``[x, y, yaw]``, checked as the world's."""
         super().reset(seed=seed)
         self.streams = RandomStreams.draw(self.np_random)
         return self._start_episode(options)
@@ -373,6 +374,9 @@ class CorridorEnv(gym.Env):
         return obs, self._info(collision=False)
 
     def step(self, action):
+        """Apply ``action`` (checked: numeric, finite, of the action space's shape; clipped to
+        [-1, 1]) for one control period.
+        """
         raw = np.asarray(action)
         if raw.dtype.kind not in "iuf":
             raise ValueError(f"action must be numeric (int or float), got dtype {raw.dtype}")
@@ -546,6 +550,7 @@ class CorridorEnv(gym.Env):
         return max(CHASE_MIN_DISTANCE, hit[2] * CHASE_DISTANCE - CHASE_WALL_GAP)
 
     def close(self) -> None:
+        """Close the window (``human`` mode) and disconnect the simulation."""
         if self._window is not None:
             self._window.close()
         self.sim.close()

@@ -108,6 +108,9 @@ class GeneratedCorridorEnv(CorridorEnv):
         super().__init__(world=first, config=config, render_mode=render_mode, **overrides)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode in a new generated world: ``seed`` picks world ``seed`` of the split, or
+        ``options["world_seed"]`` (it must lie in the split) a given one.
+        """
         options = dict(options or {})
         world_seed = options.pop("world_seed", None)
         gym.Env.reset(self, seed=seed)

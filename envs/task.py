@@ -96,6 +96,7 @@ class PathTask:
         self.reset()
 
     def reset(self) -> None:
+        """Start an episode: the first goal, no stops declared."""
         self.goal_index = 0
         self.stops: list[Stop] = []
         self._still, self._armed = 0.0, False
@@ -123,6 +124,7 @@ class PathTask:
         return len(self.goals) - self.goal_index
 
     def distance_to_goal(self, xy: np.ndarray) -> float:
+        """Distance (m) from ``xy`` to the current goal."""
         return float(np.linalg.norm(np.asarray(xy)[:2] - self.goal))
 
     def update(self, xy: np.ndarray, v: float, w: float, dt: float, time: float) -> bool:
@@ -156,6 +158,9 @@ class PathTask:
     def reward(
         self, gained: float, dt: float, reached: bool, collided: bool, steering_change: float = 0.0
     ) -> float:
+        """The step's reward: progress ``gained`` (m), time ``dt`` (s), the goal bonus when
+        ``reached``, the collision penalty when ``collided`` and the steering-change penalty.
+        """
         cfg = self.reward_cfg
         return (
             cfg.progress * gained

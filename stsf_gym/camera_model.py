@@ -99,11 +99,13 @@ def pose_matrix(x: float, y: float, z: float, rotation: np.ndarray) -> np.ndarra
 
 
 def rot_z(angle: float) -> np.ndarray:
+    """Rotation matrix (3x3) by ``angle`` (rad) about z."""
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def rot_y(angle: float) -> np.ndarray:
+    """Rotation matrix (3x3) by ``angle`` (rad) about y."""
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 

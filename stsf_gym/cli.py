@@ -435,6 +435,7 @@ def _world_args(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``stsf-gym`` argument parser: one sub-command per entry point, each with its options."""
     from stsf_gym.envs.suite import suite_names
 
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)

@@ -123,9 +123,11 @@ class TruePose(PoseEstimator):
     sensors = ()
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
+        """Start at the true pose with the fixed :data:`TRUTH_STD` covariance."""
         super().reset(model, initial_pose, np.diag(np.square(TRUTH_STD)))
 
     def see(self, true_pose: np.ndarray) -> None:
+        """Take the true pose of the step (from ``info``)."""
         self.mean = np.asarray(true_pose, dtype=float).copy()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -205,6 +207,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         )
 
     def reset(self, *, seed=None, options=None):
+        """Reset the env and start the estimator at the commanded start pose; ``options`` as
+        the env's, plus ``unknown_start`` (an estimator that localizes globally: ``mcl``)."""
         options = dict(options or {})
         unknown_start = bool(options.pop("unknown_start", False))  # the wrapper's, not the env's
         obs, info = self.env.reset(seed=seed, options=options or None)
@@ -245,6 +249,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         spread()
 
     def step(self, action):
+        """Point the camera (pan mount), step the env, update the estimate from the observation."""
         if self.searching_since is not None:
             cov = self.estimator.cov
             narrow = math.sqrt(max(cov[0, 0], cov[1, 1])) < FOUND_STD

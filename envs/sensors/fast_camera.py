@@ -68,6 +68,7 @@ def aided_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.
 
 
 def logistic(size_px: np.ndarray | float, centre: float, width: float) -> np.ndarray:
+    """The logistic function of ``size_px`` with its ``centre`` and ``width`` (px)."""
     z = (np.asarray(size_px, dtype=float) - centre) / width
     return 1.0 / (1.0 + np.exp(-np.clip(z, -50, 50)))
 
@@ -90,6 +91,7 @@ class SimulatedDetector:
         self.aided_rng = np.random.default_rng(0)
 
     def observation_space(self) -> dict[str, spaces.Space]:
+        """The observation keys this mode adds: the detections and the track-aided candidates."""
         span = 2 * max(self.camera.width, self.camera.height)
         ids = spaces.Box(-1, self.pattern.max_id, (self.slots,), np.int64)
         points = spaces.Box(-span, span, (self.slots * self.values_per_slot,), np.float32)
@@ -101,18 +103,23 @@ class SimulatedDetector:
         }
 
     def reset(self, rng: np.random.Generator) -> None:
+        """Start an episode: no detections; the track-aided draws get a stream of their own."""
         self.frame = self.aided = self.empty()
         # its own stream, spawned without a draw from ``rng``: the plain detections stay as
         # they were drawn before track-aided slots existed
         self.aided_rng = np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0])
 
     def capture(self, pose: np.ndarray, rng: np.random.Generator) -> None:
+        """Detect the boards in view from the camera pose ``pose`` (4x4), and the ones the
+        track-aided matcher could find.
+        """
         visible = self.world.landmarks_in_view(self.camera, pose)
         self.frame = self.detect(pose, visible, rng)
         found = set(self.frame[0].tolist())
         self.aided = self.findable(pose, [i for i in visible if i not in found], self.aided_rng)
 
     def observe(self) -> dict[str, np.ndarray]:
+        """The last frame's observation keys."""
         (ids, points), (aided_ids, aided_points) = self.frame, self.aided
         return {
             "landmark_ids": ids.copy(),

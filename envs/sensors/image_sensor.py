@@ -43,6 +43,7 @@ class ImageSensor:
         self._frame = np.empty(shape, np.uint8)
 
     def reset(self, rng: np.random.Generator) -> None:
+        """Draw this episode's bank of noise from ``rng``."""
         if self.noisy:
             self.bank = rng.standard_normal(BANK_FRAMES * self.size, dtype=np.float32)
 

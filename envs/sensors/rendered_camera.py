@@ -62,9 +62,11 @@ class RenderedCamera:
         self._defocused: dict[np.dtype, np.ndarray] = {}
 
     def observation_space(self) -> dict[str, spaces.Space]:
+        """The observation keys this camera adds: ``image``."""
         return {"image": spaces.Box(0, 255, self.blank.shape, np.uint8)}
 
     def reset(self, rng: np.random.Generator) -> None:
+        """Start an episode: the sensor's noise from ``rng``, a blank frame."""
         self.sensor.reset(rng)
         self.frame = self.blank
 
@@ -90,7 +92,9 @@ class RenderedCamera:
         return image
 
     def capture(self, pose: np.ndarray, rng: np.random.Generator) -> None:
+        """Expose a frame from the camera's world pose ``pose`` (4x4): render, lens and sensor."""
         self.frame = self.sensor(self.radiance(pose), rng)
 
     def observe(self) -> dict[str, np.ndarray]:
+        """The last frame's observation keys."""
         return {"image": self.frame.copy()}

@@ -57,6 +57,9 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def plane_to_world(centre, right, up, plane_xy: np.ndarray) -> np.ndarray:
+    """World coordinates of points ``plane_xy`` (..., 2) on the plane through ``centre`` spanned
+    by ``right`` and ``up``.
+    """
     return centre + plane_xy[..., :1] * right + plane_xy[..., 1:2] * up
 
 
@@ -130,6 +133,7 @@ class CorridorWorld:
         return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
 
     def board_visible(self, body: int) -> bool:
+        """Whether the board of body ``body`` is in the world (not removed by a fault)."""
         return body not in self.sim.scene.hidden
 
     def set_board_visible(self, body: int, visible: bool) -> None:

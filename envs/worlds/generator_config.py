@@ -26,6 +26,8 @@ def _ordered(pair: tuple, field: str) -> None:
 
 @dataclass(frozen=True)
 class VisibilityConfig:
+    """When a board counts as seen from a path sample (``visibility:`` of the generator)."""
+
     min_range: Positive
     max_range: Positive
     max_view_deg: Annotated[float, Range(gt=0, lt=90)]
@@ -53,6 +55,8 @@ class VisibilityConfig:
 
 @dataclass(frozen=True)
 class ClutterConfig:
+    """The clutter the generator places (``clutter:``)."""
+
     count: tuple[Annotated[int, Range(ge=0)], Annotated[int, Range(ge=0)]]
     size: tuple[Positive, Positive]
     height: tuple[Positive, Positive]
@@ -66,6 +70,8 @@ class ClutterConfig:
 
 @dataclass(frozen=True)
 class FixedWorldConfig:
+    """What every generated world shares (``world:`` of the generator): walls, goal, boards."""
+
     wall_height: Positive
     wall_thickness: Positive
     goal_radius: Positive
@@ -75,6 +81,8 @@ class FixedWorldConfig:
 
 @dataclass(frozen=True)
 class GeneratorConfig:
+    """The world generator's ranges (``configs/generator/default.yaml``), typed and checked."""
+
     segments: tuple[Count, Count]
     segment_length: tuple[Positive, Positive]
     width: tuple[Positive, Positive]

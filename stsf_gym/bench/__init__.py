@@ -35,6 +35,7 @@ PROFILED_CASE = "e: camera + detector + STSF"
 
 
 def machine() -> dict:
+    """The machine: CPU model, cores, Python version and the reference workload's time (ms)."""
     cpu = platform.processor() or platform.machine()
     cpuinfo = Path("/proc/cpuinfo")
     if cpuinfo.is_file():
@@ -276,6 +277,7 @@ def _load_text(m: dict) -> str:
 
 
 def to_markdown(summary: dict) -> str:
+    """``bench.md``: the bench summary as Markdown tables, figures beside their targets."""
     m = summary["machine"]
     speed_rows = [
         {

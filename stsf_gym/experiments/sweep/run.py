@@ -61,6 +61,8 @@ SECTIONS = {"evaluate": ("env", "options"), "train": ("env", "train")}
 
 @dataclass(frozen=True)
 class Sweep:
+    """A checked sweep file: its name, path, cell kind and every cell of its grid."""
+
     name: str
     path: Path
     kind: str
