@@ -121,6 +121,7 @@ class PathTask:
 
     @property
     def goals_left(self) -> int:
+        """Goals of the route still to declare (0 once every goal is reached)."""
         return len(self.goals) - self.goal_index
 
     def distance_to_goal(self, xy: np.ndarray) -> float:
