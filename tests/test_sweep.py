@@ -211,3 +211,27 @@ def test_an_unknown_suite_in_a_sweep_is_named(tmp_path):
     path.write_text("base: {suite: attic}\ngrid: {estimator: [odometry]}\n")
     with pytest.raises(ConfigError, match=r"bad.yaml: base.suite: unknown suite 'attic'"):
         load_sweep(path)
+
+
+def test_paired_differences_of_a_two_valued_key():
+    from stsf_gym.experiments.sweep.paired import paired_differences
+
+    cells, results = [], []
+    for estimator in ("odometry", "stsf"):
+        for beam in (False, True):
+            for seed in range(6):
+                values = {"estimator": estimator, "env.sonar.beam.enabled": beam, "seed": seed}
+                cells.append({"seed": seed, "values": values})
+                lost = estimator == "odometry" and beam and seed < 4  # the beam model hurts
+                results.append({"outcome": "collision" if lost else "goal"})
+    results[0] = {"error": "RuntimeError: crashed"}  # odometry, beam off, seed 0: unpaired
+    paired = paired_differences(cells, results)
+    beam = {p["others"]["estimator"]: p for p in paired if p["key"] == "env.sonar.beam.enabled"}
+    assert set(beam) == {"odometry", "stsf"}
+    odometry = beam["odometry"]
+    assert odometry["values"] == [False, True]
+    assert odometry["pairs"] == 5 and odometry["difference"] == pytest.approx(-3 / 5)
+    assert odometry["high"] < 0 and odometry["only_second"] == 3
+    assert beam["stsf"]["difference"] == 0.0
+    on = [p for p in paired if p["key"] == "estimator" and p["others"]["env.sonar.beam.enabled"]]
+    assert on[0]["difference"] == pytest.approx(4 / 6)  # stsf - odometry with the beam model

@@ -1,5 +1,8 @@
 """A sweep's summary: ``results.json``, ``results.md`` and ``errors.png``.
 
+Evaluation sweeps also get the paired differences in success of each two-valued swept key
+(:mod:`stsf_gym.experiments.sweep.paired`).
+
 Cells that differ only in their seed form a group; each metric of a group is a
 :func:`stsf_gym.results.stat` over its finished cells (mean, std, count and the per-seed
 values; a rate is the mean of 0/1 values). ``errors.png`` has one panel per swept numeric
@@ -16,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stsf_gym.experiments.sweep.paired import paired_differences
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
 from stsf_gym.results import METRICS, SCHEMA_VERSION, render, stats
 from stsf_gym.results.provenance import by_digest, provenance
@@ -47,17 +51,19 @@ def write_report(sweep: Sweep, results: list[dict], out: Path, configs: dict[str
         "finished": len(results) - len(failed),
         "failed": failed,
         "groups": groups,
+        "paired": paired_differences(sweep.cells, results) if sweep.kind == "evaluate" else [],
         "figures": [FIGURE] if figure else [],
     }
     seeds = (cell["seed"] for cell in sweep.cells)
     summary["provenance"] = provenance(by_digest(configs), seeds)
     write_json(out / "results.json", summary)
-    write_atomic(out / "results.md", markdown(sweep.name, groups, failed))
+    write_atomic(out / "results.md", markdown(sweep.name, groups, failed, summary["paired"]))
     return summary
 
 
-def markdown(name: str, groups: list[dict], failed: list[dict]) -> str:
-    """One row per group: its swept values ("base" where a key keeps the base value)."""
+def markdown(name: str, groups: list[dict], failed: list[dict], paired: list[dict]) -> str:
+    """One row per group: its swept values ("base" where a key keeps the base value); then
+    the paired differences in success of each two-valued swept key."""
     keys = list(dict.fromkeys(key for group in groups for key in group["values"]))
     rows = []
     for group in groups:
@@ -67,6 +73,24 @@ def markdown(name: str, groups: list[dict], failed: list[dict]) -> str:
         rows.append(row)
     columns = list(dict.fromkeys(column for row in rows for column in row))
     text = f"# Sweep: {name}\n\n" + markdown_table(rows, columns)
+    if paired:
+        text += "\n## Paired differences in success (Newcombe 1998, method 10)\n\n"
+        text += markdown_table(
+            [
+                {
+                    "key": f"{_column(p['key'])}: {_value(p['values'][1])} - "
+                    f"{_value(p['values'][0])}",
+                    "other values": ", ".join(
+                        f"{_column(k)} {_value(v)}" for k, v in p["others"].items()
+                    ),
+                    "pairs": p["pairs"],
+                    "difference (95 % CI)": f"{p['difference']:+.3f} ({p['low']:+.3f} to "
+                    f"{p['high']:+.3f})",
+                    "only second / only first": f"{p['only_first']} / {p['only_second']}",
+                }
+                for p in paired
+            ]
+        )
     if failed:
         text += "\n## Failed cells\n\n" + markdown_table(
             [
