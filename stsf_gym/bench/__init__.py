@@ -1,18 +1,22 @@
 """``stsf-gym bench``: the speed figures, each beside its target, in one run.
 
-1. Env speed as a multiple of real time on one core (cases a-g of :mod:`.speed`), with the
-   renderer named and the peak memory of each env process.
+1. Env speed as a multiple of real time on one core (cases a-j of :mod:`.speed`), in wall and
+   in CPU time, each as a ratio to the camera-off case of the run and as simulated seconds per
+   reference workload, with the renderer named and the peak memory of each env process.
 2. Each renderer alone (GL, PyBullet's EGL, TinyRenderer): ms per frame at 320x240 and
-   640x480 on one core.
+   640x480 on one core, and the GL camera's whole frame (render, lens, defocus, sensor).
 3. Latency per camera frame of each stage (camera frame: render, lens and sensor; detection,
    motion stereo + STSF update, EKF update) beside the paper's 0.127 s to detect and 0.332 s
-   to localise, and the detector beside OpenCV's ArUco ``detectMarkers`` on the same frames.
-4. ``AsyncVectorEnv`` throughput of the rendered STSF pipeline with 1 and 2 workers.
+   to localise; the detector and STSF's whole detection stage beside OpenCV's ArUco
+   ``detectMarkers`` on the same frames.
+4. ``AsyncVectorEnv`` and ``SubprocVecEnv`` throughput of the rendered and the fast-mode STSF
+   pipelines with 1 and 2 workers.
 5. Where the time goes: cProfile's top functions over the camera pipeline (case e).
 6. Recording (:mod:`.recording`): what ``--record`` adds to an episode's wall time, the files'
    sizes, and how much faster a replay of a recorded episode runs than the episode itself.
 
-Writes ``bench.json`` and ``bench.md`` to the output folder.
+Writes ``bench.json`` and ``bench.md`` (ending in the targets table: each target measured, met
+or the measured reason, and the load average at the run's start and end) to the output folder.
 """
 
 from __future__ import annotations

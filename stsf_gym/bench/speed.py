@@ -1,7 +1,8 @@
 """Env speed as a multiple of real time, each case in its own process pinned to one core.
 
 The follower drives the IRL corridor (on the true pose, or on the estimate where an estimator
-runs) for a fixed span of simulated time; the figure is simulated seconds per wall second.
+runs) for a fixed span of simulated time; the figures are simulated seconds per wall second and
+per second of the process's CPU time.
 Each case runs in a fresh ``spawn`` process so that its peak memory (``ru_maxrss``) is that of
 one env process and no renderer state leaks between cases. The pipeline cases also report the
 per-frame latency of each stage: camera frame (render, lens, sensor), detection, motion stereo

@@ -14,10 +14,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import gammaincinv
 
 from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.fusion.chi_square import chi_square_quantile
 from stsf_gym.geometry import OdometryCalibration
 from stsf_gym.vision.landmarks import LandmarkPattern
 
@@ -77,7 +77,7 @@ def chi_square_gate(probability: float, dof: int) -> float:
     """The squared Mahalanobis distance that keeps ``probability`` of consistent measurements."""
     if not 0 < probability < 1:
         raise ValueError(f"gate_probability must be in (0, 1), got {probability}")
-    return float(2 * gammaincinv(dof / 2, probability))
+    return chi_square_quantile(probability, dof)
 
 
 class PoseEstimator(ABC):

@@ -35,8 +35,8 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import gammaincinv
 
+from stsf_gym.fusion.chi_square import chi_square_quantile
 from stsf_gym.fusion.covariance import DenseCovariance, TrackCovariance
 from stsf_gym.geometry import wrap_angle
 
@@ -77,7 +77,7 @@ def _prepare(
 def _significance(offsets: Array, marginals: Array, gate: float | None) -> Array:
     m = offsets.shape[1]
     if gate is None:
-        gate = 2.0 * gammaincinv(0.5 * m, 0.99)  # chi-square quantile
+        gate = chi_square_quantile(0.99, m)
     pair = marginals + marginals[-1]
     d2 = np.einsum("ja,ja->j", offsets, np.linalg.solve(pair, offsets[..., None])[..., 0])
     _, logdet = np.linalg.slogdet(marginals)
