@@ -28,7 +28,7 @@ def paired_differences(cells: list[dict], results: list[dict]) -> list[dict]:
             continue
         pairs: dict[str, dict] = {}
         for cell, result in zip(cells, results, strict=True):
-            if "error" in result:
+            if "outcome" not in result:  # failed (or a cell kind without episodes)
                 continue
             others = {k: v for k, v in cell["values"].items() if k not in (key, "seed")}
             slot = pairs.setdefault(json.dumps(others, sort_keys=True), {"others": others})
