@@ -12,7 +12,7 @@ TORCH_INDEX ?=
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-rllib lint bench clean
+.PHONY: demo test test-rllib lint bench docs clean
 
 define CUDA_CHECK
 import importlib.metadata as md, sys, torch
@@ -47,6 +47,16 @@ test-rllib:
 	$(MAKE) VENV=.venv-rllib EXTRAS=dev,rllib .venv-rllib/.installed
 	.venv-rllib/bin/python -m pytest -q tests/test_rllib.py
 
+# The documentation site (mkdocs.yml): strict, so a broken link, a page missing from the
+# navigation or a public name without a docstring fails. Installs the docs extra once.
+DOCS_STAMP := $(VENV)/.docs-installed
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[$(EXTRAS),docs]'
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
@@ -54,4 +64,4 @@ bench: $(STAMP)
 	$(BIN)/stsf-gym bench
 
 clean:
-	rm -rf $(VENV) .venv-rllib out runs
+	rm -rf $(VENV) .venv-rllib out runs site build/api-src

@@ -24,6 +24,8 @@ class ArrivalConfig:
 
 @dataclass(frozen=True)
 class FollowerConfig:
+    """The path follower's settings (``configs/agents/follower.yaml``)."""
+
     speed: float
     lookahead: float
     max_yaw_rate: float

@@ -65,6 +65,10 @@ class TrainingConfig:
 
 @dataclass(frozen=True)
 class Hyperparams:
+    """An algorithm's hyper-parameters for one env id: the ``default`` section with the id's
+    section merged over it, split into training settings and the algorithm's own arguments.
+    """
+
     algo: str
     section: str  # the env id section merged over ``default`` ("default" if none)
     training: TrainingConfig
@@ -91,11 +95,12 @@ def check_timesteps(hp: Hyperparams, n_envs: int, total: int) -> None:
         below, above = total // size * size, (total // size + 1) * size
         raise ConfigError(
             f"timesteps {total} is not a multiple of {what} = {size}: the run would end at "
-            f"{above}; ask for {below or above} or {above}"
+            f"{above}; ask for {f'{below} or ' if below else ''}{above}"
         )
 
 
 def algorithm_class(algo: str) -> type:
+    """The stable-baselines3 class of ``algo`` (``ppo`` or ``sac``); ConfigError otherwise."""
     if algo not in ALGORITHMS:
         raise ConfigError(f"unknown algorithm {algo!r}; known: {', '.join(ALGORITHMS)}")
     module, _, name = ALGORITHMS[algo].partition(":")

@@ -42,6 +42,9 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     - ``2 K`` lookahead points: ``(x, y)`` of the path points ``lookahead`` metres ahead of the
       path point nearest the estimated pose, in the estimated robot frame, over ``scale``;
     - the path length left to the goal, over the whole path length;
+    - the current goal of the route (the task's, ``declare``: where to stop next) in the
+      estimated robot frame, over ``scale`` (Habitat's GPS+compass goal vector, from the
+      estimate), and the share of the route's goals still to declare;
     - ``sin`` and ``cos`` of the heading error (path direction minus estimated yaw);
     - ``log10`` of the standard deviations of the estimate along and across the robot's
       heading and of its yaw (each clipped to 1 mm..10 m or rad), over 3;
@@ -65,16 +68,18 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         self.ticks_at_top_speed = (
             top_wheel_speed * env.unwrapped.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
         )
-        size = 2 * len(self.config.lookahead) + 6 + cfg.sonar.count + 2
+        size = 2 * len(self.config.lookahead) + 9 + cfg.sonar.count + 2
         self.observation_space = spaces.Box(-FEATURE_LIMIT, FEATURE_LIMIT, (size,), np.float32)
 
     def step(self, action):
+        """Step the env: the policy's flat input, and ``info["is_success"]`` at the end."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         if terminated or truncated:
             info["is_success"] = bool(info["success"])
         return self.observation(obs), reward, terminated, truncated, info
 
     def observation(self, obs: dict) -> np.ndarray:
+        """The policy's input (:attr:`observation_space`) from the wrapped env's observation."""
         world = self.env.unwrapped.config.world
         if world is not self._world:  # a generated world per episode: follow the new path
             self._world, self.path = world, Polyline(world.path)
@@ -91,10 +96,14 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         position_var = np.diag(to_robot @ cov[:2, :2] @ to_robot.T)
         stds = np.sqrt(np.maximum([*position_var, cov[2, 2]], 0.0))
         low, high = self.sonar_range
+        task = self.env.unwrapped.task
+        goal = (task.goal - (x, y)) @ to_robot.T / self.config.scale
         features = np.concatenate(
             [
                 points.ravel(),
                 [(self.path.length - here) / self.path.length],
+                goal,
+                [task.goals_left / len(task.goals)],
                 [math.sin(heading_error), math.cos(heading_error)],
                 np.log10(np.clip(stds, STD_FLOOR, STD_CEIL)) / 3.0,
                 (np.asarray(obs["sonar"], dtype=float) - low) / (high - low),

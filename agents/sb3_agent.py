@@ -24,6 +24,7 @@ META_KEY = "stsf_meta"
 
 
 def check_model_file(path: str | Path) -> Path:
+    """``path`` as a Path if it is a file; ConfigError naming it otherwise."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"agent model not found: {path} (train one with `stsf-gym train`)")

@@ -12,6 +12,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class AvoidanceConfig:
+    """The follower's sonar avoidance (``avoidance:`` in ``configs/agents/follower.yaml``)."""
+
     enabled: bool
     margin: float  # m added to the body radius: half-width of the lane a heading must keep free
     horizon: float  # m of free lane that makes a heading clear

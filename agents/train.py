@@ -4,7 +4,9 @@ The agent runs in the same env as every evaluated agent (``make_episode_env``: t
 pointed by :class:`PoseEstimateWrapper`), with :class:`PolicyObservation` on top and
 ``Monitor`` outside. ``OUT`` receives ``checkpoints/``, ``tb/`` (TensorBoard), ``monitor/``,
 ``eval/`` and ``best/`` (the best evaluated model), ``episodes.csv``, ``eval.csv``,
-``learning_curve.png``, ``model.zip`` and ``train.json``. Rerunning with the same ``OUT``
+``learning_curve.png``, ``model.zip`` and ``train.json``. With ``suite`` the agent trains on a
+benchmark suite's train worlds under its task and is evaluated (best model chosen) on the
+suite's ``val`` worlds, never on the benchmark's ``test`` ones. Rerunning with the same ``OUT``
 continues from the newest checkpoint (PPO checkpoints after every update, SAC every
 ``checkpoint_freq`` steps and on Ctrl-C) and ends at exactly the timesteps asked for, which must
 be a whole number of updates (:func:`~stsf_gym.agents.hyperparams.check_timesteps`). A
@@ -51,23 +53,36 @@ from stsf_gym.agents.training_log import (
     plot_learning_curve,
 )
 from stsf_gym.envs.config import ConfigError
-from stsf_gym.envs.generated_env import parse_world
+from stsf_gym.envs.generated_env import generated_label, parse_world
+from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results.provenance import fingerprint, provenance
 from stsf_gym.wrappers import check_pose_source
+from stsf_gym.yaml_layers import deep_merge, overrides_to_tree
 
 PREFIX = "model"  # checkpoints are checkpoints/model_<timesteps>_steps.zip
 EVAL_SEED_OFFSET = 10_000  # the evaluation env's seed is the training seed plus this
 
 
-def env_id_for(world: str, estimator: str) -> str | None:
-    """The registered id of ``world`` driven on ``estimator`` (None if not registered)."""
+def env_id_for(world: str, estimator: str, suite: str | None = None) -> str | None:
+    """The registered id of ``world`` (or of ``suite``) driven on ``estimator`` (None if not
+    registered)."""
     base = next((i for i, w in stsf_gym.ENV_WORLDS.items() if w == world), None)
     if parse_world(world) is not None:
-        base = stsf_gym.GENERATED_ID
+        base = stsf_gym.suite_id(suite) if suite else stsf_gym.GENERATED_ID
     suffix = next((s for s, e in stsf_gym.ESTIMATOR_IDS.items() if e == estimator), None)
     return base.replace("-v0", f"-{suffix}-v0") if base and suffix else None
+
+
+def check_training_env(world: str, estimator: str, env: dict, seed: int) -> None:
+    """Make and reset the first training env here, so a setting only an env can check (a start
+    range wider than the corridor, say) fails before any file is written or worker started."""
+    probe = make_episode_env(world, estimator, env, {})
+    try:
+        probe.reset(seed=seed)
+    finally:
+        probe.close()
 
 
 def make_training_env(
@@ -99,6 +114,7 @@ def make_vec_env(n_envs: int, out: Path, tag: str, **spec) -> VecEnv:
 
 
 def latest_checkpoint(out: Path) -> tuple[Path, int] | None:
+    """The newest checkpoint in ``out/checkpoints`` and its timesteps, or None."""
     found = [
         (path, int(match.group(1)))
         for path in (out / "checkpoints").glob(f"{PREFIX}_*_steps.zip")
@@ -183,7 +199,7 @@ def _resume(cls: type, out: Path, meta: dict, env: VecEnv):
         return None
     path, steps = found
     saved = model_metadata(path)
-    for key in ("algo", "estimator", "world"):
+    for key in ("algo", "estimator", "world", "suite"):
         if saved.get(key) != meta[key]:
             raise ConfigError(
                 f"{out} holds a run with {key} {saved.get(key)!r}, not {meta[key]!r}; "
@@ -219,6 +235,12 @@ def _set_aside(out: Path) -> Path:
     return target
 
 
+def evaluation_world(world: str) -> str:
+    """Where training evaluates: generated worlds on the ``val`` split (held out from training
+    and from the benchmark's ``test``), a fixed world on itself with other seeds."""
+    return generated_label("val") if parse_world(world) is not None else world
+
+
 def train(
     algo: str,
     estimator: str,
@@ -230,27 +252,41 @@ def train(
     overrides: dict | None = None,
     n_envs: int | None = None,
     progress_bar: bool = True,
+    suite: str | None = None,
 ) -> dict:
-    """Train (or continue training) until ``timesteps``; return the summary in train.json."""
+    """Train (or continue training) until ``timesteps``; return the summary in train.json.
+    With ``suite`` the agent trains on the suite's train worlds under its task (its settings
+    over the hyper-parameter file's ``env``) and is evaluated on its ``val`` worlds."""
     import torch
 
     check_pose_source(estimator)
-    hp = load_hyperparams(algo, env_id_for(world, estimator), config, overrides)
+    if suite is not None:
+        world = generated_label("train")
+    hp = load_hyperparams(algo, env_id_for(world, estimator, suite), config, overrides)
     cfg = hp.training
+    env_settings = cfg.env
+    if suite is not None:  # the suite over the file's env, the command line's over both
+        on_command_line = overrides_to_tree(overrides or {}).get("env", {})
+        env_settings = deep_merge(
+            deep_merge(cfg.env, load_suite(suite).episode_env), on_command_line
+        )
     n_envs = cfg.n_envs if n_envs is None else n_envs
     total = cfg.n_timesteps if timesteps is None else timesteps
     if n_envs < 1 or total < 1:
         raise ConfigError(f"--n-envs and --timesteps must be at least 1, got {n_envs}, {total}")
     check_timesteps(hp, n_envs, total)
     torch.set_num_threads(1)
+    check_training_env(world, estimator, env_settings, seed)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     observation = asdict(observation_config(cfg.observation))
-    spec = {"world": world, "estimator": estimator, "env": cfg.env, "observation": observation}
+    spec = {"world": world, "estimator": estimator, "env": env_settings, "observation": observation}
     training = {k: v for k, v in asdict(cfg).items() if k not in ("env", "observation")}
     hyperparams = {"section": hp.section, **training, **hp.algo_kwargs, "n_envs": n_envs}
     resolved = {
-        **resolved_config(world, estimator, cfg.env),
+        **resolved_config(world, estimator, env_settings),
+        "suite": suite,
+        "evaluation_world": evaluation_world(world),
         "algo": algo,
         "hyperparams": hyperparams,
         "observation": observation,
@@ -258,6 +294,8 @@ def train(
     meta = {
         "algo": algo,
         "seed": seed,
+        "suite": suite,
+        "evaluation_world": evaluation_world(world),
         **spec,
         "hyperparams": hyperparams,
         "wall_time_s": 0.0,
@@ -266,7 +304,7 @@ def train(
     }
     cls = algorithm_class(algo)
     train_env = make_vec_env(n_envs, out, "train", **spec)
-    eval_env = make_vec_env(1, out, "eval", **spec)
+    eval_env = make_vec_env(1, out, "eval", **{**spec, "world": evaluation_world(world)})
     eval_env.seed(seed + EVAL_SEED_OFFSET)
     try:
         model = _resume(cls, out, meta, train_env)

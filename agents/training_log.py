@@ -18,6 +18,7 @@ SMOOTHING = 20  # training episodes in the rolling mean of the curves
 
 
 def append_row(path: Path, header: list[str], row: list) -> None:
+    """Append ``row`` to the CSV file ``path``, writing ``header`` first when the file is new."""
     new = not path.is_file()
     with path.open("a", newline="") as f:
         writer = csv.writer(f)
@@ -87,6 +88,7 @@ class EvalLog(BaseCallback):
 
 
 def last_evaluation(out: Path) -> dict | None:
+    """The last evaluation of the run in ``out`` (timesteps, mean reward, success rate), or None."""
     rows = read_rows(Path(out) / EVAL_CSV)
     if not len(rows):
         return None
@@ -123,7 +125,8 @@ def plot_learning_curve(out: Path, title: str) -> Path:
     ax_s.set(xlabel="timesteps", ylabel="success rate", ylim=(-0.05, 1.05), title="goal reached")
     for ax in (ax_r, ax_s):
         ax.grid(alpha=0.3)
-        ax.legend()
+        if ax.lines:  # nothing finished yet: no legend
+            ax.legend()
     try:
         return save_figure(fig, out / "learning_curve.png")
     finally:

@@ -59,6 +59,8 @@ __all__ = [  # re-exported: the config API lives here
 
 @dataclass(frozen=True)
 class LandmarkSpec:
+    """One landmark board of a world: its id, where it hangs on a wall and which way it faces."""
+
     id: Annotated[int, Range(ge=0)]
     at: tuple[float, float]  # a point on the wall centre line the landmark hangs on (m)
     facing_deg: Degrees  # world yaw of the landmark's outward normal
@@ -66,6 +68,8 @@ class LandmarkSpec:
 
 @dataclass(frozen=True)
 class ObstacleSpec:
+    """One clutter obstacle: a box or a cylinder standing on the floor."""
+
     shape: Literal["box", "cylinder"]
     position: tuple[float, float]
     size: tuple[Positive, ...]  # box: (length, width, height) / cylinder: (radius, height)
@@ -74,6 +78,10 @@ class ObstacleSpec:
 
 @dataclass(frozen=True)
 class WorldConfig:
+    """A world (``configs/worlds/*.yaml`` or a generated one): walls, path, start, goal and
+    landmarks, checked by :mod:`stsf_gym.envs.worlds.checks`.
+    """
+
     name: str
     walls: tuple[tuple[float, float, float, float], ...]  # centre-line segments x1, y1, x2, y2
     wall_height: Positive
@@ -106,6 +114,8 @@ class WorldConfig:
 
 @dataclass(frozen=True)
 class SimConfig:
+    """The simulation's rates and episode limit (``sim:``)."""
+
     physics_hz: Positive
     control_dt: Positive
     max_episode_seconds: Positive
@@ -127,6 +137,8 @@ class SimConfig:
 
 @dataclass(frozen=True)
 class RobotConfig:
+    """The robot's body, wheels, drive limits and camera mount (``robot:``)."""
+
     wheel_radius: Positive
     wheelbase: Positive
     body_radius: Positive
@@ -219,6 +231,8 @@ class LatencyConfig:
 
 @dataclass(frozen=True)
 class CameraConfig:
+    """The camera (``camera:``): image, rate, mount control, sensor mode, profile, latency."""
+
     enabled: bool
     width: Pixels
     height: Pixels
@@ -266,6 +280,8 @@ class SonarBeamConfig:
 
 @dataclass(frozen=True)
 class SonarConfig:
+    """The sonar ring (``sonar:``): transducers, cones, ranges, noise and firing order."""
+
     count: Count
     beam_width_deg: Annotated[float, Range(gt=0, le=360)]
     rays_per_beam: Count
@@ -300,6 +316,8 @@ class SonarConfig:
 
 @dataclass(frozen=True)
 class EncoderConfig:
+    """The wheel encoders (``encoders:``): resolution, calibration errors and slip."""
+
     ticks_per_rev: Count
     radius_error_std: Annotated[float, Range(ge=0, lt=1)]  # relative
     wheelbase_error_std: Annotated[float, Range(ge=0, lt=1)]  # relative
@@ -308,6 +326,8 @@ class EncoderConfig:
 
 @dataclass(frozen=True)
 class RewardConfig:
+    """The reward's terms (``reward:``)."""
+
     progress: float
     goal: float
     collision: float
@@ -318,17 +338,23 @@ class RewardConfig:
 @dataclass(frozen=True)
 class TaskConfig:
     """When an episode succeeds (:mod:`stsf_gym.envs.task`): ``reach`` (the paper's protocol) or
-    ``declare`` (the agent stops to declare arrival at each goal of the route)."""
+    ``declare`` (the agent stops to declare arrival at each goal of the route); and where it
+    starts (:mod:`stsf_gym.envs.start_pose`: the world's ``start`` when every ``start_*`` is 0)."""
 
     protocol: Literal["reach", "declare"]
     goal_radius: Positive  # declare: success radius around each goal at the declared stop (m)
     stop_speed: Positive  # declare: a commanded |forward speed| below this (m/s) ...
     stop_yaw_rate: Positive  # ... and |yaw rate| below this (rad/s) is standing still
     stop_seconds: Positive  # declare: standing still this long declares arrival
+    start_along: NonNegative  # m: the start drawn uniformly this far along the path (0: fixed)
+    start_lateral: NonNegative  # m: ... and uniformly within +- this across it
+    start_yaw_deg: Annotated[float, Range(ge=0, le=180)]  # deg: heading +- this off the path's
 
 
 @dataclass(frozen=True)
 class RenderConfig:
+    """What ``render()`` shows (``render:``): the view and its size."""
+
     view: Literal["map", "chase", "top"]
     width: Pixels
     height: Pixels
@@ -336,6 +362,8 @@ class RenderConfig:
 
 @dataclass(frozen=True)
 class EnvConfig:
+    """An env's whole configuration: every section of ``configs/default.yaml``, the world."""
+
     world: WorldConfig
     sim: SimConfig
     robot: RobotConfig

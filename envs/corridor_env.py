@@ -26,6 +26,7 @@ from stsf_gym.envs.sensors.rendered_camera import RenderedCamera
 from stsf_gym.envs.sensors.sonar import SonarRing
 from stsf_gym.envs.sensors.sonar_firing import FiringSchedule
 from stsf_gym.envs.simulator import Simulator
+from stsf_gym.envs.start_pose import draw_start_pose
 from stsf_gym.envs.task import PathTask
 from stsf_gym.envs.worlds.checks import check_start_pose
 from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
@@ -85,8 +86,9 @@ class CorridorEnv(gym.Env):
       step's end).
 
     ## Reward
-    ``reward.progress`` per metre gained along the path, ``reward.time`` per second,
-    ``reward.goal`` on reaching the goal, ``reward.collision`` on a collision, and
+    ``reward.progress`` per metre gained along the path (``declare``: up to the current goal;
+    past it nothing), ``reward.time`` per second, ``reward.goal`` on reaching each goal,
+    ``reward.collision`` on a collision, and
     ``reward.steering_change`` (<= 0, default 0) per unit change of the yaw command ``action[1]``.
 
     ## Episode end (``task.protocol``, :class:`stsf_gym.envs.task.PathTask`)
@@ -142,7 +144,10 @@ class CorridorEnv(gym.Env):
       (a rendered view of the whole world from above).
     - ``**overrides``: single values, e.g. ``camera__width=640`` or ``camera={"rate_hz": 10}``.
 
-    ``reset(seed=..., options={"start_pose": [x, y, yaw]})`` places the robot elsewhere.
+    ``reset(seed=..., options={"start_pose": [x, y, yaw]})`` places the robot elsewhere; with
+    ``task.start_along``, ``start_lateral`` or ``start_yaw_deg`` above 0 each episode's start is
+    drawn near the path's beginning (:mod:`stsf_gym.envs.start_pose`). ``start_pose`` holds the
+    episode's start.
     """
 
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
@@ -229,6 +234,7 @@ class CorridorEnv(gym.Env):
         )
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
         self.robot.reset(world.start, *self._mount_target)
+        self.start_pose = np.asarray(world.start, dtype=float)  # each reset sets the episode's
         # Saved after the wheels settled on the floor: the state then holds the contacts too,
         # so each reset starts the solver alike whatever the previous episode did.
         self.sim.step(SETTLE_STEPS)
@@ -315,6 +321,7 @@ class CorridorEnv(gym.Env):
         )
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode; ``options``: ``start_pose`` ``[x, y, yaw]``, checked as the world's."""
         super().reset(seed=seed)
         self.streams = RandomStreams.draw(self.np_random)
         return self._start_episode(options)
@@ -322,12 +329,14 @@ class CorridorEnv(gym.Env):
     def _start_episode(self, options: dict | None):
         """Everything of :meth:`reset` after the seed and the episode's :attr:`streams`."""
         options = dict(options or {})
-        start = options.pop("start_pose", self.config.world.start)
+        start = options.pop("start_pose", None)
         if options:
             raise ValueError(f"unknown reset option(s) {sorted(options)}; known: ['start_pose']")
-        start = check_start_pose(
-            self.config.world, start, self.config.robot.body_radius, "start_pose"
-        )
+        cfg = self.config
+        if start is None:
+            start = draw_start_pose(cfg.world, cfg.task, cfg.robot.body_radius, self.streams.start)
+        start = check_start_pose(cfg.world, start, cfg.robot.body_radius, "start_pose")
+        self.start_pose = start  # where the robot was put: the estimators start here
         self.sim.client.restoreState(self._initial_state)
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
         self.robot.reset(tuple(start), *self._mount_target)
@@ -365,6 +374,9 @@ class CorridorEnv(gym.Env):
         return obs, self._info(collision=False)
 
     def step(self, action):
+        """Apply ``action`` (checked: numeric, finite, of the action space's shape; clipped to
+        [-1, 1]) for one control period.
+        """
         raw = np.asarray(action)
         if raw.dtype.kind not in "iuf":
             raise ValueError(f"action must be numeric (int or float), got dtype {raw.dtype}")
@@ -538,6 +550,7 @@ class CorridorEnv(gym.Env):
         return max(CHASE_MIN_DISTANCE, hit[2] * CHASE_DISTANCE - CHASE_WALL_GAP)
 
     def close(self) -> None:
+        """Close the window (``human`` mode) and disconnect the simulation."""
         if self._window is not None:
             self._window.close()
         self.sim.close()

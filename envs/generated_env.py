@@ -1,8 +1,9 @@
 """``stsf_gym/Generated-v0``: the corridor env on a new generated world every episode.
 
-World seeds come in two disjoint splits (``configs/generator/default.yaml``, ``splits``):
-``train`` is world seeds 0 to 999,999 and ``test`` 1,000,000 to 1,009,999. An agent trained on
-``split="train"`` never sees a test world.
+World seeds come in three disjoint splits (``configs/generator/default.yaml``, ``splits``):
+``train`` is world seeds 0 to 999,999, ``test`` 1,000,000 to 1,009,999 (the benchmark's) and
+``val`` 2,000,000 to 2,009,999 (where training evaluates and selects its best model). An agent
+trained on ``split="train"`` never sees a test world, and none is used to choose it.
 """
 
 from __future__ import annotations
@@ -29,7 +30,9 @@ def parse_world(world) -> str | None:
     if name != GENERATED:
         return None
     if not split:
-        raise ValueError("world 'generated' needs a split: generated:train or generated:test")
+        raise ValueError(
+            "world 'generated' needs a split: generated:train, generated:val or generated:test"
+        )
     return split
 
 
@@ -82,7 +85,7 @@ class GeneratedCorridorEnv(CorridorEnv):
     simulator only when it changes (:meth:`CorridorEnv._build_world`).
 
     Args:
-        split: ``"train"`` or ``"test"``: which world seeds are drawn.
+        split: ``"train"``, ``"val"`` or ``"test"``: which world seeds are drawn.
         generator: generator YAML path or mapping over ``configs/generator/default.yaml``.
         config, render_mode, **overrides: as for :class:`CorridorEnv` (no ``world``).
     """
@@ -105,6 +108,9 @@ class GeneratedCorridorEnv(CorridorEnv):
         super().__init__(world=first, config=config, render_mode=render_mode, **overrides)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode in a new generated world: ``seed`` picks world ``seed`` of the split, or
+        ``options["world_seed"]`` (it must lie in the split) a given one.
+        """
         options = dict(options or {})
         world_seed = options.pop("world_seed", None)
         gym.Env.reset(self, seed=seed)

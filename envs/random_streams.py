@@ -27,6 +27,7 @@ class RandomStreams:
     faults: np.random.Generator  # injected faults' random parts
     world: np.random.Generator  # generated worlds drawn without a seed
     timing: np.random.Generator  # camera latency jitter
+    start: np.random.Generator  # the start pose drawn from task.start_* (envs/start_pose.py)
 
     @classmethod
     def from_seed(cls, seed: int) -> RandomStreams:

@@ -244,6 +244,7 @@ class DiffDriveRobot:
         return np.array([position[0], position[1], c.getEulerFromQuaternion(orientation)[2]])
 
     def wheel_angles(self) -> np.ndarray:
+        """The wheels' joint angles (rad), [left, right]."""
         states = self.sim.client.getJointStates(self.body, self.wheels)
         return np.array([s[0] for s in states])
 

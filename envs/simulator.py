@@ -220,6 +220,7 @@ class Simulator:
         self._hidden_from.clear()
 
     def step(self, substeps: int) -> None:
+        """Advance the physics by ``substeps`` steps."""
         for _ in range(substeps):
             self.client.stepSimulation()
 

@@ -28,6 +28,10 @@ def suite_names() -> list[str]:
 
 @dataclass(frozen=True)
 class Suite:
+    """A benchmark suite (``configs/suites/<name>.yaml``): generator and env settings over the
+    defaults.
+    """
+
     name: str
     generator: dict  # over configs/generator/default.yaml
     env: dict  # over configs/default.yaml
@@ -39,6 +43,7 @@ class Suite:
         return {**self.env, "generator": self.generator}
 
     def generator_config(self) -> GeneratorConfig:
+        """The suite's generator settings, checked."""
         return load_generator_config(self.generator)
 
 

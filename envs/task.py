@@ -37,9 +37,18 @@ class Polyline:
 
     def point_at(self, s: float) -> np.ndarray:
         """Path point at arc length ``s`` (clamped to the ends)."""
+        s, i = self._segment(s)
+        return self.points[i] + (s - self.offsets[i]) / self.lengths[i] * self.segments[i]
+
+    def heading_at(self, s: float) -> float:
+        """Direction (rad) of the path's segment at arc length ``s``."""
+        dx, dy = self.segments[self._segment(s)[1]]
+        return float(np.arctan2(dy, dx))
+
+    def _segment(self, s: float) -> tuple[float, int]:
         s = float(np.clip(s, 0.0, self.length))
         i = min(int(np.searchsorted(self.offsets, s, side="right")) - 1, len(self.lengths) - 1)
-        return self.points[i] + (s - self.offsets[i]) / self.lengths[i] * self.segments[i]
+        return s, i
 
 
 @dataclass(frozen=True)
@@ -56,7 +65,8 @@ class Stop:
 class PathTask:
     """Progress, reward and the episode's end under ``task.protocol``.
 
-    Progress is the arc length of the path point nearest the robot. Reward per step:
+    Progress is the arc length of the path point nearest the robot (under ``declare`` no further
+    than the current goal's, so driving past a goal earns nothing). Reward per step:
     ``progress * (metres gained) + time * dt``, plus ``goal`` on each goal reached and
     ``collision`` on touching a wall or obstacle.
 
@@ -81,10 +91,12 @@ class PathTask:
         self.cfg = task
         self.goals = np.asarray(world.goals if task.protocol == "declare" else world.path[-1:])
         self.goal_radius = task.goal_radius if task.protocol == "declare" else world.goal_radius
+        self.goal_arcs = [self.path.project(goal) for goal in self.goals]
         self.reward_cfg = reward
         self.reset()
 
     def reset(self) -> None:
+        """Start an episode: the first goal, no stops declared."""
         self.goal_index = 0
         self.stops: list[Stop] = []
         self._still, self._armed = 0.0, False
@@ -100,10 +112,20 @@ class PathTask:
         return self.goal_index >= len(self.goals)
 
     def progress(self, xy: np.ndarray) -> float:
-        """Arc length (m) of the path point nearest ``xy``."""
-        return self.path.project(xy)
+        """Arc length (m) of the path point nearest ``xy`` (``declare``: at most the current
+        goal's)."""
+        s = self.path.project(xy)
+        if self.protocol == "declare":
+            return min(s, self.goal_arcs[min(self.goal_index, len(self.goals) - 1)])
+        return s
+
+    @property
+    def goals_left(self) -> int:
+        """Goals of the route still to declare (0 once every goal is reached)."""
+        return len(self.goals) - self.goal_index
 
     def distance_to_goal(self, xy: np.ndarray) -> float:
+        """Distance (m) from ``xy`` to the current goal."""
         return float(np.linalg.norm(np.asarray(xy)[:2] - self.goal))
 
     def update(self, xy: np.ndarray, v: float, w: float, dt: float, time: float) -> bool:
@@ -137,6 +159,9 @@ class PathTask:
     def reward(
         self, gained: float, dt: float, reached: bool, collided: bool, steering_change: float = 0.0
     ) -> float:
+        """The step's reward: progress ``gained`` (m), time ``dt`` (s), the goal bonus when
+        ``reached``, the collision penalty when ``collided`` and the steering-change penalty.
+        """
         cfg = self.reward_cfg
         return (
             cfg.progress * gained

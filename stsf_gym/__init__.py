@@ -38,7 +38,8 @@ ESTIMATOR_IDS: dict[str, str] = {
 }
 
 
-#: The id of generated worlds (``split="train" | "test"``, ``reset(options={"world_seed": k})``).
+#: The id of generated worlds (``split="train" | "val" | "test"``,
+#: ``reset(options={"world_seed": k})``).
 GENERATED_ID = "stsf_gym/Generated-v0"
 
 

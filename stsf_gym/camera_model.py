@@ -42,13 +42,14 @@ def undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
     ``cv2.undistortPoints``, run to convergence for the distortions a lens has."""
     k1, k2, p1, p2, k3 = dist
     xy = np.array(xy_d, dtype=float)
+    x_d, y_d = xy[..., 0].copy(), xy[..., 1].copy()
+    x, y = xy[..., 0], xy[..., 1]  # views: each iteration writes the new estimate in place
     for _ in range(UNDISTORT_ITERATIONS):
-        x, y = xy[..., 0], xy[..., 1]
         r2 = x * x + y * y
         radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
         dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
         dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
-        xy = np.stack([(xy_d[..., 0] - dx) / radial, (xy_d[..., 1] - dy) / radial], axis=-1)
+        x[...], y[...] = (x_d - dx) / radial, (y_d - dy) / radial
     return xy
 
 
@@ -98,11 +99,13 @@ def pose_matrix(x: float, y: float, z: float, rotation: np.ndarray) -> np.ndarra
 
 
 def rot_z(angle: float) -> np.ndarray:
+    """Rotation matrix (3x3) by ``angle`` (rad) about z."""
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def rot_y(angle: float) -> np.ndarray:
+    """Rotation matrix (3x3) by ``angle`` (rad) about y."""
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 

@@ -157,7 +157,7 @@ def _world(args: argparse.Namespace) -> str:
 
     if args.world == GENERATED:
         if args.split is None:
-            raise ConfigError("--world generated needs --split train or --split test")
+            raise ConfigError("--world generated needs --split train, val or test")
         return generated_label(args.split)
     if args.split is not None:
         raise ConfigError(f"--split is for --world generated, not --world {args.world}")
@@ -186,7 +186,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
     _check_counts(args)
     estimators = _pose_sources(args.estimators)
     args.world = _world(args)
-    agents = [a.strip() for a in args.agent.split(",") if a.strip()]
+    agents = _names(args.agent)
     models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
     if models:
         from stsf_gym.agents.sb3_agent import model_metadata
@@ -248,34 +248,43 @@ def _reproduce(args: argparse.Namespace) -> dict:
 def _train(args: argparse.Namespace) -> dict:
     from stsf_gym.agents.train import train
 
+    if args.suite is not None and (args.world != "irl_corridor" or args.split is not None):
+        raise ConfigError("--suite picks the worlds (its train split): drop --world/--split")
     args.world = _world(args)
-    try:
-        summary = train(
-            args.algo,
-            args.estimator,
-            args.out,
-            args.timesteps,
-            args.seed,
-            args.world,
-            args.config,
-            parse_overrides(args.overrides),
-            args.n_envs,
-            progress_bar=not args.json,
-        )
-    except KeyboardInterrupt:
-        print(
-            f"interrupted: checkpoint saved in {args.out}/checkpoints; rerun to resume",
-            file=sys.stderr,
-        )
-        raise SystemExit(130) from None
-    if not args.json:
-        evaluation = summary["last_evaluation"] or {}
-        print(
-            f"{summary['timesteps']} timesteps in {summary['wall_time_s']:.0f} s; last evaluation: "
-            f"success rate {evaluation.get('success_rate', float('nan')):.2f}. "
-            f"Wrote {summary['model']}, {summary['learning_curve']}, {args.out}/train.json"
-        )
-    return summary
+    if args.seeds < 1:
+        raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+    runs = []
+    for seed in range(args.seed, args.seed + args.seeds):
+        out = args.out / f"seed-{seed}" if args.seeds > 1 else args.out
+        try:
+            summary = train(
+                args.algo,
+                args.estimator,
+                out,
+                args.timesteps,
+                seed,
+                args.world,
+                args.config,
+                parse_overrides(args.overrides),
+                args.n_envs,
+                progress_bar=not args.json,
+                suite=args.suite,
+            )
+        except KeyboardInterrupt:
+            print(
+                f"interrupted: checkpoint saved in {out}/checkpoints; rerun to resume",
+                file=sys.stderr,
+            )
+            raise SystemExit(130) from None
+        runs.append(summary)
+        if not args.json:
+            rate = (summary["last_evaluation"] or {}).get("success_rate", float("nan"))
+            print(
+                f"seed {seed}: {summary['timesteps']} timesteps in {summary['wall_time_s']:.0f} s; "
+                f"last evaluation: success rate {rate:.2f}. "
+                f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
+            )
+    return runs[0] if len(runs) == 1 else {"runs": runs}
 
 
 def _sweep(args: argparse.Namespace) -> dict:
@@ -347,11 +356,12 @@ def _benchmark(args: argparse.Namespace) -> dict:
         raise ConfigError(f"--worlds must be at least 1, got {args.worlds}")
     if args.config or args.overrides:
         raise ConfigError("benchmark runs a suite as written: edit or copy its configs/suites file")
-    estimators = _pose_sources(args.estimators)
-    agents = _names(args.agents)
-    for model in (a for a in agents if a != "follower"):
-        from stsf_gym.agents.sb3_agent import model_metadata
+    from stsf_gym.agents.sb3_agent import model_metadata
+    from stsf_gym.experiments.benchmark.trained import FOLLOWER, expand_agents
 
+    estimators = _pose_sources(args.estimators)
+    agents = expand_agents(_names(args.agents))
+    for model in (a for a in agents if a != FOLLOWER):
         model_metadata(model)  # a missing or foreign model file fails here, clearly
     summary = benchmark(
         args.out / args.suite,
@@ -372,7 +382,13 @@ def _benchmark(args: argparse.Namespace) -> dict:
 
 
 def _names(text: str) -> list[str]:
-    return [name.strip() for name in text.split(",") if name.strip()]
+    """The comma-separated names of ``text``; one named twice is an error (its episodes would
+    be run and counted twice)."""
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise ConfigError(f"{twice[0]!r} is named twice in {text!r}")
+    return names
 
 
 def _pose_sources(text: str) -> list[str]:
@@ -419,6 +435,7 @@ def _world_args(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``stsf-gym`` argument parser: one sub-command per entry point, each with its options."""
     from stsf_gym.envs.suite import suite_names
 
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
@@ -485,7 +502,15 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
     train.add_argument("--timesteps", type=int, help="total env steps (hyper-parameter file)")
     train.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
+    train.add_argument(
+        "--seeds", type=int, default=1, help="training seeds SEED.. (1); each in OUT/seed-<s>/"
+    )
     _world_args(train)
+    train.add_argument(
+        "--suite",
+        choices=suite_names(),
+        help="train on a benchmark suite's train worlds and task, evaluate on its val worlds",
+    )
     train.set_defaults(run=_train)
     sweep = commands.add_parser("sweep", help="a grid of evaluation or training cells")
     sweep.add_argument("file", type=Path, help="sweep YAML, e.g. configs/sweeps/noise.yaml")
@@ -531,7 +556,10 @@ def build_parser() -> argparse.ArgumentParser:
     _common(bench_suite, "out/benchmark")
     bench_suite.add_argument("--suite", required=True, choices=suite_names(), help="difficulty")
     bench_suite.add_argument(
-        "--agents", default="follower", help="follower and/or saved models, comma-separated"
+        "--agents",
+        default="follower",
+        help="follower, saved models and/or training folders (train --seeds N), comma-separated;"
+        " a model drives on the pose source it was trained on",
     )
     bench_suite.add_argument(
         "--estimators",
@@ -556,7 +584,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--seconds", type=float, default=60.0, help="simulated seconds per camera case (60)"
     )
     bench.add_argument(
-        "--vector-steps", type=int, default=1000, help="AsyncVectorEnv steps per worker count"
+        "--vector-steps",
+        type=int,
+        default=1000,
+        help="vector-env steps per worker count (AsyncVectorEnv, SubprocVecEnv; rendered, fast)",
     )
     bench.set_defaults(run=_bench)
     return parser
@@ -594,6 +625,8 @@ def main(argv: list[str] | None = None) -> int:
     set_command(["stsf-gym", *(sys.argv[1:] if argv is None else argv)])
     error = f"stsf-gym {args.command}: error:"
     try:
+        if getattr(args, "seed", 0) < 0:  # seeds seed a numpy SeedSequence: non-negative
+            raise ConfigError(f"--seed must be at least 0, got {args.seed}")
         if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
             folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
             _check_writable(folder.absolute())

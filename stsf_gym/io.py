@@ -36,6 +36,7 @@ def remove_partial_writes(folder: str | Path) -> list[Path]:
 
 
 def write_json(path: str | Path, obj: Any) -> Path:
+    """Write ``obj`` as indented JSON, atomically (numpy values as numbers); return the path."""
     return write_atomic(path, json.dumps(obj, indent=2, default=_to_builtin) + "\n")
 
 

@@ -252,6 +252,9 @@ def import_cycles(imports: dict[str, list[tuple[str, str]]]) -> list[list[str]]:
 
 
 def main() -> int:
+    """``python -m stsf_gym.layers``: print the layer graph and any broken rule (exit code 1), or
+    the package tree with ``--tree``.
+    """
     if "--tree" in sys.argv[1:]:
         print_tree()
         return 0

@@ -123,9 +123,11 @@ class TruePose(PoseEstimator):
     sensors = ()
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
+        """Start at the true pose with the fixed :data:`TRUTH_STD` covariance."""
         super().reset(model, initial_pose, np.diag(np.square(TRUTH_STD)))
 
     def see(self, true_pose: np.ndarray) -> None:
+        """Take the true pose of the step (from ``info``)."""
         self.mean = np.asarray(true_pose, dtype=float).copy()
 
     def update(self, obs: dict, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -149,7 +151,8 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     privileged, for reference runs only; ``"degraded-truth"`` corrupts it with a configurable
     error model (:mod:`stsf_gym.estimators.degraded_truth`), seeded by ``reset(seed=...)``.
     The real estimators never see ``info``: each starts an episode at the commanded start
-    pose (the world's ``start`` or ``options["start_pose"]``) with standard deviations
+    pose (``options["start_pose"]``, the one drawn from ``task.start_*`` or the world's ``start``;
+    ``env.unwrapped.start_pose``) with standard deviations
     ``start_std``; ``reset(options={"unknown_start": True})`` gives an estimator that
     localizes globally (``mcl``) no start at all: its prior spreads over the map's free space.
     When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
@@ -204,11 +207,13 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         )
 
     def reset(self, *, seed=None, options=None):
+        """Reset the env and start the estimator at the commanded start pose; ``options`` as
+        the env's, plus ``unknown_start`` (an estimator that localizes globally: ``mcl``)."""
         options = dict(options or {})
         unknown_start = bool(options.pop("unknown_start", False))  # the wrapper's, not the env's
         obs, info = self.env.reset(seed=seed, options=options or None)
-        start = (options or {}).get("start_pose", self.env.unwrapped.config.world.start)
-        self.start = np.asarray(start, dtype=float)  # the commanded start (a floor starts there)
+        start = self.env.unwrapped.start_pose  # where the env put the robot (start_pose option,
+        self.start = np.asarray(start, dtype=float)  # drawn or the world's); a floor starts there
         settings = getattr(self.estimator, "settings", None)
         model = sensor_model(self.env, settings if isinstance(settings, OdometrySettings) else None)
         if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
@@ -244,6 +249,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         spread()
 
     def step(self, action):
+        """Point the camera (pan mount), step the env, update the estimate from the observation."""
         if self.searching_since is not None:
             cov = self.estimator.cov
             narrow = math.sqrt(max(cov[0, 0], cov[1, 1])) < FOUND_STD

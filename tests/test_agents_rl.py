@@ -61,15 +61,20 @@ def test_policy_observation_in_the_robot_frame(make_env):
     np.testing.assert_allclose(features[0 : 2 * k : 2], lookahead / scale, atol=5e-3)
     np.testing.assert_allclose(features[1 : 2 * k : 2], 0.0, atol=5e-3)
     np.testing.assert_allclose(features[2 * k], 1.0, atol=1e-3)  # the whole path is left
-    np.testing.assert_allclose(features[2 * k + 1 : 2 * k + 3], [0.0, 1.0], atol=5e-3)
-    np.testing.assert_allclose(features[2 * k + 3 : 2 * k + 6], math.log10(TRUTH_STD[0]) / 3)
-    sonar = features[2 * k + 6 : -2]
+    x, y, yaw = env.unwrapped.start_pose
+    goal = env.unwrapped.task.goal - (x, y)
+    in_robot = [goal @ (math.cos(yaw), math.sin(yaw)), goal @ (-math.sin(yaw), math.cos(yaw))]
+    np.testing.assert_allclose(features[2 * k + 1 : 2 * k + 3], np.array(in_robot) / scale, 1e-5)
+    assert features[2 * k + 3] == 1.0  # every goal still to declare
+    np.testing.assert_allclose(features[2 * k + 4 : 2 * k + 6], [0.0, 1.0], atol=5e-3)
+    np.testing.assert_allclose(features[2 * k + 6 : 2 * k + 9], math.log10(TRUTH_STD[0]) / 3)
+    sonar = features[2 * k + 9 : -2]
     assert sonar.shape == (16,) and np.all((sonar >= 0) & (sonar <= 1))
     # facing left, 0.3 m left of the path: the path runs to the robot's right, from behind it
     features, _ = env.reset(seed=0, options={"start_pose": [2.0, 0.3, math.pi / 2]})
     np.testing.assert_allclose(features[0:2], [-0.3 / scale, 0.0], atol=1e-2)
     np.testing.assert_allclose(features[2:4], [-0.3 / scale, -0.5 / scale], atol=1e-2)
-    np.testing.assert_allclose(features[2 * k + 1 : 2 * k + 3], [-1.0, 0.0], atol=1e-2)
+    np.testing.assert_allclose(features[2 * k + 4 : 2 * k + 6], [-1.0, 0.0], atol=1e-2)
     assert features[-2:] == pytest.approx([0.0, 0.0])  # standing still
 
 

@@ -121,3 +121,20 @@ def test_the_follower_declares_arrival_on_the_true_pose():
     episode = run_episode(EpisodeSpec("straight_10m", "truth", 0, env=env))
     assert episode.outcome == "goal"
     assert len(episode.stops) == 1 and episode.stops[0]["true_distance_m"] < 0.1
+
+
+def test_progress_stops_at_the_current_goal():
+    """Driving past a goal earns no progress (so no reward for not stopping); after the goal
+    is declared, progress runs on to the next one."""
+    t = task([[4.0, 0.0], [10.0, 0.0]])
+    assert t.progress(np.array([3.0, 0.0])) == pytest.approx(3.0)
+    assert t.progress(np.array([6.0, 0.0])) == pytest.approx(4.0)  # past goal 0: held there
+    drive_then_stop(t, [4.0, 0.0], 10)
+    assert t.goal_index == 1
+    assert t.progress(np.array([6.0, 0.0])) == pytest.approx(6.0)
+    reach = PathTask(*_configs(load_config(world="straight_10m")))
+    assert reach.progress(np.array([9.0, 0.0])) == pytest.approx(9.0)  # reach: the path's
+
+
+def _configs(cfg):
+    return cfg.world, cfg.reward, cfg.task

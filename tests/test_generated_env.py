@@ -127,7 +127,7 @@ def test_cli_world_yaml_and_grid(tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--world", "generated"], "needs --split train or --split test"),
+        (["--world", "generated"], "needs --split train, val or test"),
         (["--world", "generated", "--split", "dev"], "split must be one of"),
         (["--split", "test"], "--split is for --world generated"),
     ],

@@ -93,6 +93,21 @@ def run_cli(monkeypatch, capsys):
         (["evaluate", "--set", "world.start=[0,0,0]"], "use --world"),
         (["demo", "--set", "camera.width=0"], "camera.width must be in [1, 8192], got 0"),
         (["reproduce", "fig10", "--seeds", "0"], "--seeds must be at least 1"),
+        (["train", "--seeds", "0"], "--seeds must be at least 1"),
+        (["train", "--timesteps", "100"], "would end at 2048; ask for 2048"),
+        (["benchmark", "--suite", "sparse", "--seed", "-1"], "--seed must be at least 0, got -1"),
+        (
+            ["benchmark", "--suite", "sparse", "--estimators", "stsf,ekf,stsf"],
+            "'stsf' is named twice",
+        ),
+        (["evaluate", "--agent", "follower,follower"], "'follower' is named twice"),
+        (["train", "--suite", "sparse", "--world", "straight_10m"], "drop --world/--split"),
+        (["train", "--world", "generated", "--split", "dev"], "split must be one of"),
+        (["benchmark", "--suite", "sparse", "--agents", "no/such/folder"], "no/such/folder"),
+        (
+            ["train", "--suite", "corridor", "--set", "env.task.start_lateral=5"],
+            "task.start_lateral 5 m across the path",
+        ),
     ],
 )
 def test_cli_bad_input_exits_2_with_one_line_and_writes_nothing(run_cli, tmp_path, argv, message):

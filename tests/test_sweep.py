@@ -192,3 +192,22 @@ def test_ray_gives_the_local_table(local_run, tmp_path):
     assert sorted(f.name for f in (tmp_path / "cells").iterdir()) == sorted(
         f.name for f in (out / "cells").iterdir()
     )
+
+
+def test_a_sweep_on_a_suite_runs_its_test_worlds_and_task():
+    from stsf_gym.yaml_layers import CONFIG_DIR
+
+    sweep = load_sweep(CONFIG_DIR / "sweeps" / "sonar_beam.yaml")
+    assert len(sweep.cells) == 2 * 2 * 20
+    cell = sweep.cells[0]
+    assert cell["world"] == "generated:test"
+    assert cell["env"]["task"]["protocol"] == "declare"  # the suite's task ...
+    assert cell["env"]["generator"]["halls"] == [1, 1]  # ... and its worlds
+    assert {c["env"]["sonar"]["beam"]["enabled"] for c in sweep.cells} == {False, True}
+
+
+def test_an_unknown_suite_in_a_sweep_is_named(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text("base: {suite: attic}\ngrid: {estimator: [odometry]}\n")
+    with pytest.raises(ConfigError, match=r"bad.yaml: base.suite: unknown suite 'attic'"):
+        load_sweep(path)

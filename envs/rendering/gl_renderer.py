@@ -11,10 +11,16 @@ shade as they do under PyBullet's renderers.
 
 EGL cannot be used in a process forked after its parent made a context (Mesa deadlocks):
 :func:`gl_inherited` tells, and :class:`~stsf_gym.envs.simulator.Simulator` then falls back.
+
+In a worker process of a vector env (any process started by :mod:`multiprocessing`, as
+Gymnasium's ``AsyncVectorEnv`` and stable-baselines3's ``SubprocVecEnv`` start theirs) llvmpipe
+rasterises on :data:`WORKER_RASTER_THREADS` thread: its default of one thread per core has
+every worker's threads contend for every core. A user's own ``LP_NUM_THREADS`` is kept.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 
 import numpy as np
@@ -28,6 +34,7 @@ BACKGROUND = (0.9, 0.9, 0.92)
 # filtering averages the texture over each pixel's footprint (as a sensor's pixel integrates
 # light), where plain mipmapping would blur it by the larger axis.
 ANISOTROPY = 16.0  # no ceiling: what shows above the walls
+WORKER_RASTER_THREADS = 1  # llvmpipe's threads in a vector env's worker process
 ATTRIBUTES = ("3f 3f 2f 3f 1f", "position", "normal", "uv", "colour", "layer")
 
 VERTEX_SHADER = """
@@ -94,6 +101,9 @@ def gl_context():
     if _context is None:
         import moderngl
 
+        if multiprocessing.parent_process() is not None:  # a vector env's worker
+            os.environ.setdefault("LP_NUM_THREADS", str(WORKER_RASTER_THREADS))
+
         _context = moderngl.create_standalone_context(backend="egl", require=330)
         _context_pid = os.getpid()
     return _context
@@ -111,6 +121,7 @@ class GLRenderer:
         self._geometry: list = []  # (vertex array, its buffer, vertex count) per material
         self._textures = None
         self._targets: dict[tuple[int, int], object] = {}
+        self._read: dict[tuple[int, int], bytearray] = {}  # read-back buffer per image size
 
     def _build_programs(self) -> None:
         self.programs = [
@@ -169,7 +180,8 @@ class GLRenderer:
             program["view_projection"].write(view_projection)
             if count:
                 vao.render(vertices=count)
-        data = target.read(components=3, alignment=1)
+        data = self._read.setdefault((width, height), bytearray(width * height * 3))
+        target.read_into(data, components=3, alignment=1)
         return np.frombuffer(data, np.uint8).reshape(height, width, 3)[::-1].copy()
 
     def _release_geometry(self) -> None:

@@ -77,6 +77,7 @@ def _rot_z(yaw: float) -> np.ndarray:
 
 
 def box_triangles(box: Box) -> np.ndarray:
+    """The triangles of ``box``'s faces (with normals), for the renderer."""
     rotation = _rot_z(box.yaw)
     half = np.asarray(box.half, float)
     quads = []
@@ -94,6 +95,7 @@ def box_triangles(box: Box) -> np.ndarray:
 
 
 def cylinder_triangles(cylinder: Cylinder) -> np.ndarray:
+    """The triangles of ``cylinder``'s side and top (with normals), for the renderer."""
     x, y = cylinder.xy
     r, h = cylinder.radius, cylinder.height
     quads = []
@@ -111,6 +113,7 @@ def cylinder_triangles(cylinder: Cylinder) -> np.ndarray:
 
 
 def board_triangles(board: Board, layer: int) -> np.ndarray:
+    """The two textured triangles of ``board``, on texture layer ``layer``."""
     half = board.size / 2
     corners = [board.centre + half * (a * board.right + b * board.up) for a, b in _SQUARE]
     return _faces(np.asarray(corners), board.normal, (1.0, 1.0, 1.0), float(layer))
@@ -131,6 +134,7 @@ class Scene:
         self.version = 0
 
     def add(self, body: int, shape: Shape) -> None:
+        """Add the shape of PyBullet body ``body``."""
         self.shapes[body] = shape
         if isinstance(shape, Board):
             self._layers[body] = len(self.textures)
@@ -146,6 +150,7 @@ class Scene:
         self.version += 1
 
     def set_visible(self, body: int, visible: bool) -> None:
+        """Show or hide ``body`` (a fault removing or occluding a board)."""
         if visible == (body not in self.hidden):
             return
         (self.hidden.discard if visible else self.hidden.add)(body)

@@ -39,6 +39,7 @@ class FrameQueue:
         self._waiting: collections.deque[Frame] = collections.deque()
 
     def reset(self) -> None:
+        """Forget the frames still waiting."""
         self._waiting.clear()
 
     def expose(

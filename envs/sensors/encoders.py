@@ -32,6 +32,7 @@ class WheelEncoders:
         self._last_angles = np.zeros(2)
 
     def reset(self, wheel_angles: np.ndarray, rng: np.random.Generator) -> None:
+        """Start at ``wheel_angles``: draw the calibration errors the robot does not know."""
         cfg = self.cfg
         radius_errors = rng.normal(size=2) * cfg.radius_error_std
         wheelbase_error = rng.normal() * cfg.wheelbase_error_std

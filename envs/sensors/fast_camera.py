@@ -47,11 +47,14 @@ from stsf_gym.vision.landmarks import square_centres
 PHANTOM_DEPTH = (2.0, 6.0)  # m, range of a false detection's depth
 
 
-def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corners) -> float:
-    """The shorter of a board's mean projected width and height (pixels)."""
-    uv = camera.project(world_from_camera, corners)  # top-left, top-right, bottom-right, ...
-    sides = np.linalg.norm(uv - np.roll(uv, -1, axis=0), axis=1)
-    return float(min(sides[0] + sides[2], sides[1] + sides[3]) / 2)
+def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corners):
+    """The shorter of a board's mean projected width and height (pixels): a float for one
+    board's corners (4, 3), an array (N,) for N boards' (N, 4, 3), projected at once."""
+    corners = np.asarray(corners, float)
+    uv = camera.project(world_from_camera, corners.reshape(-1, 3)).reshape(-1, 4, 2)
+    sides = np.linalg.norm(uv - np.roll(uv, -1, axis=1), axis=2)  # top, right, bottom, left
+    sizes = np.minimum(sides[:, 0] + sides[:, 2], sides[:, 1] + sides[:, 3]) / 2
+    return float(sizes[0]) if corners.ndim == 2 else sizes
 
 
 def detection_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.ndarray:
@@ -65,6 +68,7 @@ def aided_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.
 
 
 def logistic(size_px: np.ndarray | float, centre: float, width: float) -> np.ndarray:
+    """The logistic function of ``size_px`` with its ``centre`` and ``width`` (px)."""
     z = (np.asarray(size_px, dtype=float) - centre) / width
     return 1.0 / (1.0 + np.exp(-np.clip(z, -50, 50)))
 
@@ -87,6 +91,7 @@ class SimulatedDetector:
         self.aided_rng = np.random.default_rng(0)
 
     def observation_space(self) -> dict[str, spaces.Space]:
+        """The observation keys this mode adds: the detections and the track-aided candidates."""
         span = 2 * max(self.camera.width, self.camera.height)
         ids = spaces.Box(-1, self.pattern.max_id, (self.slots,), np.int64)
         points = spaces.Box(-span, span, (self.slots * self.values_per_slot,), np.float32)
@@ -98,18 +103,23 @@ class SimulatedDetector:
         }
 
     def reset(self, rng: np.random.Generator) -> None:
+        """Start an episode: no detections; the track-aided draws get a stream of their own."""
         self.frame = self.aided = self.empty()
         # its own stream, spawned without a draw from ``rng``: the plain detections stay as
         # they were drawn before track-aided slots existed
         self.aided_rng = np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0])
 
     def capture(self, pose: np.ndarray, rng: np.random.Generator) -> None:
+        """Detect the boards in view from the camera pose ``pose`` (4x4), and the ones the
+        track-aided matcher could find.
+        """
         visible = self.world.landmarks_in_view(self.camera, pose)
         self.frame = self.detect(pose, visible, rng)
         found = set(self.frame[0].tolist())
         self.aided = self.findable(pose, [i for i in visible if i not in found], self.aided_rng)
 
     def observe(self) -> dict[str, np.ndarray]:
+        """The last frame's observation keys."""
         (ids, points), (aided_ids, aided_points) = self.frame, self.aided
         return {
             "landmark_ids": ids.copy(),
@@ -123,9 +133,9 @@ class SimulatedDetector:
     ) -> tuple[np.ndarray, np.ndarray]:
         """The boards in view the detector missed that a track-aided search would find."""
         found = []
-        for landmark_id in missed_ids:
+        sizes = self._sizes(world_from_camera, missed_ids)
+        for landmark_id, size in zip(missed_ids, sizes, strict=True):
             landmark = self.landmarks[landmark_id]
-            size = apparent_size_px(self.camera, world_from_camera, landmark.board_corners)
             if rng.random() < aided_probability(size, self.cfg):
                 found.append(
                     (landmark_id, self.camera.project(world_from_camera, landmark.square_centres))
@@ -144,9 +154,9 @@ class SimulatedDetector:
     ) -> tuple[np.ndarray, np.ndarray]:
         """``(landmark_ids, landmark_points)`` of one frame; ``visible_ids`` from ray tests."""
         found = []
-        for landmark_id in visible_ids:
+        sizes = self._sizes(world_from_camera, visible_ids)
+        for landmark_id, size in zip(visible_ids, sizes, strict=True):
             landmark = self.landmarks[landmark_id]
-            size = apparent_size_px(self.camera, world_from_camera, landmark.board_corners)
             if rng.random() < detection_probability(size, self.cfg):
                 found.append(
                     (landmark_id, self.camera.project(world_from_camera, landmark.square_centres))
@@ -154,6 +164,13 @@ class SimulatedDetector:
         for _ in range(rng.poisson(self.cfg.false_detection_rate)):
             found.append(self._phantom(rng))
         return self._slots(found, rng)
+
+    def _sizes(self, world_from_camera: np.ndarray, landmark_ids: list[int]) -> list[float]:
+        """The apparent sizes (pixels) of these landmarks' boards, projected at once."""
+        if not landmark_ids:
+            return []
+        corners = np.array([self.landmarks[i].board_corners for i in landmark_ids])
+        return apparent_size_px(self.camera, world_from_camera, corners).tolist()
 
     def _slots(self, found: list, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """Slots of ``(id, true pixels)`` pairs, the pixels with the detector's noise."""

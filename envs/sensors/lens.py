@@ -8,7 +8,8 @@ so a world point lands where ``cv2.projectPoints`` with the true K and distortio
 Vignetting is a per-pixel gain with the shape of the ``cos^4`` law of the field angle,
 scaled so the corner loses ``vignetting`` of its light (:func:`cos4_gain`; the sensor
 applies it).
-With no distortion the render camera is the camera itself and nothing is resampled.
+With no distortion the render camera is the camera itself and nothing is resampled. The
+resampled image is written into a buffer made once per type (valid until the next call).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ class Lens:
         self.camera = camera
         w, h = camera.width, camera.height
         self.distorted = camera.calibration.distorted
+        self._out: dict[np.dtype, np.ndarray] = {}  # the image of each render type
         if not self.distorted:
             self.render_K, self.render_size, self._maps = camera.K, (w, h), None
             return
@@ -64,4 +66,10 @@ class Lens:
         """The true camera's image (H, W, C) of a render of the render camera."""
         if self._maps is None:
             return render
-        return cv2.remap(render, *self._maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        shape = (self.camera.height, self.camera.width, *render.shape[2:])
+        out = self._out.get(render.dtype)
+        if out is None or out.shape != shape:
+            out = self._out[render.dtype] = np.empty(shape, render.dtype)
+        return cv2.remap(
+            render, *self._maps, cv2.INTER_LINEAR, dst=out, borderMode=cv2.BORDER_REPLICATE
+        )

@@ -57,11 +57,16 @@ class RenderedCamera:
         self.sensor = ImageSensor(cfg.sensor, shape, cos4_gain(camera, cfg.lens.vignetting))
         self.blank = np.zeros(shape, np.uint8)
         self.frame = self.blank
+        # made once: a blurred frame's sum of renders, the defocused image of each type
+        self._exposure = np.zeros((*self.lens.render_size[::-1], 3), np.float32)
+        self._defocused: dict[np.dtype, np.ndarray] = {}
 
     def observation_space(self) -> dict[str, spaces.Space]:
+        """The observation keys this camera adds: ``image``."""
         return {"image": spaces.Box(0, 255, self.blank.shape, np.uint8)}
 
     def reset(self, rng: np.random.Generator) -> None:
+        """Start an episode: the sensor's noise from ``rng``, a blank frame."""
         self.sensor.reset(rng)
         self.frame = self.blank
 
@@ -74,18 +79,22 @@ class RenderedCamera:
         size = self.lens.render_size
         render = self.sim.render(*size, view_matrix(poses[0]), self.projection)
         if len(poses) > 1:  # the exposure's mean, summed in place
-            total = np.zeros(render.shape, np.float32)
+            total = self._exposure
+            total.fill(0.0)
             cv2.accumulate(render, total)
             for p in poses[1:]:
                 cv2.accumulate(self.sim.render(*size, view_matrix(p), self.projection), total)
             render = np.multiply(total, 1 / len(poses), out=total)
         image = self.lens(render)
         if self.cfg.lens.defocus_px > 0:
-            image = cv2.GaussianBlur(image, (0, 0), self.cfg.lens.defocus_px)
+            out = self._defocused.setdefault(image.dtype, np.empty_like(image))
+            image = cv2.GaussianBlur(image, (0, 0), self.cfg.lens.defocus_px, dst=out)
         return image
 
     def capture(self, pose: np.ndarray, rng: np.random.Generator) -> None:
+        """Expose a frame from the camera's world pose ``pose`` (4x4): render, lens and sensor."""
         self.frame = self.sensor(self.radiance(pose), rng)
 
     def observe(self) -> dict[str, np.ndarray]:
+        """The last frame's observation keys."""
         return {"image": self.frame.copy()}

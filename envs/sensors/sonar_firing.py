@@ -26,6 +26,7 @@ class FiringSchedule:
         return bool(self.order)
 
     def reset(self) -> None:
+        """Start an episode: no transducer fired yet."""
         self._fired = 0
 
     def due(self, time: float) -> list[tuple[int, float]]:

@@ -57,6 +57,9 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def plane_to_world(centre, right, up, plane_xy: np.ndarray) -> np.ndarray:
+    """World coordinates of points ``plane_xy`` (..., 2) on the plane through ``centre`` spanned
+    by ``right`` and ``up``.
+    """
     return centre + plane_xy[..., :1] * right + plane_xy[..., 1:2] * up
 
 
@@ -89,6 +92,10 @@ class CorridorWorld:
         self.obstacles = [self._obstacle(o) for o in cfg.obstacles]
         self.boards: dict[int, int] = {}  # landmark id -> its board's body
         self.landmarks = [self._landmark(spec) for spec in cfg.landmarks]
+        # the landmarks' geometry stacked, for the per-frame view tests
+        self._normals = np.array([lm.normal for lm in self.landmarks]).reshape(-1, 3)
+        self._centres = np.array([lm.centre for lm in self.landmarks]).reshape(-1, 3)
+        self._corners = np.array([lm.board_corners for lm in self.landmarks]).reshape(-1, 4, 3)
 
     def add_board(self, spec: LandmarkSpec) -> int:
         """The body of a new board showing landmark ``spec.id``'s pattern where ``spec`` says
@@ -102,15 +109,20 @@ class CorridorWorld:
         """Ids of landmarks wholly inside the frame of ``camera`` at world-from-camera
         ``pose``, facing it, present (a fault may remove one) and not occluded."""
         eye = pose[:3, 3]
-        candidates = []
-        for landmark in self.landmarks:
-            facing = np.dot(landmark.normal, eye - landmark.centre) > 0
-            if not (facing and self.board_visible(self.boards[landmark.id])):
-                continue
-            uv = camera.project(pose, landmark.board_corners)
-            inside = np.all((uv >= -0.5) & (uv <= (camera.width - 0.5, camera.height - 0.5)))
-            if inside and np.linalg.norm(landmark.centre - eye) < camera.far:
-                candidates.append(landmark)
+        facing = np.einsum("ij,ij->i", self._normals, eye - self._centres) > 0
+        near = np.linalg.norm(self._centres - eye, axis=1) < camera.far
+        shown = [
+            k
+            for k in np.flatnonzero(facing & near).tolist()
+            if self.board_visible(self.boards[self.landmarks[k].id])
+        ]
+        if not shown:
+            return []
+        # every shown board's corners projected at once
+        uv = camera.project(pose, self._corners[shown].reshape(-1, 3)).reshape(-1, 4, 2)
+        limit = (camera.width - 0.5, camera.height - 0.5)
+        inside = np.all((uv >= -0.5) & (uv <= limit), axis=(1, 2))
+        candidates = [self.landmarks[k] for k, ok in zip(shown, inside.tolist(), strict=True) if ok]
         if not candidates:
             return []
         # rays start a little ahead of the optical centre, which sits on the robot's own mast
@@ -121,6 +133,7 @@ class CorridorWorld:
         return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
 
     def board_visible(self, body: int) -> bool:
+        """Whether the board of body ``body`` is in the world (not removed by a fault)."""
         return body not in self.sim.scene.hidden
 
     def set_board_visible(self, body: int, visible: bool) -> None:

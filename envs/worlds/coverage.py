@@ -29,6 +29,8 @@ BOARD_OFF_WALL = 0.02  # m between the wall face and the board (as corridor.py b
 
 @dataclass(frozen=True)
 class Coverage:
+    """How much of a world's path sees a board: share of samples, longest dark stretch."""
+
     fraction: float  # share of path samples that see a board
     longest_dark_m: float  # longest stretch of path from which no board is seen
 

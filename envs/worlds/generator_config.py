@@ -6,6 +6,7 @@ name the file and the key, as for env configs (:mod:`stsf_gym.validation`).
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,7 +17,7 @@ from stsf_gym.vision.landmarks import LandmarkPattern
 from stsf_gym.yaml_layers import CONFIG_DIR, deep_merge, read_yaml, shown
 
 DEFAULT_GENERATOR = CONFIG_DIR / "generator" / "default.yaml"
-SPLITS = ("train", "test")
+SPLITS = ("train", "val", "test")  # val: model selection while training, never benchmarked
 
 
 def _ordered(pair: tuple, field: str) -> None:
@@ -25,6 +26,8 @@ def _ordered(pair: tuple, field: str) -> None:
 
 @dataclass(frozen=True)
 class VisibilityConfig:
+    """When a board counts as seen from a path sample (``visibility:`` of the generator)."""
+
     min_range: Positive
     max_range: Positive
     max_view_deg: Annotated[float, Range(gt=0, lt=90)]
@@ -52,6 +55,8 @@ class VisibilityConfig:
 
 @dataclass(frozen=True)
 class ClutterConfig:
+    """The clutter the generator places (``clutter:``)."""
+
     count: tuple[Annotated[int, Range(ge=0)], Annotated[int, Range(ge=0)]]
     size: tuple[Positive, Positive]
     height: tuple[Positive, Positive]
@@ -65,6 +70,8 @@ class ClutterConfig:
 
 @dataclass(frozen=True)
 class FixedWorldConfig:
+    """What every generated world shares (``world:`` of the generator): walls, goal, boards."""
+
     wall_height: Positive
     wall_thickness: Positive
     goal_radius: Positive
@@ -74,6 +81,8 @@ class FixedWorldConfig:
 
 @dataclass(frozen=True)
 class GeneratorConfig:
+    """The world generator's ranges (``configs/generator/default.yaml``), typed and checked."""
+
     segments: tuple[Count, Count]
     segment_length: tuple[Positive, Positive]
     width: tuple[Positive, Positive]
@@ -125,15 +134,18 @@ class GeneratorConfig:
                 f"splits.{name}",
                 f"must be [first world seed >= 0, count >= 1], got {value!r}",
             )
-        (a0, an), (b0, bn) = (self.splits[s] for s in SPLITS)
-        require(
-            a0 + an <= b0 or b0 + bn <= a0,
-            "splits",
-            f"train {[a0, a0 + an - 1]} and test {[b0, b0 + bn - 1]} world seeds must not overlap",
-        )
+        ranges = {name: range(v[0], v[0] + v[1]) for name, v in self.splits.items()}
+        for a, b in itertools.combinations(SPLITS, 2):
+            first, second = ranges[a], ranges[b]
+            require(
+                first.stop <= second.start or second.stop <= first.start,
+                "splits",
+                f"{a} [{first.start}, {first.stop - 1}] and {b} [{second.start}, "
+                f"{second.stop - 1}] world seeds must not overlap",
+            )
 
     def split_range(self, split: str) -> range:
-        """World seeds of ``split`` (``"train"`` or ``"test"``)."""
+        """World seeds of ``split`` (``"train"``, ``"val"`` or ``"test"``)."""
         if split not in SPLITS:
             raise ValueError(f"split must be one of {list(SPLITS)}, got {split!r}")
         first, count = self.splits[split]

@@ -38,6 +38,7 @@ class Rect:
         return cls(*np.round([low[0], low[1], high[0], high[1]], DECIMALS))
 
     def grown(self, margin: float) -> Rect:
+        """This rectangle grown by ``margin`` (m) on every side."""
         return Rect(self.xmin - margin, self.ymin - margin, self.xmax + margin, self.ymax + margin)
 
     def gap(self, other: Rect) -> float:

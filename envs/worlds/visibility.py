@@ -47,6 +47,7 @@ class CameraView:
 
     @classmethod
     def from_env_config(cls, cfg) -> CameraView:
+        """The camera view of an env config ``cfg`` (its camera and mount)."""
         return cls(
             cfg.camera.width,
             cfg.camera.height,

@@ -22,6 +22,7 @@ from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 #: case -> (env overrides, pose source); "truth" drives on info["true_pose"].
 CASES: dict[str, tuple[dict, str]] = {
@@ -70,22 +71,8 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
     follower = PathFollower.for_env(env)
     steps = round(sim_seconds / env.unwrapped.dt)
     obs, info = env.reset(seed=seed)
-    profiler = cProfile.Profile() if profile else None
-    if profiler is not None:
-        profiler.enable()
-    frames, kept, start = 0, [], time.perf_counter()
-    for _ in range(steps):
-        pose = info["true_pose"] if source == "truth" else obs["pose"]
-        obs, _, terminated, truncated, info = env.step(follower.act(pose))
-        if obs["image_new"]:
-            frames += 1
-            if "image" in obs and source != "truth" and len(kept) < ARUCO_FRAMES:
-                kept.append(obs["image"])
-        if terminated or truncated:
-            obs, info = env.reset()
-    wall = time.perf_counter() - start
-    if profiler is not None:
-        profiler.disable()
+    kept: list = []
+    wall, cpu, frames, obs, info = _drive(env, follower, source, steps, obs, info, kept)
     stages = {"camera frame": frame_time["total"]} if frame_time["count"] else {}
     if source != "truth":
         timings = env.estimator.timings
@@ -98,7 +85,11 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
         "renderer": env.unwrapped.renderer,
         "steps": steps,
         "wall_s": wall,
+        "cpu_s": cpu,
         "x_real_time": steps * env.unwrapped.dt / wall,
+        # simulated s per s of the process's CPU time (its llvmpipe threads included): what
+        # one core costs, less sensitive than wall time to other jobs on a shared machine
+        "x_real_time_cpu": steps * env.unwrapped.dt / cpu,
         "steps_per_s": steps / wall,
         "camera_frames": frames,
         "ms_per_frame": {k: 1e3 * v / max(frames, 1) for k, v in stages.items()},
@@ -108,12 +99,36 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
         else 1e3 * sum(env.estimator.timings.values()) / steps,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
-    if profiler is not None:
-        row["profile"] = top_functions(profiler, wall)
+    if profile:  # a second drive of the same length: the profiler's overhead stays out of the rows
+        profiler = cProfile.Profile()
+        profiler.enable()
+        profiled_wall, *_ = _drive(env, follower, source, steps, obs, info, None)
+        profiler.disable()
+        row["profile"] = top_functions(profiler, profiled_wall)
     if kept:
-        row["detector_vs_aruco"] = detector_vs_aruco(kept, env.unwrapped.config.world)
+        row["detector_vs_aruco"] = detector_vs_aruco(
+            kept, env.unwrapped.config.world, env.estimator.detector
+        )
     env.close()
     return row
+
+
+def _drive(env, follower, source: str, steps: int, obs, info, kept: list | None):
+    """The follower drives ``steps`` steps (on the truth or the estimate); returns wall s,
+    CPU s, camera frames and the last observation and info. ``kept`` collects the first
+    rendered frames with the predictions the estimator's detector was given."""
+    frames, start, start_cpu = 0, time.perf_counter(), time.process_time()
+    for _ in range(steps):
+        pose = info["true_pose"] if source == "truth" else obs["pose"]
+        obs, _, terminated, truncated, info = env.step(follower.act(pose))
+        if obs["image_new"]:
+            frames += 1
+            keep = kept is not None and len(kept) < ARUCO_FRAMES
+            if keep and "image" in obs and source != "truth":
+                kept.append((obs["image"], env.estimator.detector.predictions))
+        if terminated or truncated:
+            obs, info = env.reset()
+    return time.perf_counter() - start, time.process_time() - start_cpu, frames, obs, info
 
 
 def top_functions(profiler: cProfile.Profile, wall: float, count: int = 12) -> list[dict]:
@@ -131,31 +146,53 @@ def top_functions(profiler: cProfile.Profile, wall: float, count: int = 12) -> l
     ]
 
 
-def detector_vs_aruco(images: list[np.ndarray], world, rounds: int = 3) -> dict:
-    """Best-of-``rounds`` ms per frame of the landmark detector and of ArUco ``detectMarkers``."""
+def detector_vs_aruco(frames: list[tuple], world, live, rounds: int = 3) -> dict:
+    """Best-of-``rounds`` ms per frame, on the same frames (``(image, predictions)``, the first
+    of the drive), of the plain landmark detector, of the estimator's whole detection stage
+    replayed (``pipeline_ms``: a fresh copy of its :class:`FrameDetector` given the predictions
+    it was given live, so track-aided matching and undistortion included) and of ArUco
+    ``detectMarkers``."""
     import cv2
 
+    from stsf_gym.estimators.frame_detector import FrameDetector
     from stsf_gym.vision.detector import LandmarkDetector
 
     detector = LandmarkDetector(world.landmark_pattern, valid_ids={lm.id for lm in world.landmarks})
+    images = [image for image, _ in frames]
     greys = [cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) for image in images]
     aruco = cv2.aruco.ArucoDetector(
         cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50), cv2.aruco.DetectorParameters()
     )
 
-    def best_ms(fn, frames) -> float:
-        fn(frames[0])  # warm-up
+    def replay(_) -> None:
+        pipeline = FrameDetector(live.pattern, live.valid_ids, live.calibration, live.matcher)
+        for image, predictions in frames:
+            pipeline({"image": image}, predictions)
+
+    def best_ms(fn, items, per_item: bool = True) -> float:
+        fn(items[0])  # warm-up
         times = []
         for _ in range(rounds):
             t0 = time.perf_counter()
-            for frame in frames:
-                fn(frame)
-            times.append((time.perf_counter() - t0) / len(frames) * 1e3)
+            if per_item:
+                for item in items:
+                    fn(item)
+            else:
+                fn(items)
+            times.append((time.perf_counter() - t0) / len(items) * 1e3)
         return min(times)
 
     ours = best_ms(detector.detect, images)
+    pipeline = best_ms(replay, frames, per_item=False)
     theirs = best_ms(aruco.detectMarkers, greys)
-    return {"frames": len(images), "detector_ms": ours, "aruco_ms": theirs, "ratio": ours / theirs}
+    return {
+        "frames": len(images),
+        "detector_ms": ours,
+        "pipeline_ms": pipeline,
+        "aruco_ms": theirs,
+        "ratio": ours / theirs,
+        "pipeline_ratio": pipeline / theirs,
+    }
 
 
 def _time_frames(env) -> dict:
@@ -208,30 +245,82 @@ def _render_latency(renderer: str, frames: int, cpu: int | None) -> dict:
         for _ in range(frames):
             u.sim.render(width, height, view, projection)
         row[f"ms_{width}x{height}"] = (time.perf_counter() - start) / frames * 1e3
+        if renderer == "gl":
+            row[f"camera_frame_ms_{width}x{height}"] = _camera_frame_ms(width, height, frames)
     row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     env.close()
     return row
 
 
-def vector_scaling(steps: int, seed: int = 0) -> dict:
-    """Throughput of ``AsyncVectorEnv`` with 1 and 2 workers (rendered STSF pipeline)."""
+#: vector-env throughput cases: label -> (env id, overrides)
+VECTOR_PIPELINES = {
+    "rendered STSF": ("stsf_gym/Corridor-STSF-v0", {}),
+    "fast mode STSF": ("stsf_gym/Corridor-STSF-v0", {"camera__mode": "fast"}),
+}
+VECTOR_KINDS = ("AsyncVectorEnv", "SubprocVecEnv")
+
+
+def _camera_frame_ms(width: int, height: int, frames: int) -> float:
+    """ms per whole camera frame (render, lens, defocus, sensor) of a still camera of this
+    size, the paper's camera profile."""
+    import gymnasium as gym
+
+    env = gym.make("stsf_gym/Corridor-v0", camera__width=width, camera__height=height)
+    u = env.unwrapped
+    env.reset(seed=0)
+    pose, rng = u.robot.camera_pose(), np.random.default_rng(0)
+    u.camera_sensor.capture(pose, rng)  # warm-up
+    start = time.perf_counter()
+    for _ in range(frames):
+        u.camera_sensor.capture(pose, rng)
+    elapsed = time.perf_counter() - start
+    env.close()
+    return elapsed / frames * 1e3
+
+
+def vector_scaling(steps: int, seed: int = 0) -> list[dict]:
+    """Throughput with 1 and 2 workers of Gymnasium's ``AsyncVectorEnv`` and stable-baselines3's
+    ``SubprocVecEnv`` (each worker a ``spawn`` process), on the rendered and the fast-mode STSF
+    pipelines: steps per second of all workers together and the 2-worker speed-up."""
+    rows = []
+    runs = [(p, k) for p in VECTOR_PIPELINES for k in VECTOR_KINDS]
+    for pipeline, kind in tqdm(runs, desc="vector envs", unit="run"):
+        env_id, overrides = VECTOR_PIPELINES[pipeline]
+        rates = {w: _vector_rate(kind, env_id, overrides, w, steps, seed) for w in (1, 2)}
+        rows.append(
+            {
+                "pipeline": pipeline,
+                "vector env": kind,
+                "steps_per_s_1_worker": rates[1],
+                "steps_per_s_2_workers": rates[2],
+                "speed_up": rates[2] / rates[1],
+            }
+        )
+    return rows
+
+
+def _vector_rate(
+    kind: str, env_id: str, overrides: dict, workers: int, steps: int, seed: int
+) -> float:
     import gymnasium as gym
 
     import stsf_gym  # noqa: F401
 
-    rows = {}
-    for workers in (1, 2):
-        fns = [lambda: gym.make("stsf_gym/Corridor-STSF-v0") for _ in range(workers)]
+    fns = [lambda: gym.make(env_id, **overrides) for _ in range(workers)]
+    actions = np.tile(np.array([0.5, 0.05], np.float32), (workers, 1))
+    if kind == "AsyncVectorEnv":
         envs = gym.vector.AsyncVectorEnv(fns, context="spawn")
         envs.reset(seed=seed)
-        actions = np.tile(np.array([0.5, 0.05], np.float32), (workers, 1))
-        start = time.perf_counter()
-        for _ in range(steps):
-            envs.step(actions)
-        rows[workers] = steps * workers / (time.perf_counter() - start)
-        envs.close()
-    return {
-        "steps_per_s_1_worker": rows[1],
-        "steps_per_s_2_workers": rows[2],
-        "speed_up": rows[2] / rows[1],
-    }
+    else:
+        from stable_baselines3.common.vec_env import SubprocVecEnv
+
+        envs = SubprocVecEnv(fns, start_method="spawn")
+        envs.seed(seed)
+        envs.reset()
+    envs.step(actions)  # warm-up: the first frame builds the GL objects
+    start = time.perf_counter()
+    for _ in range(steps):
+        envs.step(actions)
+    rate = steps * workers / (time.perf_counter() - start)
+    envs.close()
+    return rate

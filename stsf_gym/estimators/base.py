@@ -100,6 +100,9 @@ class PoseEstimator(ABC):
         self.mean, self.cov = np.zeros(3), np.eye(3)
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
+        """Start an episode on the robot ``model`` at ``initial_pose`` ``[x, y, yaw]`` with
+        covariance ``initial_cov`` (3x3); clears the timings and counters.
+        """
         self.model = model
         self.mean = np.asarray(initial_pose, dtype=float).copy()
         self.cov = np.asarray(initial_cov, dtype=float).copy()

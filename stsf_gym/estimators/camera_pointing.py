@@ -40,6 +40,7 @@ class LandmarkPointer:
         self.target: int | None = None
 
     def reset(self) -> None:
+        """Forget the landmark the camera was kept on."""
         self.target = None
 
     def _camera_xy(self, pose: np.ndarray) -> np.ndarray:

@@ -11,8 +11,13 @@ predicted (track-aided matching, :class:`~stsf_gym.vision.predicted.PredictedMat
 fast mode the env lists the boards such a search would find (``obs["aided_ids"]``, drawn with
 the matcher's fitted rate by size, :mod:`stsf_gym.envs.sensors.fast_camera`); a prediction takes
 one when it is of that id, at least the matcher's smallest board size, and its centre lies
-within its search radius of the board's (as the matcher's search window). Either way the image
-points are then
+within its search radius of the board's (as the matcher's search window).
+
+With predictions the rendered frame is searched where the tracks predict first: the detector's
+geometry stage runs on each predicted board's window (:meth:`LandmarkDetector.detect_at`), and
+the whole frame (template search, eq. 6-7, then geometry) only when no prediction is in view or
+every :data:`FULL_FRAME_EVERY` frames, so a board no track follows is found at most that many
+frames late. Either way the image points are then
 undistorted with the calibration the robot believes it has
 (:attr:`~stsf_gym.estimators.base.SensorModel.camera_calibration`): the estimators work with
 an ideal pinhole camera of that calibration's K.
@@ -30,6 +35,10 @@ from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.vision.detector import Detection, LandmarkDetector, to_grey
 from stsf_gym.vision.landmarks import LandmarkPattern, square_centres
 from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
+
+#: While tracks predict boards, the whole frame is searched every this many frames (the others:
+#: the predicted windows only).
+FULL_FRAME_EVERY = 3
 
 
 class FrameDetector:
@@ -52,6 +61,7 @@ class FrameDetector:
         #: was told to expect (for recordings: :mod:`stsf_gym.recording`).
         self.found: list[Detection] = []
         self.predictions: list[BoardPrediction] = []
+        self._since_full_frame = FULL_FRAME_EVERY  # frames since the whole frame was searched
 
     def __call__(self, obs: dict, predictions: list[BoardPrediction] = ()) -> list[Detection]:
         self.aided, self.predictions = [], list(predictions)
@@ -61,7 +71,7 @@ class FrameDetector:
                 self.aided = self._simulated_search(obs, predictions, found)
                 found = found + self.aided
         else:
-            found = _detect(self.pattern, self.valid_ids, obs["image"])
+            found = self._detect(obs["image"], predictions)
             if self.matcher is not None and predictions:
                 self.aided = self._search(obs["image"], predictions, found)
                 found = found + self.aided
@@ -69,6 +79,32 @@ class FrameDetector:
         if self.calibration is None or not self.calibration.distorted:
             return found
         return [self._undistorted(d) for d in found]
+
+    def _detect(self, image: np.ndarray, predictions: list[BoardPrediction]) -> list[Detection]:
+        """The detector's boards: in the predicted windows, or in the whole frame when none is
+        predicted or its turn has come (see the module docstring)."""
+        detector = _image_detector(self.pattern, self.valid_ids)
+        windows = [
+            p
+            for p in predictions
+            if p.landmark_id in self.valid_ids
+            and p.size_px >= detector.min_board_px  # as small as the whole-frame search finds
+            and np.isfinite(p.corners).all()
+        ]
+        self._since_full_frame += 1
+        if not windows or self._since_full_frame >= FULL_FRAME_EVERY:
+            self._since_full_frame = 0
+            return _detect(self.pattern, self.valid_ids, image)
+        grey = to_grey(image)
+        found: dict[int, Detection] = {}
+        for prediction in windows:
+            if prediction.landmark_id in found:
+                continue
+            cx, cy = prediction.corners.mean(axis=0)
+            detection = detector.detect_at(grey, cx, cy, prediction.size_px)
+            if detection is not None and detection.landmark_id not in found:
+                found[detection.landmark_id] = detection
+        return list(found.values())
 
     def _search(
         self, image: np.ndarray, predictions: list[BoardPrediction], found: list[Detection]

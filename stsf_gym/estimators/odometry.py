@@ -43,6 +43,7 @@ class OdometryNoise:
         return np.diag([self.radius_var, self.radius_var, self.wheelbase_var])
 
     def slip_variances(self, d_left: float, d_right: float) -> np.ndarray:
+        """Slip variances (m^2) of the wheel travels ``d_left``, ``d_right`` (m)."""
         return self.slip_var_per_m * np.abs(np.array([d_left, d_right]))
 
 

@@ -38,6 +38,7 @@ class Crash:
 
     @classmethod
     def of(cls, err: BaseException) -> Crash:
+        """The crash an exception of a job stands for (a dead worker process is named as such)."""
         if isinstance(err, BrokenProcessPool):
             return cls("the worker process died (killed, os._exit or a crash in native code)")
         first_line = (str(err).strip().splitlines() or [""])[0]

@@ -153,6 +153,7 @@ def _aided_detector(pattern, ids):
 
 
 def world_to_camera(world_from_camera: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """World ``points`` (n, 3) in the camera frame of ``world_from_camera``."""
     camera_from_world = np.linalg.inv(world_from_camera)
     return points @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
 

@@ -91,6 +91,9 @@ REACH = {"task": {"protocol": "reach"}}
 
 
 def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
+    """The paper's Fig. 10: odometry, STSF and the EKF along the straight 10 m under the reach
+    protocol; writes ``out/fig10`` and returns its summary.
+    """
     env = deep_merge(env or {}, REACH)
     summary, by_estimator = evaluate(
         out,
@@ -122,6 +125,9 @@ def fig10(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | No
 
 
 def fig11(out: Path, seeds: int, seed: int = 0, workers: int = 2, env: dict | None = None):
+    """The paper's Fig. 11: every estimator of :data:`FIG11_ESTIMATORS` along the IRL corridor under
+    the paper's camera and the reach protocol; writes ``out/fig11`` and returns its summary.
+    """
     names = FIG11_ESTIMATORS
     env = deep_merge(deep_merge(PAPER_CAMERA, env or {}), REACH)
     summary, by_estimator = evaluate(

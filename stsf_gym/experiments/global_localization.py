@@ -71,6 +71,9 @@ def localize(
 
 
 def main(argv: list[str] | None = None) -> dict:
+    """``python -m stsf_gym.experiments.global_localization``: MCL from an unknown start; returns
+    the summary it writes.
+    """
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)

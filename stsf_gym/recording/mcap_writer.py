@@ -44,6 +44,7 @@ class McapLogWriter:
         self._schemas: dict[str, int] = {}
 
     def write(self, topic: str, stamp: int, message) -> None:
+        """Serialize ``message`` with its topic's ROS 2 type and write it at ``stamp`` (ns)."""
         self.write_cdr(topic, stamp, ros.serialize(message, topics.type_of(topic)))
 
     def write_cdr(self, topic: str, stamp: int, data: bytes) -> None:
@@ -65,6 +66,7 @@ class McapLogWriter:
         return self._file.closed
 
     def close(self) -> None:
+        """Finish the MCAP file and move it to its name (atomic); a second call does nothing."""
         if self._file.closed:
             return
         self._writer.finish()
@@ -91,6 +93,7 @@ class McapRecorder:
         self._layout, self._last_stamp = None, 0
 
     def start(self, start: EpisodeStart) -> None:
+        """Write the episode's sensor model, camera info, metadata and the start pose."""
         self._layout, self._model = start.layout, start.model
         calibration = start.model.camera_calibration
         info = ros.camera_info(0, calibration.K, calibration.dist, start.model.image_size)
@@ -112,6 +115,7 @@ class McapRecorder:
         self._write(topics.TF_STATIC, 0, ros.tf_message([sonar]))
 
     def step(self, record: StepRecord) -> None:
+        """Write one step: wheel ticks, mount, sonar, the frame or detections, poses, command."""
         stamp, obs, layout = nanoseconds(record.time), record.obs, self._layout
         self._last_stamp = stamp
         self._ticks = self._ticks + np.asarray(obs["encoders"], np.int64)
@@ -180,6 +184,7 @@ class McapRecorder:
         )
 
     def close(self, end: dict | None = None) -> None:
+        """Write the episode's ending (when given) and finish the file."""
         if self.log.closed:
             return
         if end is not None:

@@ -70,9 +70,11 @@ class Recorder(Protocol):
 
     path: Any
 
-    def start(self, start: EpisodeStart) -> None: ...
+    def start(self, start: EpisodeStart) -> None:
+        """Begin the file with the episode's start (layout, sensor model, metadata)."""
 
-    def step(self, record: StepRecord) -> None: ...
+    def step(self, record: StepRecord) -> None:
+        """Write one control step."""
 
     def close(self, end: dict | None = None) -> None:
         """Finish the file; ``end`` is the episode's ending (``outcome``), when it ended."""

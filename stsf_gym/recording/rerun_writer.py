@@ -47,6 +47,7 @@ class RerunRecorder:
         self.frames: dict[str, list] = defaultdict(list)
 
     def start(self, start: EpisodeStart) -> None:
+        """Log the static world: walls, boards with their ids and the path."""
         self.layout, model = start.layout, start.model
         walls = np.asarray(model.walls, float).reshape(-1, 4)
         length = np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1])
@@ -135,6 +136,7 @@ class RerunRecorder:
         )
 
     def close(self, end: dict | None = None) -> None:
+        """Send the buffered steps and frames and close the recording."""
         if self.steps["time"]:
             self._send_steps()
         if self.frames["time"]:

@@ -24,10 +24,12 @@ PLANAR = np.ix_([0, 1, 5], [0, 1, 5])
 
 
 def serialize(message, msgtype: str) -> bytes:
+    """CDR bytes of ``message`` of ROS 2 type ``msgtype``."""
     return bytes(TYPESTORE.serialize_cdr(message, msgtype))
 
 
 def deserialize(data: bytes, msgtype: str):
+    """The message of ROS 2 type ``msgtype`` in CDR bytes ``data``."""
     return TYPESTORE.deserialize_cdr(data, msgtype)
 
 
@@ -37,6 +39,7 @@ def message_definition(msgtype: str) -> str:
 
 
 def header(stamp_ns: int, frame_id: str):
+    """A ``std_msgs/Header`` at ``stamp_ns`` (ns) in frame ``frame_id``."""
     sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
     return _T["std_msgs/msg/Header"](
         stamp=_T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec), frame_id=frame_id
@@ -49,6 +52,7 @@ def stamp_ns(message) -> int:
 
 
 def string(text: str):
+    """A ``std_msgs/String`` holding ``text``."""
     return _T["std_msgs/msg/String"](data=text)
 
 
@@ -115,10 +119,12 @@ def transform(stamp: int, parent: str, child: str, matrix: np.ndarray):
 
 
 def tf_message(transforms: list):
+    """A ``tf2_msgs/TFMessage`` of ``transforms``."""
     return _T["tf2_msgs/msg/TFMessage"](transforms=transforms)
 
 
 def joint_state(stamp: int, names: list[str], positions) -> object:
+    """A ``sensor_msgs/JointState`` of joint ``positions`` named ``names`` at ``stamp`` (ns)."""
     positions = np.asarray(positions, dtype=np.float64)
     empty = np.zeros(0, np.float64)
     return _T["sensor_msgs/msg/JointState"](
@@ -166,6 +172,7 @@ def camera_info(stamp: int, K: np.ndarray, dist: np.ndarray, size: tuple[int, in
 
 
 def compressed_image(stamp: int, data: bytes, image_format: str) -> object:
+    """A ``sensor_msgs/CompressedImage`` (``png`` or ``jpeg``) in the camera's optical frame."""
     return _T["sensor_msgs/msg/CompressedImage"](
         header=header(stamp, "camera_optical"),
         format=image_format,
@@ -174,6 +181,7 @@ def compressed_image(stamp: int, data: bytes, image_format: str) -> object:
 
 
 def raw_image(stamp: int, rgb: np.ndarray) -> object:
+    """A lossless ``sensor_msgs/Image`` (``rgb8``) in the camera's optical frame."""
     height, width = rgb.shape[:2]
     return _T["sensor_msgs/msg/Image"](
         header=header(stamp, "camera_optical"),
@@ -244,6 +252,7 @@ def detection_points(message) -> np.ndarray:
 
 
 def twist(stamp: int, linear: float, angular: float) -> object:
+    """A ``geometry_msgs/TwistStamped`` command: forward speed (m/s) and yaw rate (rad/s)."""
     vector = _T["geometry_msgs/msg/Vector3"]
     return _T["geometry_msgs/msg/TwistStamped"](
         header=header(stamp, "base_link"),

@@ -70,6 +70,7 @@ def sensor_model_dict(model: SensorModel) -> dict[str, Any]:
 
 
 def sensor_model_json(model: SensorModel) -> str:
+    """``model`` as the JSON text of ``/robot/sensor_model`` (docs/log_format.md)."""
     return json.dumps(sensor_model_dict(model), default=lambda v: v.item())  # numpy scalars
 
 

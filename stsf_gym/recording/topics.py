@@ -59,4 +59,5 @@ FRAME_FORMATS = {"png": True, "raw": True, "jpeg": False}
 
 
 def type_of(topic: str) -> str:
+    """The ROS 2 message type of ``topic``."""
     return ESTIMATE_TYPE if topic.startswith("/estimate/") else TYPES[topic]

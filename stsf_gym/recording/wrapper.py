@@ -85,6 +85,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._recorder: Recorder | None = None
 
     def reset(self, *, seed=None, options=None):
+        """Finish the previous episode's file, reset the env and start a new recording."""
         self._finish()
         obs, info = self.env.reset(seed=seed, options=options)
         started = _clocks()
@@ -99,6 +100,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return obs, info
 
     def step(self, action):
+        """Step the env and record the step; the file is finished when the episode ends."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         if self._recorder is not None:
             started = _clocks()
@@ -111,6 +113,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return obs, reward, terminated, truncated, info
 
     def close(self):
+        """Finish the open recording, then close the env."""
         self._finish()
         return super().close()
 
@@ -133,7 +136,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if estimator is not None:
             pose, cov = estimator.mean.copy(), estimator.cov.copy()
         else:
-            pose = np.asarray((options or {}).get("start_pose", cfg.world.start), float)
+            pose = np.asarray(u.start_pose, float)
             cov = np.diag(np.square(START_STD))
         layout = RobotLayout(
             body_radius=cfg.robot.body_radius,

@@ -97,6 +97,7 @@ def _numeric(value: Any) -> bool:
 
 
 def is_stat(value: Any) -> bool:
+    """True when ``value`` is a statistic of the schema (``{mean, std, count, ...}``)."""
     return isinstance(value, Mapping) and {"mean", "std", "count"} <= set(value)
 
 

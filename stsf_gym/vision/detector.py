@@ -183,6 +183,11 @@ class LandmarkDetector:
             detections.append(det)
         return detections
 
+    def detect_at(self, grey: np.ndarray, cx: float, cy: float, size: float) -> Detection | None:
+        """The board around ``(cx, cy)`` of side about ``size`` px (a track's prediction), by
+        stage 2 alone: no template search. Its ``score`` is NaN (no correlation was taken)."""
+        return self._verify(grey, Candidate(cx, cy, size, math.nan))
+
     def _verify(self, grey: np.ndarray, cand: Candidate) -> Detection | None:
         """The landmark around a candidate, growing the region while the board touches its edge."""
         h, w = grey.shape

@@ -14,6 +14,7 @@ texture the simulator pastes on the wall and the geometry the detector matches a
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,7 +86,13 @@ def cell_centre(row: int, col: int, pattern: LandmarkPattern) -> np.ndarray:
 
 
 def square_centres(landmark_id: int, pattern: LandmarkPattern) -> np.ndarray:
-    """(M, 2) centres of the white squares, in the order of :func:`lit_cells`."""
+    """(M, 2) centres of the white squares, in the order of :func:`lit_cells` (a fresh copy of
+    the table made once per id and pattern: estimators ask for it every frame)."""
+    return _square_centres(landmark_id, pattern).copy()
+
+
+@functools.lru_cache(maxsize=4096)
+def _square_centres(landmark_id: int, pattern: LandmarkPattern) -> np.ndarray:
     return np.array([cell_centre(r, c, pattern) for r, c in lit_cells(landmark_id, pattern)])
 
 

@@ -24,18 +24,22 @@ CONSIDERED_KEY = gtsam.symbol("k", 0)
 
 
 def pose_key(index: int) -> int:
+    """The GTSAM key of pose ``index``."""
     return gtsam.symbol("x", index)
 
 
 def as_pose2(pose: np.ndarray) -> gtsam.Pose2:
+    """``[x, y, yaw]`` as a ``gtsam.Pose2``."""
     return gtsam.Pose2(float(pose[0]), float(pose[1]), float(pose[2]))
 
 
 def as_array(pose: gtsam.Pose2) -> np.ndarray:
+    """A ``gtsam.Pose2`` as ``[x, y, yaw]``."""
     return np.array([pose.x(), pose.y(), pose.theta()])
 
 
 def gaussian(cov: np.ndarray) -> gtsam.noiseModel.Gaussian:
+    """A GTSAM Gaussian noise model of covariance ``cov``."""
     return gtsam.noiseModel.Gaussian.Covariance(np.ascontiguousarray(cov, dtype=float))
 
 
@@ -61,10 +65,14 @@ def pose_prior(index: int, pose: np.ndarray, cov: np.ndarray) -> gtsam.PriorFact
 
 
 def considered_prior(mean: np.ndarray, cov: np.ndarray) -> gtsam.PriorFactorVector:
+    """The prior (``mean``, ``cov``) on the considered parameters ``k``."""
     return gtsam.PriorFactorVector(CONSIDERED_KEY, np.asarray(mean, float), gaussian(cov))
 
 
 def odometry_factor(i: int, j: int, leg: OdometryLeg) -> gtsam.CustomFactor:
+    """The factor between poses ``i`` and ``j``: the preintegrated ``leg``'s ``Delta`` with its slip
+    covariance, corrected by the calibration ``c`` through its Jacobian (analytic Jacobians).
+    """
     delta, by_calibration = leg.delta.copy(), leg.by_calibration.copy()
 
     def error(factor, values, jacobians):
@@ -91,6 +99,10 @@ def odometry_factor(i: int, j: int, leg: OdometryLeg) -> gtsam.CustomFactor:
 
 
 def landmark_factor(index: int, measurement: LandmarkPose) -> gtsam.CustomFactor:
+    """The factor of one board's PnP pose on pose ``index``: ``z = h(x) + M k + v`` (analytic
+    Jacobians).
+    """
+
     def error(factor, values, jacobians):
         pose = as_array(values.atPose2(pose_key(index)))
         k = values.atVector(CONSIDERED_KEY)

@@ -55,6 +55,7 @@ class FloorRecorder:
         self.settings = settings
 
     def reset(self, model: SensorModel, start, start_cov) -> None:
+        """Start recording an episode of ``model`` at ``start`` with covariance ``start_cov``."""
         self.model, self.boards = model, LandmarkPoses(model, self.settings)
         self.data = EpisodeMeasurements(
             np.asarray(start, float),
@@ -66,6 +67,7 @@ class FloorRecorder:
         self.counters: dict[str, int] = {}
 
     def update(self, obs: dict) -> None:
+        """Record one step: its wheel travel, and the boards of a new camera frame."""
         self.leg.add(self.model, *self.model.calibration.wheel_travel(obs["encoders"]))
         if int(obs["image_new"]):
             self.data.legs.append(self.leg)

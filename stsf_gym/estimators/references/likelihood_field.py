@@ -46,6 +46,7 @@ class LikelihoodField:
         return np.clip(cells, 0, np.array(self.shape) - 1)
 
     def distance(self, points: np.ndarray) -> np.ndarray:
+        """Distance (m) from ``points`` (..., 2) to the nearest wall face, looked up in the grid."""
         cells = self._cell(points)
         return self.grid[cells[..., 0], cells[..., 1]]
 

@@ -8,9 +8,15 @@ from stsf_gym.io import markdown_table, save_figure
 
 
 def _label(row: dict) -> str:
-    return (
-        row["estimator"] if row["agent"] == "follower" else f"{row['agent']} / {row['estimator']}"
-    )
+    if row["agent"] == "follower":
+        return row["estimator"]
+    return f"{agent_name(row['agent'])} / {row['estimator']}"
+
+
+def agent_name(agent: str) -> str:
+    """``follower``, or a model by its last two folders (``ppo-stsf/seed-0``); the JSON keeps
+    the whole path."""
+    return agent if agent == "follower" else "/".join(Path(agent).parts[-3:-1])
 
 
 def leaderboard_markdown(summary: dict) -> str:
@@ -34,7 +40,7 @@ def leaderboard_markdown(summary: dict) -> str:
         f = r["failures"]
         table.append(
             {
-                "agent": r["agent"],
+                "agent": agent_name(r["agent"]),
                 "pose source": r["estimator"],
                 "success (95 % CI)": f"{r['success_rate']['mean']:.2f} "
                 f"({r['success_ci95'][0]:.2f}-{r['success_ci95'][1]:.2f})",
@@ -49,6 +55,24 @@ def leaderboard_markdown(summary: dict) -> str:
             }
         )
     text += markdown_table(table)
+    if summary.get("trained"):
+        text += (
+            "\n## Trained agents over their training seeds (IQM, 95 % stratified bootstrap; "
+            "Agarwal et al. 2021)\n\n"
+        )
+        text += markdown_table(
+            [
+                {
+                    "agent": Path(t["agent"]).name,
+                    "pose source": t["estimator"],
+                    "runs x worlds": f"{t['runs']} x {t['worlds']}",
+                    "success IQM (95 % CI)": _iqm(t, "success"),
+                    "success per run": ", ".join(f"{v:.2f}" for v in t["success_per_run"]),
+                    "SPL IQM (95 % CI)": _iqm(t, "spl"),
+                }
+                for t in summary["trained"]
+            ]
+        )
     if summary["paired"]:
         text += "\n## Paired differences in success (Newcombe 1998, method 10) and SPL\n\n"
         pairs = []
@@ -56,7 +80,7 @@ def leaderboard_markdown(summary: dict) -> str:
             s, d = p["success_difference"], p["spl_difference"]
             pairs.append(
                 {
-                    "agent": p["agent"],
+                    "agent": agent_name(p["agent"]),
                     "first - second": f"{p['first']} - {p['second']}",
                     "success difference (95 % CI)": f"{s['difference']:+.3f} "
                     f"({s['low']:+.3f} to {s['high']:+.3f})",
@@ -72,6 +96,11 @@ def leaderboard_markdown(summary: dict) -> str:
             [{"cell": str(f["cell"]), "error": f["error"]} for f in summary["failed"]]
         )
     return text
+
+
+def _iqm(row: dict, key: str) -> str:
+    low, high = row[f"{key}_iqm_ci95"]
+    return f"{row[f'{key}_iqm']:.2f} ({low:.2f}-{high:.2f})"
 
 
 def _stat(value: dict) -> str:

@@ -1,5 +1,9 @@
 """``stsf-gym benchmark --suite NAME``: agents x pose sources x a suite's test worlds.
 
+Agents: the follower on each pose source, and trained models (or training folders of several
+seeds) on their own pose source, aggregated over training seeds
+(:mod:`~stsf_gym.experiments.benchmark.trained`).
+
 Every episode is a sweep cell (``kind: evaluate``, :mod:`stsf_gym.experiments.sweep.cells`) on
 world ``generated:test`` with the suite's generator and env (the declared-stop task, the fast
 sensor mode): episode seed ``s`` drives test world ``first + s``, the same world and seed for
@@ -25,6 +29,11 @@ from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, paired_bootstrap
 from stsf_gym.experiments.benchmark.report import leaderboard_markdown, plot_leaderboard
 from stsf_gym.experiments.benchmark.scores import episode_scores, leaderboard_row
+from stsf_gym.experiments.benchmark.trained import (
+    agent_pose_sources,
+    aggregate_runs,
+    expand_agents,
+)
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.sweep.backends import make_runner
 from stsf_gym.experiments.sweep.cells import cell_config, run_cell
@@ -39,25 +48,27 @@ DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf",
 
 
 def benchmark_cells(suite: Suite, agents: list[str], estimators: list[str], seeds: list[int]):
-    """One evaluate cell per agent, pose source and episode seed; seed by seed, so a run cut
-    short has every pose source on the same worlds (``--worlds`` fewer then resumes)."""
+    """One evaluate cell per agent, pose source and episode seed (a trained model on its own
+    pose source only, :mod:`~stsf_gym.experiments.benchmark.trained`); per agent seed by seed,
+    so a run cut short has every pose source on the same worlds."""
     cells = []
-    for agent, seed, estimator in itertools.product(agents, seeds, estimators):
-        agent = str(Path(agent).resolve()) if agent.endswith(".zip") else agent
-        cells.append(
-            {
-                "kind": "evaluate",
-                "world": WORLD,
-                "estimator": estimator,
-                "agent": agent,
-                "seed": seed,
-                "faults": "none",
-                "env": suite.episode_env,
-                "options": estimator_options(estimator),
-                "values": {"suite": suite.name, "agent": agent, "estimator": estimator},
-                "version": BENCHMARK_VERSION,
-            }
-        )
+    for agent in expand_agents(agents):
+        pose_sources = agent_pose_sources(agent, estimators)
+        for seed, estimator in itertools.product(seeds, pose_sources):
+            cells.append(
+                {
+                    "kind": "evaluate",
+                    "world": WORLD,
+                    "estimator": estimator,
+                    "agent": agent,
+                    "seed": seed,
+                    "faults": "none",
+                    "env": suite.episode_env,
+                    "options": estimator_options(estimator),
+                    "values": {"suite": suite.name, "agent": agent, "estimator": estimator},
+                    "version": BENCHMARK_VERSION,
+                }
+            )
     return cells
 
 
@@ -149,6 +160,7 @@ def summarise_benchmark(suite: Suite, cells: list[dict], results: list[dict]) ->
         "goal_radius_m": load_config(suite.env).task.goal_radius,
         "seeds": [min(c["seed"] for c in cells), max(c["seed"] for c in cells)],
         "rows": rows,
+        "trained": aggregate_runs(scores),
         "paired": paired,
         "failed": failed,
     }

@@ -25,11 +25,14 @@ TRAIN_ARGUMENTS = {"algo": "ppo", "timesteps": None, "n_envs": 1, "config": None
 
 @dataclass(frozen=True)
 class CellKind:
+    """What a kind of sweep cell does: ``run`` a cell, and ``check`` one before anything runs."""
+
     run: Callable[[dict], dict]
     check: Callable[[dict], None] | None = None
 
 
 def cell_kind(kind: str) -> CellKind:
+    """The :class:`CellKind` named ``kind`` (``evaluate`` or ``train``); ConfigError otherwise."""
     if kind not in CELL_KINDS:
         raise ConfigError(f"unknown cell kind {kind!r}; known: {', '.join(CELL_KINDS)}")
     return CELL_KINDS[kind]

@@ -3,7 +3,8 @@
 A sweep file (``configs/sweeps/<name>.yaml``) holds:
 
 - ``base``: what every cell starts from: ``kind`` (``evaluate``, the default, or ``train``),
-  ``world`` (irl_corridor), ``agent`` (follower), ``estimator``, ``seed`` (0), ``faults``
+  ``world`` (irl_corridor) or ``suite`` (a benchmark suite: its test worlds and its env, with
+  ``base.env`` over it), ``agent`` (follower), ``estimator``, ``seed`` (0), ``faults``
   (a fault set: ``configs/faults/<name>.yaml`` or a fault file; ``none``), ``env`` (overrides
   merged over ``configs/default.yaml``), for evaluate cells ``options`` (estimator options over
   ``configs/estimators/``) and, for training cells, ``train``.
@@ -37,6 +38,8 @@ from stsf_gym.envs.config import (
     overrides_to_tree,
     read_yaml,
 )
+from stsf_gym.envs.generated_env import generated_label, parse_world
+from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.sweep.backends import make_runner
@@ -58,6 +61,8 @@ SECTIONS = {"evaluate": ("env", "options"), "train": ("env", "train")}
 
 @dataclass(frozen=True)
 class Sweep:
+    """A checked sweep file: its name, path, cell kind and every cell of its grid."""
+
     name: str
     path: Path
     kind: str
@@ -77,9 +82,13 @@ def load_sweep(path: str | Path, seed: int = 0, env: dict | None = None) -> Swee
     except ConfigError as err:
         raise ConfigError(f"{path}: base.kind: {err}") from err
     sections = SECTIONS.get(kind, ("env",))
-    _check_keys(path, "base.", base, ("kind", *PLAIN_KEYS, *sections))
+    _check_keys(path, "base.", base, ("kind", "suite", *PLAIN_KEYS, *sections))
     for section in sections:
         base[section] = _mapping(path, base, section, f"base.{section}")
+    if "suite" in base:  # a suite's test worlds and task, base.env over the suite's env
+        suite = _suite(path, base.pop("suite"))
+        base["world"] = generated_label("test")
+        base["env"] = deep_merge(suite.episode_env, base["env"])
     base["env"] = deep_merge(base["env"], env or {})
     _checked(path, "base", base, {}, sections)
     grid = _axes(path, "grid", _mapping(path, data, "grid"), base, sections)
@@ -207,11 +216,29 @@ def _checked(path: Path, label: str, base: dict, point: dict, sections: tuple[st
             raise ConfigError(f"seed must be an integer, got {seed!r}")
         if agent != "follower" and not (isinstance(agent, str) and Path(agent).is_file()):
             raise ConfigError(f"agent must be follower or a model file, got {agent!r}")
-        load_config(cell["env"], world=cell["world"])
+        _check_env(cell["env"], cell["world"])
         if cell.get("options") and estimator is not None:
             estimator_options(estimator, **cell["options"])
     except ConfigError as err:
         raise ConfigError(f"{path}: {label}: {err}") from err
+
+
+def _suite(path: Path, name: object):
+    from stsf_gym.envs.suite import load_suite
+
+    try:
+        return load_suite(str(name))
+    except ConfigError as err:
+        raise ConfigError(f"{path}: base.suite: {err}") from err
+
+
+def _check_env(env: dict, world: str) -> None:
+    """The env as the episode builds it; for generated worlds the generator's settings too."""
+    if parse_world(world) is None:
+        load_config(env, world=world)
+        return
+    load_generator_config(env.get("generator"))
+    load_config({k: v for k, v in env.items() if k not in ("generator", "split")})
 
 
 def _points(grid: dict, single: dict) -> list[dict]:

@@ -61,6 +61,8 @@ METHODS = ("conventional", "stsf", "stsf_gls", "stsf_joint")
 
 @dataclass(frozen=True)
 class Table1Config:
+    """Table I's settings (``configs/experiments/table1.yaml``), typed and ranged."""
+
     env: dict  # over configs/default.yaml, checked as an env config
     start_distance: Positive
     distances: tuple[Positive, ...]

@@ -1,0 +1,90 @@
+"""Trained agents in the benchmark: each training seed's model, and the aggregate over seeds.
+
+An agent of ``stsf-gym benchmark --agents`` is ``follower``, a saved model (``.zip``) or a
+training folder (the ``OUT`` of ``stsf-gym train --seeds N``: its ``seed-*/model.zip``, or the
+``model.zip`` of a one-seed run). A model drives on the pose source it was trained on (its
+``stsf_meta``); the follower on each pose source asked for.
+
+The models of one training folder are one agent trained with several seeds: besides a row per
+model, the leaderboard aggregates them as rliable does (Agarwal et al. 2021, "Deep RL at the
+edge of the statistical precipice"): the **interquartile mean** of the score matrix
+``runs x test worlds`` (success, SPL), with a 95 % **stratified bootstrap** interval that
+resamples the runs within each world, so the interval carries the spread between training
+seeds, not only between worlds.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from stsf_gym.envs.config import ConfigError
+from stsf_gym.experiments.benchmark.intervals import iqm, stratified_bootstrap
+
+FOLLOWER = "follower"
+SEED_FOLDERS = "seed-*"
+
+
+def expand_agents(agents: list[str]) -> list[str]:
+    """``follower`` and model files as given (resolved), training folders as their models."""
+    expanded = []
+    for agent in agents:
+        path = Path(agent)
+        if agent == FOLLOWER:
+            expanded.append(agent)
+        elif path.is_dir():
+            models = sorted(path.glob(f"{SEED_FOLDERS}/model.zip")) or [path / "model.zip"]
+            missing = [m for m in models if not m.is_file()]
+            if missing:
+                raise ConfigError(
+                    f"agent folder {path} holds no trained model: {missing[0]} not found "
+                    "(a folder of `stsf-gym train --seeds N`, or of one run)"
+                )
+            expanded.extend(str(m.resolve()) for m in models)
+        else:
+            expanded.append(str(path.resolve()))
+    return expanded
+
+
+def agent_pose_sources(agent: str, estimators: list[str]) -> list[str]:
+    """The pose sources ``agent`` drives on: a model its own, the follower ``estimators``."""
+    if agent == FOLLOWER:
+        return list(estimators)
+    from stsf_gym.agents.sb3_agent import model_metadata
+
+    return [model_metadata(agent)["estimator"]]
+
+
+def training_group(agent: str) -> str | None:
+    """The training folder a model belongs to (None for the follower)."""
+    if agent == FOLLOWER:
+        return None
+    folder = Path(agent).parent
+    return str(folder.parent if folder.match(SEED_FOLDERS) else folder)
+
+
+def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
+    """Per training folder and pose source: IQM of success and SPL over its models' episodes
+    on the test worlds every model finished, with stratified bootstrap intervals."""
+    groups: dict[tuple[str, str], list[str]] = {}
+    for agent, estimator in scores:
+        group = training_group(agent)
+        if group is not None:
+            groups.setdefault((group, estimator), []).append(agent)
+    aggregates = []
+    for (group, estimator), runs in sorted(groups.items()):
+        worlds = sorted(set.intersection(*(set(scores[run, estimator]) for run in runs)))
+        if not worlds:
+            continue
+        row = {"agent": group, "estimator": estimator, "runs": len(runs), "worlds": len(worlds)}
+        for key in ("success", "spl"):
+            by_world = [[float(scores[run, estimator][w][key]) for run in runs] for w in worlds]
+            interval = stratified_bootstrap(by_world, iqm)
+            per_run = [
+                sum(float(scores[run, estimator][w][key]) for w in worlds) / len(worlds)
+                for run in runs
+            ]
+            row[f"{key}_iqm"] = interval["estimate"]
+            row[f"{key}_iqm_ci95"] = [interval["low"], interval["high"]]
+            row[f"{key}_per_run"] = per_run
+        aggregates.append(row)
+    return aggregates

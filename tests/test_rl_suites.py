@@ -1,0 +1,113 @@
+"""RL on a benchmark suite: train worlds, evaluation on held-out val worlds, several training
+seeds, and the benchmark's aggregate over them (IQM with a stratified bootstrap interval)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from stsf_gym.envs.worlds.generator_config import load_generator_config
+from stsf_gym.experiments.benchmark.trained import aggregate_runs
+from stsf_gym.validation import ConfigError
+from stsf_gym.yaml_layers import SUITE_DIR
+
+
+def test_train_val_and_test_worlds_are_disjoint():
+    gen = load_generator_config()
+    train, val, test = (set(gen.split_range(s)) for s in ("train", "val", "test"))
+    assert not (train & val) and not (train & test) and not (val & test)
+    with pytest.raises(
+        ConfigError, match=r"splits val \[1000005, 1000007\] and test .* must not overlap"
+    ):
+        load_generator_config(
+            splits={"train": [0, 10], "test": [1000000, 10000], "val": [1000005, 3]}
+        )
+
+
+def _scores(successes: list[list[int]]) -> dict:
+    """Synthetic per-model scores: ``successes[run][world]``."""
+    return {
+        (f"/runs/ppo-stsf/seed-{r}/model.zip", "stsf"): {
+            w: {"success": bool(v), "spl": 0.8 * v} for w, v in enumerate(row)
+        }
+        for r, row in enumerate(successes)
+    }
+
+
+def test_aggregate_over_training_seeds():
+    scores = _scores([[1, 1, 1, 1, 0, 0, 1, 1], [1, 0, 1, 1, 0, 0, 1, 0], [0, 0, 0, 0, 0, 0, 1, 0]])
+    scores["follower", "stsf"] = {w: {"success": True, "spl": 1.0} for w in range(8)}
+    (row,) = aggregate_runs(scores)  # the follower is not a training run
+    assert row["agent"] == "/runs/ppo-stsf" and row["runs"] == 3 and row["worlds"] == 8
+    assert row["success_per_run"] == pytest.approx([0.75, 0.5, 0.125])
+    everything = np.sort(np.array([v for r in _scores_matrix(scores) for v in r]))
+    assert row["success_iqm"] == pytest.approx(everything[6:18].mean())  # the middle half of 24
+    low, high = row["success_iqm_ci95"]
+    assert 0 <= low < row["success_iqm"] < high <= 1
+    assert row["spl_iqm"] == pytest.approx(0.8 * row["success_iqm"])
+
+
+def _scores_matrix(scores):
+    return [
+        [float(v["success"]) for v in by_world.values()]
+        for (agent, _), by_world in scores.items()
+        if agent != "follower"
+    ]
+
+
+def test_identical_runs_give_a_point_interval():
+    (row,) = aggregate_runs(_scores([[1, 0, 1, 1]] * 3))
+    assert row["success_iqm_ci95"] == pytest.approx([row["success_iqm"]] * 2)
+
+
+@pytest.fixture(scope="module")
+def short_suite(tmp_path_factory):
+    """The corridor suite with 12 s episodes (a policy that never stops times out fast)."""
+    suite = yaml.safe_load((SUITE_DIR / "corridor.yaml").read_text())
+    suite["env"]["sim"] = {"max_episode_seconds": 12.0}
+    path = tmp_path_factory.mktemp("suite") / "short.yaml"
+    path.write_text(yaml.safe_dump(suite))
+    return path
+
+
+def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_path):
+    from stsf_gym.agents.train import train
+    from stsf_gym.experiments.benchmark.run import benchmark
+
+    out = tmp_path / "ppo-odometry"
+    small = {"n_steps": 32, "batch_size": 32, "eval_freq": 32, "n_eval_episodes": 1}
+    for seed in (0, 1):
+        summary = train(
+            "ppo",
+            "odometry",
+            out / f"seed-{seed}",
+            32,
+            seed,
+            overrides=small,
+            n_envs=1,
+            progress_bar=False,
+            suite=str(short_suite),
+        )
+        assert summary["world"] == "generated:train"
+        assert summary["evaluation_world"] == "generated:val"  # never the benchmark's test
+        assert summary["env"]["task"]["protocol"] == "declare"  # the suite's task
+        assert summary["env"]["task"]["start_along"] == 1.0  # the hyper-parameters' starts
+        assert summary["env"]["sim"]["max_episode_seconds"] == 12.0  # the suite over them
+    result = benchmark(
+        tmp_path / "bench", str(short_suite), [str(out), "follower"], ["stsf"], 2, workers=1
+    )
+    agents = {(r["agent"], r["estimator"]) for r in result["rows"]}
+    models = {str((out / f"seed-{s}" / "model.zip").resolve()) for s in (0, 1)}
+    assert agents == {("follower", "stsf")} | {(m, "odometry") for m in models}  # own source
+    (trained,) = result["trained"]
+    assert trained["agent"] == str(out.resolve()) and trained["runs"] == 2
+    assert trained["worlds"] == 2 and len(trained["success_per_run"]) == 2
+    saved = json.loads((tmp_path / "bench" / "results.json").read_text())
+    assert saved["trained"] == json.loads(json.dumps(result["trained"]))
+    assert (
+        "Trained agents over their training seeds"
+        in (tmp_path / "bench" / "leaderboard.md").read_text()
+    )
