@@ -26,6 +26,7 @@ from stsf_gym.geometry import OdometryCalibration, compose, inverse, wrap_angle
 from stsf_gym.wrappers import sensor_model
 
 TICKS = 10**6  # fine encoders: no quantisation beyond the model
+MOUNT_STD = 0.003  # m: a mount error drawn (the simulated chassis has none), and believed
 BOARD_NOISE = np.diag([0.004, 0.004, 0.01]) ** 2
 BOARDS = np.array(
     [[x, side * 1.2, -side * math.pi / 2] for x in np.arange(1.0, 14.0, 1.5) for side in (1, -1)]
@@ -63,11 +64,11 @@ def run(model, seed, frames=150):
     """One synthetic episode: (true frame poses, floor poses and covariances, smoother poses)."""
     rng = np.random.default_rng(seed)
     start, start_cov = np.zeros(3), np.diag([0.01, 0.01, 0.005]) ** 2
-    k_cov = considered_cov(model, mount_std=0.003)
+    k_cov = considered_cov(model, mount_std=MOUNT_STD)
     k = rng.multivariate_normal(np.zeros(CONSIDERED), k_cov)
     wheelbase = model.calibration.wheelbase
     per_tick = 2 * math.pi * model.calibration.wheel_radius_left / TICKS
-    smoother = make_estimator("smoother")
+    smoother = make_estimator("smoother", mount_std=MOUNT_STD)  # believes what is drawn
     smoother.reset(model, start, start_cov)
     data = EpisodeMeasurements(start, start_cov, k_cov)
     pose, truth, smoothed, leg = start.copy(), [start.copy()], [start.copy()], OdometryLeg()
