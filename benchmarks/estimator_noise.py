@@ -171,6 +171,15 @@ def _map(function, jobs: list, workers: int) -> list:
         return list(tqdm(pool.map(function, jobs), total=len(jobs), desc=function.__name__))
 
 
+def _range_bins(rng: np.ndarray):
+    """``(low, high, mask, rms)`` of every range bin holding at least 5 measurements; ``rms(x)``
+    is the RMS of ``x`` inside the bin."""
+    for low, high in RANGE_BINS:
+        m = (rng >= low) & (rng < high)
+        if m.sum() >= 5:
+            yield low, high, m, lambda x, m=m: math.sqrt(np.mean(x[m] ** 2))
+
+
 def report_pairs(rows: np.ndarray) -> None:
     rng, radial, tangential, orientation, var_r, var_t, var_o, floor_p, floor_o = rows.T
     print(f"{len(rows)} pair measurements")
@@ -179,13 +188,7 @@ def report_pairs(rows: np.ndarray) -> None:
         "orientation RMS / model / floor (deg) |"
     )
     print("|---|---|---|---|---|")
-    for low, high in RANGE_BINS:
-        m = (rng >= low) & (rng < high)
-        if m.sum() < 5:
-            continue
-
-        def rms(x, m=m):
-            return math.sqrt(np.mean(x[m] ** 2))
+    for low, high, m, rms in _range_bins(rng):
 
         def model(var, floor, m=m):
             return math.sqrt(np.mean(var[m] - floor[m]))
@@ -207,14 +210,7 @@ def report_boards(rows: np.ndarray) -> None:
         "orientation RMS / model (deg) | normalised (3) |"
     )
     print("|---|---|---|---|---|---|")
-    for low, high in RANGE_BINS:
-        m = (rng >= low) & (rng < high)
-        if m.sum() < 5:
-            continue
-
-        def rms(x, m=m):
-            return math.sqrt(np.mean(x[m] ** 2))
-
+    for low, high, m, rms in _range_bins(rng):
         print(
             f"| {low}-{high} | {m.sum()} | {100 * rms(radial):.2f} / "
             f"{100 * math.sqrt(var_r[m].mean()):.2f} | {100 * rms(tangential):.2f} / "
