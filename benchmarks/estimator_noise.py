@@ -15,6 +15,13 @@ of the path follower driving on each estimator:
   ``configs/estimators/smoother.yaml`` (``--set`` to try others), the considered camera and
   mount errors included, and the mean normalised squared error (3 dof: 3 when consistent).
   What the smoother's and MCL's board floors were set from.
+- ``sonar``: every reading MCL's sonar likelihood uses (its ``sonar_beams``, those that
+  echoed), its end point put at the robot's true pose, and that point's distance to the
+  nearest wall in MCL's likelihood field, by range: the spread the field's ``sonar_std``
+  stands for (a half-normal's ``sigma`` is the RMS of the distance), the share beyond 3 sigma
+  (``sonar_random``'s readings), and the correlation of the readings of one update (``N``
+  readings correlated ``rho`` on average carry ``N / (1 + (N - 1) rho)`` readings' worth).
+  What MCL's ``sonar_std`` was set from.
 - ``nees``: per estimator, the 3-dof NEES and its position (2-dof) and heading (1-dof) parts,
   RMS errors beside the mean model standard deviations, updates, gated measurements, and the
   seeds that needed a re-localisation or were ever more than 10 cm off. What the floors and
@@ -22,6 +29,7 @@ of the path follower driving on each estimator:
 
     python benchmarks/estimator_noise.py pairs --world irl_corridor --mode fast
     python benchmarks/estimator_noise.py boards --seeds 10
+    python benchmarks/estimator_noise.py sonar --seeds 10
     python benchmarks/estimator_noise.py nees --estimators odometry,conventional,stsf,ekf
     python benchmarks/estimator_noise.py nees --estimators stsf --set mount_std=0.005
 """
@@ -139,6 +147,62 @@ def board_errors(job: tuple) -> np.ndarray:
     return np.array(rows).reshape(-1, 8)
 
 
+def sonar_distances(job: tuple) -> np.ndarray:
+    """Rows, one per MCL sonar update step: each used reading's range and its end point's
+    distance to the nearest wall at the true pose (NaN where it did not echo)."""
+    world, seed, mode, options = job
+    env, follower = _env(world, "mcl", mode, options)
+    obs, info, done, rows = *env.reset(seed=seed), False, []
+    mcl = env.estimator
+    sonar, beams = mcl.model.sonar, mcl.settings.sonar_beams
+    while not done:
+        obs, _, terminated, truncated, info = env.step(follower.act(obs["pose"], obs["sonar"]))
+        done = terminated or truncated
+        ranges = np.asarray(obs["sonar"], dtype=float)
+        used = np.linspace(0, len(ranges), beams, endpoint=False).astype(int)
+        r = ranges[used]
+        x, y, yaw = info["true_pose"]
+        heading = yaw + sonar.axes[used]
+        reach = sonar.ring_radius + r
+        ends = np.stack([x + reach * np.cos(heading), y + reach * np.sin(heading)], -1)
+        distance = np.where(r < sonar.max_range - 1e-6, mcl.field.distance(ends), np.nan)
+        rows.append([*r, *distance])
+    env.close()
+    return np.array(rows)
+
+
+def report_sonar(runs: list[np.ndarray]) -> None:
+    beams = runs[0].shape[1] // 2
+    rows = np.concatenate(runs)
+    rng, distance = rows[:, :beams].ravel(), rows[:, beams:].ravel()
+    echoed = ~np.isnan(distance)
+    rng, distance = rng[echoed], distance[echoed]
+    sigma = math.sqrt(np.mean(distance**2))
+    for _ in range(20):  # the half-normal's sigma without the readings beyond 3 sigma
+        sigma = math.sqrt(np.mean(distance[distance < 3 * sigma] ** 2))
+    beyond = float(np.mean(distance >= 3 * sigma))
+    print(
+        f"{len(distance)} echoed readings of {beams} used beams; distance to the nearest wall "
+        f"at the true pose: RMS {math.sqrt(np.mean(distance**2)):.3f} m, sigma without the "
+        f"readings beyond 3 sigma {sigma:.3f} m, share beyond {beyond:.3f}"
+    )
+    print("| range (m) | n | RMS distance (m) | sigma within 3 sigma (m) |")
+    print("|---|---|---|---|")
+    for low, high, m, rms in _range_bins(rng):
+        d = distance[m]
+        print(f"| {low}-{high} | {m.sum()} | {rms(distance):.3f} | "
+              f"{math.sqrt(np.mean(d[d < 3 * sigma] ** 2)):.3f} |")
+    # correlation of the distances of one update's readings, over the steps where all echoed
+    d = rows[:, beams:]
+    full = d[~np.isnan(d).any(axis=1)]
+    rho = np.corrcoef(full.T)
+    mean_rho = float(rho[~np.eye(beams, dtype=bool)].mean())
+    print(
+        f"mean correlation between the {beams} readings of an update ({len(full)} steps all "
+        f"echoed): {mean_rho:.2f}; worth {beams / (1 + (beams - 1) * mean_rho):.1f} independent"
+    )
+
+
 def nees_parts(job: tuple) -> dict:
     """NEES parts, squared errors and model variances at every step of one episode."""
     world, seed, mode, options, estimator_name = job
@@ -246,7 +310,7 @@ def report_nees(results: list[dict], estimators: list[str]) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("report", choices=["pairs", "boards", "nees"])
+    parser.add_argument("report", choices=["pairs", "boards", "sonar", "nees"])
     parser.add_argument("--world", default="irl_corridor")
     parser.add_argument("--mode", default="fast", choices=["fast", "rendered"])
     parser.add_argument("--seeds", type=int, default=20)
@@ -268,10 +332,12 @@ def main() -> None:
             parser.error(f"--set needs KEY=VALUE, got {item!r}")
         options[key] = yaml.safe_load(value)
     seeds = range(args.seed0, args.seed0 + args.seeds)
-    if args.report in ("pairs", "boards"):
+    if args.report in ("pairs", "boards", "sonar"):
         jobs = [(args.world, seed, args.mode, options) for seed in seeds]
         if args.report == "pairs":
             report_pairs(np.concatenate(_map(pair_errors, jobs, args.workers)))
+        elif args.report == "sonar":
+            report_sonar(_map(sonar_distances, jobs, args.workers))
         else:
             report_boards(np.concatenate(_map(board_errors, jobs, args.workers)))
     else:

@@ -154,6 +154,7 @@ class MCLSettings(OdometrySettings):
     sonar_std: Positive  # m, the likelihood field's Gaussian
     sonar_random: OpenProbability  # weight of a random sonar reading (z_rand)
     sonar_beams: Count  # readings used per update, evenly spread over the ring (max_beams)
+    sonar_max_range: Positive  # m: longer readings are left out (AMCL's laser_max_range)
     field_resolution: Positive  # m, the likelihood field's cell
     sigma_px: Positive
     position_std_floor: NonNegative  # m, std added to a board's x and y (the smoother's)

@@ -255,7 +255,7 @@ class MonteCarloLocalization(PoseEstimator):
         sonar, s = self.model.sonar, self.settings
         used = np.zeros(len(ranges), dtype=bool)
         used[np.linspace(0, len(ranges), s.sonar_beams, endpoint=False).astype(int)] = True
-        echoed = used & (ranges < sonar.max_range - 1e-6)
+        echoed = used & (ranges < min(sonar.max_range - 1e-6, s.sonar_max_range))
         axes, reach = sonar.axes[echoed], sonar.ring_radius + ranges[echoed]
         heading = self.poses[:, 2:3] + axes
         ends = self.poses[:, None, :2] + reach[:, None] * np.stack(
