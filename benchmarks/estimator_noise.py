@@ -190,8 +190,10 @@ def report_sonar(runs: list[np.ndarray]) -> None:
     print("|---|---|---|---|")
     for low, high, m, rms in _range_bins(rng):
         d = distance[m]
-        print(f"| {low}-{high} | {m.sum()} | {rms(distance):.3f} | "
-              f"{math.sqrt(np.mean(d[d < 3 * sigma] ** 2)):.3f} |")
+        print(
+            f"| {low}-{high} | {m.sum()} | {rms(distance):.3f} | "
+            f"{math.sqrt(np.mean(d[d < 3 * sigma] ** 2)):.3f} |"
+        )
     # correlation of the distances of one update's readings, over the steps where all echoed
     d = rows[:, beams:]
     full = d[~np.isnan(d).any(axis=1)]
