@@ -188,20 +188,21 @@ def targets(summary: dict) -> list[dict]:
         ),
     ]
     load = summary["machine"].get("load_average")
-    busy = (
-        f"1-min load average {load[0][0]:.1f} -> {load[1][0]:.1f} on "
-        f"{summary['machine']['cores']} cores: other jobs held cores"
-        if load
-        else ""
-    )
+    busy = f"; 1-min load average {load[0][0]:.1f} -> {load[1][0]:.1f}" if load else ""
     for v in summary["vector"]:
+        wall, worker, parent = (
+            v[f"{key}_2_workers"]
+            for key in ("wall_ms_per_step", "worker_cpu_ms_per_step", "parent_cpu_ms_per_step")
+        )
         checks.append(
             (
                 f"2 workers / 1 worker, {v['vector env']}, {v['pipeline']}",
                 v["speed_up"],
                 ">=",
                 1.8,
-                busy,
+                f"a 2-worker step: {wall:.2f} ms wall = a worker's {worker:.2f} ms CPU + the "
+                f"parent's {parent:.2f} ms + {wall - worker - parent:.2f} ms waiting (for the "
+                f"slower worker, or for a core){busy}",
             )
         )
     checks += [

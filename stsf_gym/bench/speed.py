@@ -19,6 +19,7 @@ import resource
 import time
 from collections import defaultdict
 from concurrent.futures import ProcessPoolExecutor
+from functools import partial
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -282,32 +283,54 @@ def _camera_frame_ms(width: int, height: int, frames: int) -> float:
 def vector_scaling(steps: int, seed: int = 0) -> list[dict]:
     """Throughput with 1 and 2 workers of Gymnasium's ``AsyncVectorEnv`` and stable-baselines3's
     ``SubprocVecEnv`` (each worker a ``spawn`` process), on the rendered and the fast-mode STSF
-    pipelines: steps per second of all workers together and the 2-worker speed-up."""
+    pipelines: steps per second of all workers together, the 2-worker speed-up, and where a
+    2-worker vector step's wall time goes (each worker's and the parent's CPU time per step)."""
     rows = []
     runs = [(p, k) for p in VECTOR_PIPELINES for k in VECTOR_KINDS]
     for pipeline, kind in tqdm(runs, desc="vector envs", unit="run"):
         env_id, overrides = VECTOR_PIPELINES[pipeline]
-        rates = {w: _vector_rate(kind, env_id, overrides, w, steps, seed) for w in (1, 2)}
+        one = _vector_rate(kind, env_id, overrides, 1, steps, seed)
+        two = _vector_rate(kind, env_id, overrides, 2, steps, seed)
         rows.append(
             {
                 "pipeline": pipeline,
                 "vector env": kind,
-                "steps_per_s_1_worker": rates[1],
-                "steps_per_s_2_workers": rates[2],
-                "speed_up": rates[2] / rates[1],
+                "steps_per_s_1_worker": one["steps_per_s"],
+                "steps_per_s_2_workers": two["steps_per_s"],
+                "speed_up": two["steps_per_s"] / one["steps_per_s"],
+                "wall_ms_per_step_2_workers": two["wall_ms"],
+                "worker_cpu_ms_per_step_2_workers": two["worker_cpu_ms"],
+                "parent_cpu_ms_per_step_2_workers": two["parent_cpu_ms"],
             }
         )
     return rows
 
 
-def _vector_rate(
-    kind: str, env_id: str, overrides: dict, workers: int, steps: int, seed: int
-) -> float:
+def _make_env(env_id: str, overrides: dict):
+    """A worker's env (a module-level function: a spawned worker imports this module, and
+    with it stsf_gym's registrations)."""
     import gymnasium as gym
 
-    import stsf_gym  # noqa: F401
+    return gym.make(env_id, **overrides)
 
-    fns = [lambda: gym.make(env_id, **overrides) for _ in range(workers)]
+
+def _process_cpu_s(pid: int) -> float:
+    """CPU seconds (user + system) process ``pid`` has used (Linux ``/proc``; NaN elsewhere)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return float("nan")
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _vector_rate(
+    kind: str, env_id: str, overrides: dict, workers: int, steps: int, seed: int
+) -> dict:
+    """Steps per second of ``workers`` workers together; per vector step its wall time and
+    the mean worker's and the parent's CPU time (ms)."""
+    import gymnasium as gym
+
+    fns = [partial(_make_env, env_id, overrides) for _ in range(workers)]
     actions = np.tile(np.array([0.5, 0.05], np.float32), (workers, 1))
     if kind == "AsyncVectorEnv":
         envs = gym.vector.AsyncVectorEnv(fns, context="spawn")
@@ -319,9 +342,19 @@ def _vector_rate(
         envs.seed(seed)
         envs.reset()
     envs.step(actions)  # warm-up: the first frame builds the GL objects
-    start = time.perf_counter()
+    pids = [p.pid for p in envs.processes]
+    worker_cpu = [_process_cpu_s(pid) for pid in pids]
+    parent_cpu, start = time.process_time(), time.perf_counter()
     for _ in range(steps):
         envs.step(actions)
-    rate = steps * workers / (time.perf_counter() - start)
+    wall = time.perf_counter() - start
+    parent_cpu = time.process_time() - parent_cpu
+    used = [_process_cpu_s(pid) - cpu for pid, cpu in zip(pids, worker_cpu, strict=True)]
+    worker_cpu = float(np.mean(used))
     envs.close()
-    return rate
+    return {
+        "steps_per_s": steps * workers / wall,
+        "wall_ms": wall / steps * 1e3,
+        "worker_cpu_ms": worker_cpu / steps * 1e3,
+        "parent_cpu_ms": parent_cpu / steps * 1e3,
+    }
