@@ -94,6 +94,9 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
         "x_real_time_cpu": steps * env.unwrapped.dt / cpu,
         "steps_per_s": steps / wall,
         "camera_frames": frames,
+        "renders_per_frame": frame_time["renders"] / frame_time["count"]
+        if frame_time["count"]
+        else None,
         "ms_per_frame": {k: 1e3 * v / max(frames, 1) for k, v in stages.items()},
         # every stage of the estimator (odometry, detection, update) per control step
         "estimator_ms_per_step": None
@@ -198,9 +201,17 @@ def detector_vs_aruco(frames: list[tuple], world, live, rounds: int = 3) -> dict
 
 
 def _time_frames(env) -> dict:
-    """Wrap the env's camera capture so its wall time is summed (benchmark instrumentation)."""
+    """Wrap the env's camera capture so its wall time is summed, and the simulator's render so
+    its calls are counted (motion blur renders several times a frame; benchmark
+    instrumentation)."""
     totals = defaultdict(float)
-    capture = env.camera_sensor.capture
+    capture, render = env.camera_sensor.capture, env.sim.render
+
+    def counted_render(*args):
+        totals["renders"] += 1
+        return render(*args)
+
+    env.sim.render = counted_render
 
     def timed_capture(*args):
         t0 = time.perf_counter()
