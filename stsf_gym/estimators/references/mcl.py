@@ -16,8 +16,9 @@ last one, AMCL's rule against counting one view many times; with ``board_updates
 every-frame`` the boards of every frame in between too), particle weights multiply by
 
 - the sonar ring's likelihood field (:mod:`.likelihood_field`): ``sonar_beams`` readings
-  evenly spread over the ring (AMCL's ``max_beams``: neighbouring cones overlap and share
-  their errors), those below the maximum range;
+  evenly spread over the ring (AMCL's ``max_beams``), those below ``sonar_max_range`` (AMCL's
+  ``laser_max_range``: past 2 m a 25 degree cone is too wide for its echo's point to be put on
+  its axis), each ``N(d; 0, sonar_std^2)`` in its end point's distance ``d`` to the walls;
 - every map board seen in this step's camera frame: its PnP pose ``z`` in the robot frame
   (:class:`~.measurements.LandmarkPose`, the smoother's measurement, floors included) against
   ``h(x) + M k``: ``p = exp(-0.5 e^T R^-1 e) + landmark_outlier``, ``e = h(x) + M k - z``;
