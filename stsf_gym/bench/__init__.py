@@ -202,7 +202,8 @@ def targets(summary: dict) -> list[dict]:
                 v["speed_up"],
                 ">=",
                 1.8,
-                f"a 2-worker step: {wall:.2f} ms wall = a worker's {worker:.2f} ms CPU + the "
+                f"a 2-worker step: {wall:.2f} ms wall = a worker's {worker:.2f} ms CPU (alone: "
+                f"{v.get('worker_cpu_ms_per_step_1_worker', float('nan')):.2f} ms) + the "
                 f"parent's {parent:.2f} ms + {wall - worker - parent:.2f} ms waiting (for the "
                 f"slower worker, or for a core){busy}",
             )

@@ -309,6 +309,8 @@ def vector_scaling(steps: int, seed: int = 0) -> list[dict]:
                 "steps_per_s_1_worker": one["steps_per_s"],
                 "steps_per_s_2_workers": two["steps_per_s"],
                 "speed_up": two["steps_per_s"] / one["steps_per_s"],
+                "wall_ms_per_step_1_worker": one["wall_ms"],
+                "worker_cpu_ms_per_step_1_worker": one["worker_cpu_ms"],
                 "wall_ms_per_step_2_workers": two["wall_ms"],
                 "worker_cpu_ms_per_step_2_workers": two["worker_cpu_ms"],
                 "parent_cpu_ms_per_step_2_workers": two["parent_cpu_ms"],
