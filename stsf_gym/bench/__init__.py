@@ -196,14 +196,17 @@ def targets(summary: dict) -> list[dict]:
             v[f"{key}_2_workers"]
             for key in ("wall_ms_per_step", "worker_cpu_ms_per_step", "parent_cpu_ms_per_step")
         )
+        alone_cpu = v.get("worker_cpu_ms_per_step_1_worker", nan)
+        alone_wall = v.get("wall_ms_per_step_1_worker", nan)
         checks.append(
             (
                 f"2 workers / 1 worker, {v['vector env']}, {v['pipeline']}",
                 v["speed_up"],
                 ">=",
                 1.8,
-                f"a 2-worker step: {wall:.2f} ms wall = a worker's {worker:.2f} ms CPU (alone: "
-                f"{v.get('worker_cpu_ms_per_step_1_worker', float('nan')):.2f} ms) + the "
+                f"one worker alone: {alone_cpu:.2f} ms CPU per step in {alone_wall:.2f} ms wall "
+                f"({alone_cpu / alone_wall:.2f} cores: OpenCV's and llvmpipe's threads); a "
+                f"2-worker step: {wall:.2f} ms wall = a worker's {worker:.2f} ms CPU + the "
                 f"parent's {parent:.2f} ms + {wall - worker - parent:.2f} ms waiting (for the "
                 f"slower worker, or for a core){busy}",
             )
