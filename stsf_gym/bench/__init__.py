@@ -198,6 +198,8 @@ def targets(summary: dict) -> list[dict]:
         )
         alone_cpu = v.get("worker_cpu_ms_per_step_1_worker", nan)
         alone_wall = v.get("wall_ms_per_step_1_worker", nan)
+        cores = alone_cpu / alone_wall
+        threads = ": OpenCV's and llvmpipe's threads" if cores > 1.05 else ""
         checks.append(
             (
                 f"2 workers / 1 worker, {v['vector env']}, {v['pipeline']}",
@@ -205,7 +207,7 @@ def targets(summary: dict) -> list[dict]:
                 ">=",
                 1.8,
                 f"one worker alone: {alone_cpu:.2f} ms CPU per step in {alone_wall:.2f} ms wall "
-                f"({alone_cpu / alone_wall:.2f} cores: OpenCV's and llvmpipe's threads); a "
+                f"({cores:.2f} cores{threads}); a "
                 f"2-worker step: {wall:.2f} ms wall = a worker's {worker:.2f} ms CPU + the "
                 f"parent's {parent:.2f} ms + {wall - worker - parent:.2f} ms waiting (for the "
                 f"slower worker, or for a core){busy}",
