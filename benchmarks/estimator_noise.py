@@ -157,18 +157,15 @@ def sonar_distances(job: tuple) -> np.ndarray:
     env, follower = _env(world, "mcl", mode, options)
     obs, info, done, rows = *env.reset(seed=seed), False, []
     mcl = env.estimator
-    sonar, beams = mcl.model.sonar, mcl.settings.sonar_beams
+    max_range = mcl.model.sonar.max_range
     while not done:
         obs, _, terminated, truncated, info = env.step(follower.act(obs["pose"], obs["sonar"]))
         done = terminated or truncated
         ranges = np.asarray(obs["sonar"], dtype=float)
-        used = np.linspace(0, len(ranges), beams, endpoint=False).astype(int)
+        used = mcl.used_beams(len(ranges))
+        ends = mcl.end_points(np.asarray(info["true_pose"], float)[None], ranges, used)[0]
         r = ranges[used]
-        x, y, yaw = info["true_pose"]
-        heading = yaw + sonar.axes[used]
-        reach = sonar.ring_radius + r
-        ends = np.stack([x + reach * np.cos(heading), y + reach * np.sin(heading)], -1)
-        distance = np.where(r < sonar.max_range - 1e-6, mcl.field.distance(ends), np.nan)
+        distance = np.where(r < max_range - 1e-6, mcl.field.distance(ends), np.nan)
         rows.append([*r, *distance])
     env.close()
     return np.array(rows)
@@ -206,7 +203,7 @@ def report_sonar(runs: list[np.ndarray]) -> None:
         f"mean correlation between the {beams} readings of an update ({len(full)} steps all "
         f"echoed): {mean_rho:.2f}; worth {beams / (1 + (beams - 1) * mean_rho):.1f} independent"
     )
-    # correlation of one beam's distance with itself an update later (readings under 2 m)
+    # correlation of one beam's distance with itself an update later (readings under NEAR_M)
     for lag in SONAR_LAGS:
         rho = np.nanmean(
             [
@@ -227,11 +224,12 @@ def report_sonar(runs: list[np.ndarray]) -> None:
 #: updates every 0.1 m driven, about 8 steps
 SONAR_LAGS = (1, 8, 40)
 STEP_S = 0.1
+NEAR_M = 2.0  # m: the readings the correlation and the near spread are taken over
 
 
 def _lag_correlation(distance: np.ndarray, ranges: np.ndarray, lag: int) -> float:
-    """Correlation of ``distance`` with itself ``lag`` steps later, readings under 2 m."""
-    near = ~np.isnan(distance) & (ranges < 2.0)
+    """Correlation of ``distance`` with itself ``lag`` steps later, readings under NEAR_M."""
+    near = ~np.isnan(distance) & (ranges < NEAR_M)
     both = near[:-lag] & near[lag:]
     if both.sum() < 50:
         return float("nan")
@@ -239,9 +237,9 @@ def _lag_correlation(distance: np.ndarray, ranges: np.ndarray, lag: int) -> floa
 
 
 def sigma_near(rows: np.ndarray, beams: int) -> float:
-    """RMS end-point distance of the echoed readings under 2 m."""
+    """RMS end-point distance of the echoed readings under NEAR_M."""
     ranges, distance = rows[:, :beams].ravel(), rows[:, beams:].ravel()
-    near = ~np.isnan(distance) & (ranges < 2.0)
+    near = ~np.isnan(distance) & (ranges < NEAR_M)
     return math.sqrt(np.mean(distance[near] ** 2))
 
 

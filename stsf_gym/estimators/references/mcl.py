@@ -251,18 +251,27 @@ class MonteCarloLocalization(PoseEstimator):
         offset[2] = wrap_angle(offset[2])
         return float(offset @ np.linalg.solve(board.cov + self.cov, offset)) <= self.gate
 
-    def _sonar_log_likelihood(self, ranges: np.ndarray) -> np.ndarray:
-        """Log likelihood (particles x readings) of the readings that echoed."""
-        sonar, s = self.model.sonar, self.settings
-        used = np.zeros(len(ranges), dtype=bool)
-        used[np.linspace(0, len(ranges), s.sonar_beams, endpoint=False).astype(int)] = True
-        echoed = used & (ranges < min(sonar.max_range - 1e-6, s.sonar_max_range))
-        axes, reach = sonar.axes[echoed], sonar.ring_radius + ranges[echoed]
-        heading = self.poses[:, 2:3] + axes
-        ends = self.poses[:, None, :2] + reach[:, None] * np.stack(
+    def used_beams(self, count: int) -> np.ndarray:
+        """Indices of the ``sonar_beams`` readings, evenly spread over a ring of ``count``."""
+        return np.linspace(0, count, self.settings.sonar_beams, endpoint=False).astype(int)
+
+    def end_points(self, poses: np.ndarray, ranges: np.ndarray, beams: np.ndarray) -> np.ndarray:
+        """World end points (poses x beams x 2) of the readings ``ranges[beams]`` taken from
+        each of ``poses`` (n x 3), each on its transducer's axis."""
+        sonar = self.model.sonar
+        heading = poses[:, 2:3] + sonar.axes[beams]
+        reach = sonar.ring_radius + ranges[beams]
+        return poses[:, None, :2] + reach[:, None] * np.stack(
             [np.cos(heading), np.sin(heading)], -1
         )
-        distance = self.field.distance(ends)
+
+    def _sonar_log_likelihood(self, ranges: np.ndarray) -> np.ndarray:
+        """Log likelihood (particles x readings) of the used readings that echoed within
+        ``sonar_max_range``."""
+        sonar, s = self.model.sonar, self.settings
+        beams = self.used_beams(len(ranges))
+        beams = beams[ranges[beams] < min(sonar.max_range - 1e-6, s.sonar_max_range)]
+        distance = self.field.distance(self.end_points(self.poses, ranges, beams))
         hit = np.exp(-0.5 * (distance / s.sonar_std) ** 2) / (math.sqrt(math.tau) * s.sonar_std)
         return np.log((1 - s.sonar_random) * hit + s.sonar_random / sonar.max_range)
 
