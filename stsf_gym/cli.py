@@ -14,6 +14,8 @@ from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.io import remove_partial_writes
 from stsf_gym.results.provenance import set_command
 
+DEFAULT_WORLD = "irl_corridor"  # --world when none is given
+
 
 def _common(
     parser: argparse.ArgumentParser,
@@ -155,6 +157,7 @@ def _world(args: argparse.Namespace) -> str:
     """``--world``, or ``generated:<split>`` for ``--world generated --split NAME``."""
     from stsf_gym.envs.generated_env import GENERATED, generated_label
 
+    args.world = args.world or DEFAULT_WORLD
     if args.world == GENERATED:
         if args.split is None:
             raise ConfigError("--world generated needs --split train, val or test")
@@ -248,7 +251,7 @@ def _reproduce(args: argparse.Namespace) -> dict:
 def _train(args: argparse.Namespace) -> dict:
     from stsf_gym.agents.train import train
 
-    if args.suite is not None and (args.world != "irl_corridor" or args.split is not None):
+    if args.suite is not None and (args.world is not None or args.split is not None):
         raise ConfigError("--suite picks the worlds (its train split): drop --world/--split")
     args.world = _world(args)
     if args.seeds < 1:
@@ -427,7 +430,7 @@ def _backend_args(parser: argparse.ArgumentParser) -> None:
 def _world_args(parser: argparse.ArgumentParser) -> None:
     """``--world`` (a name, a YAML path or ``generated``) and ``--split``."""
     parser.add_argument(
-        "--world", default="irl_corridor", help="world name, YAML path, or generated"
+        "--world", help=f"world name, YAML path, or generated (default {DEFAULT_WORLD})"
     )
     parser.add_argument(
         "--split", help="with --world generated: the world-seed split, train or test"

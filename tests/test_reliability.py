@@ -102,6 +102,7 @@ def run_cli(monkeypatch, capsys):
         ),
         (["evaluate", "--agent", "follower,follower"], "'follower' is named twice"),
         (["train", "--suite", "sparse", "--world", "straight_10m"], "drop --world/--split"),
+        (["train", "--suite", "sparse", "--world", "irl_corridor"], "drop --world/--split"),
         (["train", "--world", "generated", "--split", "dev"], "split must be one of"),
         (["benchmark", "--suite", "sparse", "--agents", "no/such/folder"], "no/such/folder"),
         (
