@@ -26,9 +26,10 @@ of the path follower driving on each estimator:
   sigma is the per-reading spread times ``sqrt((1 + rho) / (1 - rho))``. What MCL's
   ``sonar_max_range`` and ``sonar_std`` were set from.
 - ``nees``: per estimator, the 3-dof NEES, the time average of the run-averaged NEES with its
-  95 % bounds (Fig. 11's judgement), its position (2-dof) and heading (1-dof) parts, RMS errors beside the mean model standard deviations, updates, gated measurements, and the
-  seeds that needed a re-localisation or were ever more than 10 cm off. What the floors and
-  ``mount_std`` were checked with.
+  95 % bounds (Fig. 11's judgement), its position (2-dof) and heading (1-dof) parts, RMS
+  errors beside the mean model standard deviations, updates, gated measurements, and the seeds
+  that needed a re-localisation or were ever more than 10 cm off. What the floors,
+  ``mount_std`` and MCL's ``odometry_inflation`` were checked with.
 
     python benchmarks/estimator_noise.py pairs --world irl_corridor --mode fast
     python benchmarks/estimator_noise.py boards --seeds 10
