@@ -28,8 +28,10 @@ from stsf_gym.experiments.table1.rig import Table1Rig
 from stsf_gym.experiments.table1.run import load_table1_config
 
 
-def seed_rows(seed: int) -> list[dict]:
-    """Per row: the truth, the conventional distance, ``t`` and its predicted covariance."""
+def seed_rows(seed: int) -> dict:
+    """The wheel calibration errors the seed drew (``c``) and their believed covariance, and
+    per row (``rows``): the truth, the conventional distance, ``t`` and its predicted
+    covariance."""
     cfg = load_table1_config()
     rig = Table1Rig(cfg.env, seed, cfg.speed, cfg.frames_per_place, cfg.approach_deg)
     places, truths = rig.capture([cfg.start_distance, *cfg.distances])
@@ -51,24 +53,15 @@ def seed_rows(seed: int) -> list[dict]:
             measured.append(k)
         t, sigma = joint_track(places, k, measured, *args, calibration_cov)
         truth = truths[k].distance
-        rows.append(
-            {
-                "truth": truth,
-                "conventional": conventional[k - 1],
-                "t": t,
-                "sigma": sigma,
-                "calibration": errors,
-                "calibration_cov": calibration_cov,
-            }
-        )
-    return rows
+        rows.append({"truth": truth, "conventional": conventional[k - 1], "t": t, "sigma": sigma})
+    return {"calibration": errors, "calibration_cov": calibration_cov, "rows": rows}
 
 
-def report_calibration(seeds: list[list[dict]]) -> None:
+def report_calibration(seeds: list[dict]) -> None:
     """The drawn radius difference ``c_r - c_l`` and wheelbase error, RMS over the seeds,
     as a multiple of the believed standard deviation (1 when the seeds draw as believed)."""
-    drawn = np.array([s[0]["calibration"] for s in seeds])
-    cov = seeds[0][0]["calibration_cov"]
+    drawn = np.array([s["calibration"] for s in seeds])
+    cov = seeds[0]["calibration_cov"]
     difference = np.array([-1.0, 1.0, 0.0])
     print(
         f"drawn calibration ({len(seeds)} seeds), RMS / believed std: radius difference "
@@ -120,9 +113,9 @@ def main() -> None:
     seeds = range(args.seed0, args.seed0 + args.seeds)
     context = multiprocessing.get_context("forkserver")
     with ProcessPoolExecutor(args.workers, mp_context=context) as pool:
-        rows = list(tqdm(pool.map(seed_rows, seeds), total=len(seeds), desc="table1 seeds"))
-    report_calibration(rows)
-    report(rows)
+        drawn = list(tqdm(pool.map(seed_rows, seeds), total=len(seeds), desc="table1 seeds"))
+    report_calibration(drawn)
+    report([seed["rows"] for seed in drawn])
 
 
 if __name__ == "__main__":

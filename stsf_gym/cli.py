@@ -157,14 +157,14 @@ def _world(args: argparse.Namespace) -> str:
     """``--world``, or ``generated:<split>`` for ``--world generated --split NAME``."""
     from stsf_gym.envs.generated_env import GENERATED, generated_label
 
-    args.world = args.world or DEFAULT_WORLD
-    if args.world == GENERATED:
+    world = args.world or DEFAULT_WORLD
+    if world == GENERATED:
         if args.split is None:
             raise ConfigError("--world generated needs --split train, val or test")
         return generated_label(args.split)
     if args.split is not None:
-        raise ConfigError(f"--split is for --world generated, not --world {args.world}")
-    return args.world
+        raise ConfigError(f"--split is for --world generated, not --world {world}")
+    return world
 
 
 def _world_cmd(args: argparse.Namespace) -> dict:
