@@ -58,7 +58,8 @@ class PathFollower:
     goal, the speed falls as ``approach_gain`` times the distance its estimate has left (at least
     ``min_speed``), and once that is within ``arrival.tolerance`` (or the estimate has passed
     the goal) it commands ``[0, 0]`` for ``hold_steps`` steps (the task's ``stop_seconds``),
-    then heads for the next goal. It turns where its estimate says the turn is, as always.
+    or once with its ``stop`` entry raised (``task.stop_action``), then heads for the next
+    goal. It turns where its estimate says the turn is, as always.
 
     Before its pose is known (an unknown start the estimator has not localized yet), a path
     follower has nowhere to steer to: :meth:`explore` wanders instead, straight ahead at
@@ -74,11 +75,13 @@ class PathFollower:
         avoidance: SonarAvoidance | None = None,
         goals: list[float] | None = None,
         hold_steps: int = 0,
+        stop_action: bool = False,
     ) -> None:
         self.path, self.cfg, self.avoidance = Polyline(path), cfg, avoidance
         self.scale = np.array([max_speed, max_yaw_rate])
         self.goals, self.hold_steps = list(goals or []), hold_steps
-        self._goal, self._holding = 0, 0
+        self.stop_action = stop_action
+        self._goal, self._holding, self._declared = 0, 0, False
 
     @classmethod
     def for_env(cls, env, config: str | Path | None = None, **overrides) -> PathFollower:
@@ -94,10 +97,12 @@ class PathFollower:
                 env_cfg.sonar.max_range,
             )
         goals, hold = None, 0
+        stop_action = "stop" in env.get_wrapper_attr("action_layout")
         if env_cfg.task.protocol == "declare":
-            path = Polyline(env_cfg.world.path)
-            goals = [path.project(goal) for goal in env_cfg.world.goals]
-            hold = math.ceil(env_cfg.task.stop_seconds / env_cfg.sim.control_dt - 1e-9) + 1
+            task = env.unwrapped.task  # the route's goals, or this episode's training leg's
+            goals = [task.path.project(goal) for goal in task.goals]
+            if not stop_action:
+                hold = math.ceil(env_cfg.task.stop_seconds / env_cfg.sim.control_dt - 1e-9) + 1
         return cls(
             env_cfg.world.path,
             cfg,
@@ -106,7 +111,13 @@ class PathFollower:
             avoidance,
             goals,
             hold,
+            stop_action,
         )
+
+    def follow_goal(self, index: int) -> None:
+        """Head for goal ``index`` of the route (an expert labelling another agent's states
+        follows the task's current goal, wherever that agent's own stops left it)."""
+        self._goal, self._holding = index, 0
 
     def explore(self, sonar: np.ndarray | None = None) -> np.ndarray:
         """Action [v, w] that wanders without a pose: ahead, around what the sonar sees."""
@@ -116,14 +127,23 @@ class PathFollower:
         return np.clip(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)
 
     def act(self, pose: np.ndarray, sonar: np.ndarray | None = None) -> np.ndarray:
-        """Action [v, w] in [-1, 1] for the robot at ``pose`` = [x, y, yaw].
+        """Action [v, w] in [-1, 1] for the robot at ``pose`` = [x, y, yaw], and a last entry
+        ``stop`` (+1 declares, -1 not) when the env has ``task.stop_action``.
 
         With ``sonar`` (the observation's 16 ranges) and avoidance enabled, obstacles the ring
         sees bend the command; without it this is plain pure pursuit.
         """
+        drive = self._drive(pose, sonar)
+        if not self.stop_action:
+            return drive
+        return np.append(drive, np.float32(1.0 if self._declared else -1.0))
+
+    def _drive(self, pose: np.ndarray, sonar: np.ndarray | None) -> np.ndarray:
+        """[v, w] for :meth:`act`; sets ``_declared`` when this step declares arrival."""
         x, y, yaw = pose
         along = self.path.project(pose)
         ahead, speed = along + self.cfg.lookahead, self.cfg.speed
+        self._declared = False
         if self._holding:  # declaring arrival: stand still
             self._holding -= 1
             return np.zeros(2, np.float32)
@@ -133,7 +153,8 @@ class PathFollower:
             left = max(goal - along, 0.0)
             if left <= arrival.tolerance:
                 self._goal += 1
-                self._holding = self.hold_steps - 1
+                self._holding = max(self.hold_steps - 1, 0)
+                self._declared = True
                 return np.zeros(2, np.float32)
             ahead = min(ahead, goal)
             speed = float(np.clip(arrival.approach_gain * left, arrival.min_speed, speed))

@@ -332,6 +332,7 @@ class RewardConfig:
     goal: float
     collision: float
     time: float
+    false_stop: Annotated[float, Range(le=0)] = 0.0  # declare: a stop declared off the goal
     steering_change: Annotated[float, Range(le=0)] = 0.0  # per unit change of action[1]
 
 
@@ -349,6 +350,27 @@ class TaskConfig:
     start_along: NonNegative  # m: the start drawn uniformly this far along the path (0: fixed)
     start_lateral: NonNegative  # m: ... and uniformly within +- this across it
     start_yaw_deg: Annotated[float, Range(ge=0, le=180)]  # deg: heading +- this off the path's
+    stop_action: bool = False  # declare: a last action entry; above 0 declares arrival at once
+    leg_min: NonNegative = 0.0  # m: training legs (envs/start_pose.py): a start on the route ...
+    leg_max: NonNegative = 0.0  # ... and one goal this far ahead along it; both 0: the route
+
+    def __post_init__(self) -> None:
+        require(
+            self.leg_min <= self.leg_max,
+            "task.leg_min",
+            f"must not exceed task.leg_max ({self.leg_max:g}), got {self.leg_min:g}",
+        )
+        require(
+            self.leg_max == 0 or self.leg_min >= self.goal_radius,
+            "task.leg_min",
+            f"a leg's goal lies ahead of its start: at least task.goal_radius "
+            f"({self.goal_radius:g} m), got {self.leg_min:g}",
+        )
+        require(
+            not (self.stop_action or self.leg_max) or self.protocol == "declare",
+            "task.protocol",
+            "task.stop_action and training legs need the declare protocol, got 'reach'",
+        )
 
 
 @dataclass(frozen=True)

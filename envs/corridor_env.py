@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from stsf_gym.camera_model import CameraCalibration, PanTiltMount
+from stsf_gym.envs.action_layout import ActionLayout
 from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
 from stsf_gym.envs.drive_controller import VelocityController
 from stsf_gym.envs.faults import FaultInjector
@@ -26,13 +27,12 @@ from stsf_gym.envs.sensors.rendered_camera import RenderedCamera
 from stsf_gym.envs.sensors.sonar import SonarRing
 from stsf_gym.envs.sensors.sonar_firing import FiringSchedule
 from stsf_gym.envs.simulator import Simulator
-from stsf_gym.envs.start_pose import draw_start_pose
+from stsf_gym.envs.start_pose import draw_leg, draw_start_pose, legs
 from stsf_gym.envs.task import PathTask
 from stsf_gym.envs.worlds.checks import check_start_pose
 from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
 from stsf_gym.geometry import OdometryCalibration
 
-MOUNT_DIMS = {"none": 0, "pan": 1, "pan_tilt": 2}
 RENDER_VFOV_DEG = 60.0
 CHASE_DISTANCE, CHASE_MIN_DISTANCE, CHASE_WALL_GAP, CHASE_HEIGHT = 1.8, 0.3, 0.15, 1.6  # m
 EGL_WARMUP_FRAMES = 2
@@ -45,7 +45,9 @@ class CorridorEnv(gym.Env):
     ## Action space
     ``Box(-1, 1, (2,), float32)``: ``[v, w]`` scaled to forward speed ``robot.max_speed`` (m/s)
     and yaw rate ``robot.max_yaw_rate`` (rad/s). With ``camera.control`` set to ``pan`` or
-    ``pan_tilt`` one or two more entries set the mount's target angles, scaled to its limits.
+    ``pan_tilt`` one or two more entries set the mount's target angles, scaled to its limits;
+    with ``task.stop_action`` a last entry ``stop`` declares arrival when above 0 (Habitat's
+    STOP). ``action_layout`` names the entries (:mod:`stsf_gym.envs.action_layout`).
     Entries outside [-1, 1] are clipped to it; NaN or infinite entries, a wrong shape or a
     non-numeric dtype (strings, objects, bools) raise ``ValueError``.
 
@@ -196,7 +198,8 @@ class CorridorEnv(gym.Env):
         self.frames = FrameQueue(cfg.camera.latency)
         self.encoders = WheelEncoders(cfg.encoders, cfg.robot.wheel_radius, cfg.robot.wheelbase)
         self.controller = VelocityController(cfg.robot)
-        self.action_space = spaces.Box(-1.0, 1.0, (2 + MOUNT_DIMS[cfg.camera.control],), np.float32)
+        self.action_layout = ActionLayout.for_env(cfg.camera.control, cfg.task.stop_action)
+        self.action_space = self.action_layout.space
         self.observation_space = self._observation_space()
         self._initial_state: int | None = None
         #: The top-down map (``render_mode`` set): wrappers hand it their estimates.
@@ -333,7 +336,11 @@ class CorridorEnv(gym.Env):
         if options:
             raise ValueError(f"unknown reset option(s) {sorted(options)}; known: ['start_pose']")
         cfg = self.config
-        if start is None:
+        if legs(cfg.task):
+            drawn, goal = draw_leg(cfg.world, cfg.task, cfg.robot.body_radius, self.streams.start)
+            self.task.set_goals([goal])
+            start = drawn if start is None else start
+        elif start is None:
             start = draw_start_pose(cfg.world, cfg.task, cfg.robot.body_radius, self.streams.start)
         start = check_start_pose(cfg.world, start, cfg.robot.body_radius, "start_pose")
         self.start_pose = start  # where the robot was put: the estimators start here
@@ -386,10 +393,12 @@ class CorridorEnv(gym.Env):
         if not np.all(np.isfinite(a)):
             raise ValueError(f"action contains NaN or infinite values: {a.tolist()}")
         a = np.clip(a, -1.0, 1.0)
-        robot = self.config.robot
-        target = np.array([a[0] * robot.max_speed, a[1] * robot.max_yaw_rate])
-        if len(a) > 2:
-            self._mount_target[: len(a) - 2] = a[2:] * self.robot.pan_tilt_limits[: len(a) - 2]
+        robot, layout = self.config.robot, self.action_layout
+        v, w = a[layout.index("v")] * robot.max_speed, a[layout.index("w")] * robot.max_yaw_rate
+        target = np.array([v, w])
+        mount = layout.mount(a)
+        if len(mount):
+            self._mount_target[: len(mount)] = mount * self.robot.pan_tilt_limits[: len(mount)]
             self.robot.point_camera(*self._mount_target)
         if self.faults.before_physics(self._time + self.dt):
             self._pose = self.robot.floor_pose()  # a kidnap is no distance driven
@@ -404,11 +413,9 @@ class CorridorEnv(gym.Env):
         ticks = self.encoders.read(self.robot.wheel_angles(), self.streams.encoders)
         collision = self.robot.in_collision(ignore={self.world.floor})
         progress = self.task.progress(pose)
-        reached = self.task.update(
-            pose, a[0] * robot.max_speed, a[1] * robot.max_yaw_rate, self.dt, self._time
-        )
-        steering_change = abs(a[1] - self._yaw_command)
-        self._yaw_command = float(a[1])
+        reached = self.task.update(pose, v, w, self.dt, self._time, layout.stops(a))
+        steering_change = abs(a[layout.index("w")] - self._yaw_command)
+        self._yaw_command = float(a[layout.index("w")])
         reward = self.task.reward(
             progress - self._progress, self.dt, reached, collision, steering_change
         )

@@ -8,9 +8,11 @@ is drawn from the episode's ``start`` stream (:class:`~stsf_gym.envs.random_stre
 - an offset ``d ~ U[-start_lateral, start_lateral]`` along the path's left normal at ``s``,
 - a heading ``psi(s) + U[-start_yaw_deg, start_yaw_deg]``, ``psi(s)`` the path's direction.
 
-It models a robot set down by hand near its dock, so a learned agent meets many start poses,
-not one it could memorise. The estimators start from the drawn pose, as from an operator's
-initial pose (known start). A draw closer than a body radius to a wall or an obstacle is drawn
+Training legs (``task.leg_max`` above 0, :func:`draw_leg`) draw the start anywhere on the
+route, with one goal a few metres ahead. A drawn start models a robot set down by hand near
+its dock, so a learned agent meets many start poses, not one it could memorise. The
+estimators start from the drawn pose, as from an operator's initial pose (known start). A draw
+closer than a body radius to a wall or an obstacle is drawn
 again, as is one beyond a wall (the line from its path point crosses one), at most
 :data:`MAX_DRAWS` times.
 """
@@ -58,18 +60,81 @@ def draw_start_pose(
                 f"{task.start_lateral:g} m across the path at {s:g} m along it puts the robot "
                 f"into or beyond a wall (a body radius is {body_radius:g} m): make it smaller",
             )
+    return _draw_near(world, path, (0.0, task.start_along), task, body_radius, rng)
+
+
+def legs(task: TaskConfig) -> bool:
+    """Whether ``task`` drives training legs (``task.leg_max`` above 0)."""
+    return task.leg_max > 0
+
+
+def draw_leg(
+    world: WorldConfig, task: TaskConfig, body_radius: float, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """A training leg of ``world``'s route: ``(start pose, goal)``.
+
+    The goal's arc length is drawn uniformly over the route (from ``task.leg_min`` to the last
+    goal's), the leg's length ``U[leg_min, leg_max]`` (cut at the route's start), and the start
+    that far behind the goal, with the lateral and heading spread of ``task.start_*``. A leg
+    therefore ends anywhere a route may stop, turns included, and a short episode still teaches
+    the whole task: drive the corridor, then declare at the goal.
+    """
+    path = Polyline(world.path)
+    end = path.project(np.asarray(world.goals[-1], dtype=float))
+    require(
+        task.leg_min < end,
+        "task.leg_min",
+        f"this world's route is {end:.2f} m long, shorter than a leg ({task.leg_min:g} m)",
+    )
     for _ in range(MAX_DRAWS):
-        s = rng.uniform(0.0, task.start_along)
-        offset = rng.uniform(-task.start_lateral, task.start_lateral)
-        turn = math.radians(rng.uniform(-task.start_yaw_deg, task.start_yaw_deg))
-        if _free(world, path, s, offset, body_radius):  # else a box or a turn's wall is there
-            x, y = _place(path, s, offset)
-            return np.array([x, y, math.remainder(path.heading_at(s) + turn, math.tau)])
+        goal_arc = rng.uniform(task.leg_min, end)
+        start_arc = max(goal_arc - rng.uniform(task.leg_min, task.leg_max), 0.0)
+        start = _draw_pose(world, path, start_arc, task, body_radius, rng)
+        if start is not None:
+            return start, path.point_at(goal_arc)
+    raise FieldError(
+        "task.start_lateral",
+        f"no leg start a body radius ({body_radius:g} m) clear of walls and obstacles in "
+        f"{MAX_DRAWS} draws within +-{task.start_lateral:g} m of the path: make it smaller",
+    )
+
+
+def _draw_near(
+    world: WorldConfig,
+    path: Polyline,
+    arcs: tuple[float, float],
+    task: TaskConfig,
+    body_radius: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """A pose at an arc length ``U[arcs]``, offset and turned as ``task.start_*`` allow."""
+    for _ in range(MAX_DRAWS):
+        pose = _draw_pose(world, path, rng.uniform(*arcs), task, body_radius, rng)
+        if pose is not None:
+            return pose
     raise FieldError(
         "task.start_lateral",
         f"no start pose a body radius ({body_radius:g} m) clear of walls and obstacles in "
         f"{MAX_DRAWS} draws within +-{task.start_lateral:g} m of the path: make it smaller",
     )
+
+
+def _draw_pose(
+    world: WorldConfig,
+    path: Polyline,
+    s: float,
+    task: TaskConfig,
+    body_radius: float,
+    rng: np.random.Generator,
+) -> np.ndarray | None:
+    """A pose at arc length ``s``, offset and turned as ``task.start_*`` allow; None where the
+    robot does not fit (a box or a turn's wall is there)."""
+    offset = rng.uniform(-task.start_lateral, task.start_lateral)
+    turn = math.radians(rng.uniform(-task.start_yaw_deg, task.start_yaw_deg))
+    if not _free(world, path, s, offset, body_radius):
+        return None
+    x, y = _place(path, s, offset)
+    return np.array([x, y, math.remainder(path.heading_at(s) + turn, math.tau)])
 
 
 def _place(path: Polyline, s: float, offset: float) -> np.ndarray:

@@ -80,19 +80,28 @@ class PathTask:
       position is compared with the current goal: within ``task.goal_radius`` the goal is
       reached and the next one becomes current (the last one ends the episode as a success);
       outside it the episode ends as a failure. The truth crossing a goal never ends anything.
-      Standing still, not an extra action entry, because it keeps every agent's action space
-      (``Box`` ``[v, w]``, plus the camera mount) as it is, so a policy learns when to stop
-      with the same outputs it drives with, and it is how a real robot ends a delivery.
+      Standing still keeps every agent's action space (``Box`` ``[v, w]``, plus the camera
+      mount) as it is, and is how a real robot ends a delivery. With ``task.stop_action`` the
+      action has a last entry ``stop`` (:mod:`stsf_gym.envs.action_layout`): above 0 it
+      declares arrival at once, judged alike (Habitat's STOP); standing still is then just
+      standing still. A declared stop off its goal costs ``reward.false_stop``.
+
+    :meth:`set_goals` replaces the route's goals for one episode (a training leg,
+    :func:`~stsf_gym.envs.start_pose.draw_leg`).
     """
 
     def __init__(self, world: WorldConfig, reward: RewardConfig, task: TaskConfig) -> None:
         self.path = Polyline(world.path)
         self.protocol = task.protocol
         self.cfg = task
-        self.goals = np.asarray(world.goals if task.protocol == "declare" else world.path[-1:])
         self.goal_radius = task.goal_radius if task.protocol == "declare" else world.goal_radius
-        self.goal_arcs = [self.path.project(goal) for goal in self.goals]
         self.reward_cfg = reward
+        self.set_goals(world.goals if task.protocol == "declare" else world.path[-1:])
+
+    def set_goals(self, goals) -> None:
+        """Visit ``goals`` (points on the path, in order) from now on; starts afresh."""
+        self.goals = np.asarray(goals, dtype=float).reshape(-1, 2)
+        self.goal_arcs = [self.path.project(goal) for goal in self.goals]
         self.reset()
 
     def reset(self) -> None:
@@ -128,13 +137,18 @@ class PathTask:
         """Distance (m) from ``xy`` to the current goal."""
         return float(np.linalg.norm(np.asarray(xy)[:2] - self.goal))
 
-    def update(self, xy: np.ndarray, v: float, w: float, dt: float, time: float) -> bool:
-        """Advance by one control step with the TRUE position ``xy`` and the commanded speed
-        ``v`` (m/s) and yaw rate ``w`` (rad/s); True when a goal was reached at this step."""
+    def update(
+        self, xy: np.ndarray, v: float, w: float, dt: float, time: float, stop: bool = False
+    ) -> bool:
+        """Advance by one control step with the TRUE position ``xy``, the commanded speed ``v``
+        (m/s) and yaw rate ``w`` (rad/s) and the action's ``stop`` entry (``task.stop_action``);
+        True when a goal was reached at this step."""
         if self.protocol == "reach":
             reached = self.distance_to_goal(xy) <= self.goal_radius
             self.goal_index += int(reached)
             return reached
+        if self.cfg.stop_action:
+            return self._declare(xy, time) if stop else False
         if abs(v) >= self.cfg.stop_speed or abs(w) >= self.cfg.stop_yaw_rate:
             self._still, self._armed = 0.0, True
             return False
@@ -143,6 +157,10 @@ class PathTask:
         self._still += dt
         if self._still < self.cfg.stop_seconds - 1e-9:
             return False
+        return self._declare(xy, time)
+
+    def _declare(self, xy: np.ndarray, time: float) -> bool:
+        """A declared arrival at the TRUE position ``xy``: a success within the goal radius."""
         distance = self.distance_to_goal(xy)
         success = distance <= self.goal_radius
         position = (float(xy[0]), float(xy[1]))
@@ -152,15 +170,21 @@ class PathTask:
         return success
 
     @property
+    def missed(self) -> bool:
+        """A declared stop was off its goal (``declare``): the episode ends as a failure."""
+        return any(not stop.success for stop in self.stops)
+
+    @property
     def finished(self) -> bool:
         """The episode ends: every goal reached, or (``declare``) a declared stop missed."""
-        return self.success or any(not stop.success for stop in self.stops)
+        return self.success or self.missed
 
     def reward(
         self, gained: float, dt: float, reached: bool, collided: bool, steering_change: float = 0.0
     ) -> float:
         """The step's reward: progress ``gained`` (m), time ``dt`` (s), the goal bonus when
-        ``reached``, the collision penalty when ``collided`` and the steering-change penalty.
+        ``reached``, the collision penalty when ``collided``, the false-stop penalty once a
+        declared stop missed, and the steering-change penalty.
         """
         cfg = self.reward_cfg
         return (
@@ -168,5 +192,6 @@ class PathTask:
             + cfg.time * dt
             + cfg.goal * reached
             + cfg.collision * collided
+            + cfg.false_stop * self.missed
             + cfg.steering_change * steering_change
         )

@@ -157,7 +157,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     localizes globally (``mcl``) no start at all: its prior spreads over the map's free space.
     When the env's camera has a pan axis (``camera.control: pan``), the wrapper points it at a
     landmark from the pose estimate and the map (:class:`LandmarkPointer`) and the agent's
-    action stays ``[v, w]``.
+    action has no pan entry (``action_layout``: ``[v, w]``, or ``[v, w, stop]``).
 
     Args:
         env: a stsf-gym env.
@@ -182,12 +182,15 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         check_sensors(estimator, self.estimator.sensors, env.unwrapped.config.camera.enabled)
         robot = env.unwrapped.config.robot
         self.pointer = None
+        #: the agent's action entries (:class:`~stsf_gym.envs.action_layout.ActionLayout`)
+        self.action_layout = env.unwrapped.action_layout
         if env.unwrapped.config.camera.control == "pan":
-            # the wrapper points the camera; the agent keeps the (v, w) action
+            # the wrapper points the camera; the agent's action has no pan entry
             self.pointer = LandmarkPointer(
                 {}, np.zeros((0, 4)), robot.camera_forward, math.radians(robot.pan_limit_deg)
             )
-            self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+            self.action_layout = self.action_layout.without("pan")
+            self.action_space = self.action_layout.space
         latency = env.unwrapped.config.camera.latency
         self.history = None  # late frames fused at their exposure (estimators only)
         if estimator not in (TRUTH, *PRIVILEGED) and latency.delay_s + latency.jitter_s > 0:
@@ -257,12 +260,12 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 self.searching_since = None
             else:
                 self.searching_since += self.env.unwrapped.dt
-        if self.pointer is not None and self.searching_since is not None:
-            pan = math.sin(math.tau * self.searching_since / SWEEP_PERIOD_S)
-            action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
-        elif self.pointer is not None:
-            pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
-            action = np.append(np.asarray(action, dtype=np.float32).ravel(), np.float32(pan))
+        if self.pointer is not None:
+            if self.searching_since is not None:
+                pan = math.sin(math.tau * self.searching_since / SWEEP_PERIOD_S)
+            else:
+                pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
+            action = self.env.unwrapped.action_layout.fill(action, self.action_layout, pan=pan)
         obs, reward, terminated, truncated, info = self.env.step(action)
         if hasattr(self.estimator, "see"):
             self.estimator.see(info["true_pose"])

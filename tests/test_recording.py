@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
+from stsf_gym.agents.registry import make_agent
 from stsf_gym.episode_env import make_episode_env
-from stsf_gym.experiments.episodes import make_agent
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording import topics
 from stsf_gym.recording.log_reader import read_log
@@ -36,7 +36,9 @@ def record(folder: Path, estimator: str, seconds: float, env: dict, **recording)
     )
     env = RecordEpisode(inner, folder, name_prefix=estimator, **recording)
     obs, info = env.reset(seed=5)
-    act = make_agent("follower", env)
+    follower = make_agent("follower")
+    follower.begin(env)
+    act = follower.act
     means, covs = [inner.estimator.mean.copy()], [inner.estimator.cov.copy()]
     history = [(obs, info)]
     done = False

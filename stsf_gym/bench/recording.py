@@ -39,8 +39,8 @@ def recording_costs(seed: int = 0, cpu: int | None = 0) -> dict:
 
 
 def _episode(mode: str, seed: int, record: tuple[str, str] | None, folder: Path) -> dict:
+    from stsf_gym.agents.registry import make_agent
     from stsf_gym.episode_env import make_episode_env
-    from stsf_gym.experiments.episodes import make_agent
     from stsf_gym.recording.wrapper import RecordEpisode
 
     env = make_episode_env(WORLD, ESTIMATOR, {"camera": {"mode": mode}})
@@ -48,7 +48,9 @@ def _episode(mode: str, seed: int, record: tuple[str, str] | None, folder: Path)
         env = RecordEpisode(env, folder, record[0], record[1], f"{mode}-{record[0]}-{record[1]}")
     start, cpu, done = time.perf_counter(), time.process_time(), False
     obs, info = env.reset(seed=seed)
-    act = make_agent("follower", env)
+    follower = make_agent("follower")
+    follower.begin(env)
+    act = follower.act
     while not done:
         obs, _, terminated, truncated, info = env.step(act(obs))
         done = terminated or truncated

@@ -9,8 +9,9 @@ from __future__ import annotations
 from dataclasses import asdict
 from pathlib import Path
 
+from stsf_gym.agents.registry import make_agent
 from stsf_gym.experiments.cache import run_cached
-from stsf_gym.experiments.episodes import EpisodeSpec, make_agent, make_episode_env
+from stsf_gym.experiments.episodes import EpisodeSpec, make_episode_env
 from stsf_gym.video import VideoWriter
 
 #: Playback speed of the videos relative to simulated time.
@@ -24,14 +25,15 @@ def record_episode(spec: EpisodeSpec, stem: str | Path, seconds: float) -> Path:
         spec.world, spec.estimator, {**spec.env, "render_mode": "rgb_array"}, spec.options
     )
     try:
-        act = make_agent(spec.agent, env, spec.agent_options)
+        agent = make_agent(spec.agent, spec.agent_options)
+        driven = agent.wrap(env)  # a frame per decision of the agent
         dt = env.unwrapped.dt
-        steps = round(seconds / dt)
         with VideoWriter(stem, SPEED_UP / dt) as video:
-            obs, _ = env.reset(seed=spec.seed)
+            obs, info = driven.reset(seed=spec.seed)
+            agent.begin(driven)
             video.append(env.render())
-            for _ in range(steps):
-                obs, _, terminated, truncated, _ = env.step(act(obs))
+            while info.get("sim_time", 0.0) < seconds - 1e-9:
+                obs, _, terminated, truncated, info = driven.step(agent.act(obs))
                 video.append(env.render())
                 if terminated or truncated:
                     break

@@ -13,8 +13,10 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 
+from stsf_gym.agents.registry import make_agent
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
@@ -138,38 +140,60 @@ FLOOR_SETTINGS = "smoother"
 
 def agent_label(agent: str) -> str:
     """``follower``, or a saved model's file stem and content digest (a file-name part)."""
-    if agent == "follower":
-        return agent
-    from stsf_gym.agents.sb3_agent import model_digest
-
-    return f"{Path(agent).stem}-{model_digest(agent)}"
+    return make_agent(agent).label()
 
 
 def agent_config(name: str, options: dict | None = None) -> dict:
-    """The resolved settings of agent ``name``: the follower's config with ``options`` over
-    it, or a saved model's path and content digest."""
-    if name == "follower":
-        from stsf_gym.agents.follower import load_follower_config
-
-        return {"follower": asdict(load_follower_config(**(options or {})))}
-    from stsf_gym.agents.sb3_agent import model_digest
-
-    return {"model": name, "digest": model_digest(name)}
+    """The resolved settings of agent ``name`` with ``options`` over them."""
+    return make_agent(name, options).config()
 
 
-def make_agent(name: str, env, options: dict | None = None):
-    """``obs -> action`` for the wrapped ``env``: the follower (``options`` override
-    ``configs/agents/follower.yaml``), or a saved SB3 model's path."""
-    if name == "follower":
-        from stsf_gym.agents.follower import PathFollower
+class EpisodeTrace(gym.Wrapper):
+    """Records every control step of the pose-estimating env beneath an agent's policy stack
+    (time, distance, true pose, estimate and covariance; camera frames; the floor's data), so a
+    policy that decides every few steps is scored on every step all the same."""
 
-        follower = PathFollower.for_env(env, **(options or {}))
-        return lambda obs: follower.act(obs["pose"], obs["sonar"])
-    if name.endswith(".zip"):
-        from stsf_gym.agents.sb3_agent import load_agent
+    def __init__(self, env: gym.Env, estimating) -> None:
+        super().__init__(env)
+        self.estimating = estimating
+        self.trace: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
+        self.frames = self.in_view = self.steps = 0
+        self.finite, self.min_eig = True, math.inf
+        self.floor, self.info = None, {}
 
-        return load_agent(name, env)
-    raise ValueError(f"unknown agent {name!r}; known: follower or a saved model (.zip)")
+    def reset(self, *, seed=None, options=None):
+        obs, info = self.env.reset(seed=seed, options=options)
+        if "image_new" in obs:  # the floor needs the camera
+            self.floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
+            self.floor.reset(
+                sensor_model(self.env), self.estimating.start, self.estimating.start_cov
+            )
+        self._record(obs, info)
+        return obs, info
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self.steps += 1
+        if self.floor is not None:
+            self.floor.update(obs)
+        if obs["image_new"]:
+            self.frames += 1
+            self.in_view += bool(self.env.unwrapped.landmarks_in_view())
+        self._record(obs, info)
+        return obs, reward, terminated, truncated, info
+
+    def _record(self, obs: dict, info: dict) -> None:
+        cov = obs["pose_cov"].reshape(3, 3).astype(float)
+        pose = obs["pose"].astype(float)
+        self.finite = self.finite and bool(np.isfinite(pose).all() and np.isfinite(cov).all())
+        if self.finite:
+            self.min_eig = min(self.min_eig, float(np.linalg.eigvalsh(cov)[0]))
+        self.trace["t"].append(float(info["sim_time"]) if self.steps else 0.0)
+        self.trace["d"].append(float(info["distance_travelled"]) if self.steps else 0.0)
+        self.trace["true"].append(np.asarray(info["true_pose"], dtype=float).tolist())
+        self.trace["est"].append(pose.tolist())
+        self.trace["cov"].append(cov[np.triu_indices(3)].tolist())
+        self.info = info
 
 
 def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
@@ -190,36 +214,16 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             meta={"spec": asdict(spec)},
         )
     try:
-        obs, info = env.reset(seed=spec.seed)  # first: a generated world is drawn here
-        act = make_agent(spec.agent, env, spec.agent_options)
-        floor = None
-        if "image_new" in obs:  # the floor needs the camera
-            floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
-            floor.reset(sensor_model(env), estimating.start, estimating.start_cov)
+        agent = make_agent(spec.agent, spec.agent_options)
+        traced = EpisodeTrace(env, estimating)
+        driven = agent.wrap(traced)
+        obs, _ = driven.reset(seed=spec.seed)  # a generated world is drawn here
+        agent.begin(driven)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            obs, _, terminated, truncated, _ = driven.step(agent.act(obs))
+        info, trace, steps = traced.info, traced.trace, traced.steps
         path = np.asarray(env.unwrapped.config.world.path, dtype=float)
-        trace: dict[str, list] = {k: [] for k in ("t", "d", "true", "est", "cov")}
-        frames, in_view, terminated, truncated = 0, 0, False, False
-        finite, min_eig, steps = True, math.inf, 0
-        while True:
-            cov = obs["pose_cov"].reshape(3, 3).astype(float)
-            pose = obs["pose"].astype(float)
-            finite = finite and bool(np.isfinite(pose).all() and np.isfinite(cov).all())
-            if finite:
-                min_eig = min(min_eig, float(np.linalg.eigvalsh(cov)[0]))
-            trace["t"].append(float(info["sim_time"]) if steps else 0.0)
-            trace["d"].append(float(info["distance_travelled"]) if steps else 0.0)
-            trace["true"].append(np.asarray(info["true_pose"], dtype=float).tolist())
-            trace["est"].append(pose.tolist())
-            trace["cov"].append(cov[np.triu_indices(3)].tolist())
-            if terminated or truncated:
-                break
-            obs, _, terminated, truncated, info = env.step(act(obs))
-            steps += 1
-            if floor is not None:
-                floor.update(obs)
-            if obs["image_new"]:
-                frames += 1
-                in_view += bool(env.unwrapped.landmarks_in_view())
         counters = estimating.estimator.counters
         outcome = "collision" if info["collision"] else "time"
         if terminated and not info["collision"]:
@@ -239,21 +243,23 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             nis=[list(value) for value in estimating.estimator.innovations()],
             path_errors=distance_to_path(np.array(trace["true"])[:, :2], path).tolist(),
             frames=counters.get("frames", 0),
-            camera_frames=frames,
-            frames_in_view=in_view,
+            camera_frames=traced.frames,
+            frames_in_view=traced.in_view,
             frames_matched=counters.get("frames_matched", 0),
             landmark_updates=counters.get("landmark_updates", 0),
             gated_out=counters.get("gated_out", 0),
             relocalised=counters.get("relocalised", 0),
-            finite=finite,
-            min_cov_eigenvalue=min_eig,
+            finite=traced.finite,
+            min_cov_eigenvalue=traced.min_eig,
             stage_ms_per_step={
                 k: 1000 * v / steps for k, v in estimating.estimator.timings.items()
             },
             stops=[{**stop, "position": list(stop["position"])} for stop in info["stops"]],
             goals=len(task.goals),
             route_length=task.path.project(task.goals[-1]),
-            floor_estimates=None if floor is None else batch_floor(floor.data)[0].tolist(),
+            floor_estimates=(
+                None if traced.floor is None else batch_floor(traced.floor.data)[0].tolist()
+            ),
         )
     finally:
         env.close()

@@ -1,0 +1,31 @@
+"""The wrappers between a learnt policy and the pose-estimating env, built in one place.
+
+Training (:mod:`stsf_gym.agents.train`) and evaluation (:class:`~stsf_gym.agents.registry.
+SB3Agent`) both call :func:`policy_stack`, so a wrapper a policy was trained behind (its
+observation, its decision interval) is never missing when it is evaluated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import gymnasium as gym
+
+from stsf_gym.agents.decision_interval import DecisionInterval
+from stsf_gym.agents.observation import PolicyObservation, observation_config
+
+
+def policy_stack(env: gym.Env, observation: dict | None, decision_steps: int) -> gym.Env:
+    """``env`` (a :class:`~stsf_gym.wrappers.PoseEstimateWrapper`) as the policy sees and
+    drives it: :class:`PolicyObservation` with ``observation``'s settings, then
+    :class:`DecisionInterval` of ``decision_steps`` (1: a decision every control step)."""
+    features = PolicyObservation(env, observation_config(observation))
+    return features if decision_steps == 1 else DecisionInterval(features, decision_steps)
+
+
+def stack_settings(observation: dict | None, decision_steps: int) -> dict:
+    """What a saved policy records of its stack (:func:`policy_stack`'s arguments, resolved)."""
+    return {
+        "observation": asdict(observation_config(observation)),
+        "decision_steps": decision_steps,
+    }

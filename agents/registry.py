@@ -1,0 +1,148 @@
+"""Agents by name, behind one interface, as the estimators are behind theirs.
+
+An :class:`Agent` owns its policy stack: :meth:`~Agent.wrap` puts the wrappers it drives
+through (its observation, its decision interval) over the pose-estimating env, and the
+evaluation steps that stack, so an agent is evaluated exactly as it was trained. Names:
+
+- ``follower``: the scripted path follower (:mod:`stsf_gym.agents.follower`); options override
+  ``configs/agents/follower.yaml``;
+- a path ending in ``.zip``: a model saved by ``stsf-gym train`` (:class:`SB3Agent`);
+- ``package.module:Class``: an agent of your own, a class with this interface, built with the
+  options as keyword arguments;
+- any name given to :func:`register_agent`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from typing import Protocol
+
+import gymnasium as gym
+import numpy as np
+
+from stsf_gym.envs.config import ConfigError
+
+FOLLOWER = "follower"
+
+
+class Agent(Protocol):
+    """What an evaluation needs of an agent."""
+
+    def wrap(self, env: gym.Env) -> gym.Env:
+        """The env the agent drives: ``env`` under the agent's own wrappers (or ``env``)."""
+
+    def begin(self, env: gym.Env) -> None:
+        """Called after each reset of :meth:`wrap`'s env (the world may be new)."""
+
+    def act(self, obs) -> np.ndarray:
+        """The action for ``obs``, an observation of :meth:`wrap`'s env."""
+
+    def config(self) -> dict:
+        """The agent's resolved settings, for the results' provenance."""
+
+    def label(self) -> str:
+        """A short name for file names and tables."""
+
+
+class FollowerAgent:
+    """The scripted path follower on the pose estimate, every control step."""
+
+    def __init__(self, **options) -> None:
+        from stsf_gym.agents.follower import load_follower_config
+
+        self.options = options
+        self.settings = load_follower_config(**options)  # bad options fail here, early
+        self.follower = None
+
+    def wrap(self, env: gym.Env) -> gym.Env:
+        return env
+
+    def begin(self, env: gym.Env) -> None:
+        from stsf_gym.agents.follower import PathFollower
+
+        self.follower = PathFollower.for_env(env, **self.options)
+
+    def act(self, obs) -> np.ndarray:
+        return self.follower.act(obs["pose"], obs["sonar"])
+
+    def config(self) -> dict:
+        from dataclasses import asdict
+
+        return {FOLLOWER: asdict(self.settings)}
+
+    def label(self) -> str:
+        return FOLLOWER
+
+
+class SB3Agent:
+    """A model saved by ``stsf-gym train``, behind the policy stack it was trained with
+    (:func:`~stsf_gym.agents.policy_stack.policy_stack`); its actions deterministic."""
+
+    def __init__(self, path: str) -> None:
+        from stsf_gym.agents.sb3_agent import check_model_file, model_digest, model_metadata
+
+        self.path = check_model_file(path)
+        self.meta, self.digest = model_metadata(self.path), model_digest(self.path)
+        self.model = None
+
+    def wrap(self, env: gym.Env) -> gym.Env:
+        from stsf_gym.agents.policy_stack import policy_stack
+        from stsf_gym.agents.sb3_agent import load_model
+
+        stack = policy_stack(env, self.meta.get("observation"), self.meta.get("decision_steps", 1))
+        self.model = load_model(self.path)
+        for space in ("observation_space", "action_space"):
+            theirs, ours = getattr(self.model, space), getattr(stack, space)
+            if theirs.shape != ours.shape:
+                raise ConfigError(
+                    f"{self.path} expects an {space.split('_')[0]} of shape {theirs.shape}, "
+                    f"this env's is {ours.shape}"
+                )
+        return stack
+
+    def begin(self, env: gym.Env) -> None:
+        pass
+
+    def act(self, obs) -> np.ndarray:
+        action, _ = self.model.predict(obs, deterministic=True)
+        return action
+
+    def config(self) -> dict:
+        return {"model": str(self.path), "digest": self.digest}
+
+    def label(self) -> str:
+        return f"{self.path.stem}-{self.digest}"
+
+
+#: Agents registered by name: name -> factory(**options).
+AGENTS: dict[str, Callable[..., Agent]] = {FOLLOWER: FollowerAgent}
+
+
+def register_agent(name: str, factory: Callable[..., Agent]) -> None:
+    """Make ``name`` an agent wherever one is named (``--agents``, ``EpisodeSpec.agent``)."""
+    if ":" in name or name.endswith(".zip"):
+        raise ValueError(f"agent names may not contain ':' or end in .zip, got {name!r}")
+    AGENTS[name] = factory
+
+
+def make_agent(name: str, options: dict | None = None) -> Agent:
+    """The agent called ``name`` (see the module's docstring) with ``options``."""
+    options = options or {}
+    if name in AGENTS:
+        return AGENTS[name](**options)
+    if name.endswith(".zip"):
+        if options:
+            raise ConfigError(f"a saved model takes no agent options, got {sorted(options)}")
+        return SB3Agent(name)
+    module, sep, attr = name.partition(":")
+    if sep and module and attr:
+        try:
+            cls = getattr(importlib.import_module(module), attr)
+        except (ImportError, AttributeError) as err:
+            raise ConfigError(f"agent {name!r} not found: {err}") from None
+        return cls(**options)
+    raise ConfigError(
+        f"unknown agent {name!r}; known: {', '.join(AGENTS)}, a saved model (.zip) or "
+        "package.module:Class"
+    )
