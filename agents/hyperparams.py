@@ -37,6 +37,7 @@ RESERVED = {
     "self", "policy", "env", "policy_kwargs", "tensorboard_log", "verbose", "seed", "device",
     "_init_setup_model", "action_noise", "rollout_buffer_class", "replay_buffer_class",
 }  # fmt: skip
+SUITES = "suites"  # the section for training on a benchmark suite (declared arrival)
 ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leaky_relu": "LeakyReLU"}
 
 
@@ -53,12 +54,17 @@ class TrainingConfig:
     policy_kwargs: dict = field(default_factory=dict)
     env: dict = field(default_factory=dict)  # env overrides, as gym.make keyword sections
     observation: dict = field(default_factory=dict)  # stsf_gym.agents.observation.ObservationConfig
+    decision_steps: int = 1  # control steps per decision (agents/decision_interval.py)
+    train_env: dict = field(default_factory=dict)  # over env, for the training envs only (legs)
+    demonstrations: dict = field(default_factory=dict)  # agents/demonstrations/dagger.py
 
     def __post_init__(self) -> None:
-        for name in ("n_envs", "n_timesteps", "eval_freq", "n_eval_episodes", "checkpoint_freq"):
+        for name in ("n_envs", "eval_freq", "n_eval_episodes", "checkpoint_freq", "decision_steps"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"{name} must be at least 1, got {getattr(self, name)}")
-        for name in ("policy_kwargs", "env", "observation"):
+        if self.n_timesteps < 0:
+            raise ConfigError(f"n_timesteps must be at least 0, got {self.n_timesteps}")
+        for name in ("policy_kwargs", "env", "observation", "train_env", "demonstrations"):
             if not isinstance(getattr(self, name), dict):
                 raise ConfigError(f"{name} must be a mapping, got {getattr(self, name)!r}")
 
@@ -112,14 +118,16 @@ def load_hyperparams(
     env_id: str | None,
     path: str | Path | None = None,
     overrides: dict[str, Any] | None = None,
+    suite: bool = False,
 ) -> Hyperparams:
-    """The ``default`` section of ``path`` (``configs/agents/<algo>.yaml``) with the
-    ``env_id`` section and then ``overrides`` (flat ``key.sub=value`` or nested) over it."""
+    """The ``default`` section of ``path`` (``configs/agents/<algo>.yaml``), with the ``suites``
+    section when training on a suite, the ``env_id`` section and then ``overrides`` (flat
+    ``key.sub=value`` or nested) over it."""
     cls = algorithm_class(algo)
     path = Path(path or CONFIG_DIR / "agents" / f"{algo}.yaml")
     data = read_yaml(path)
     for section, body in data.items():
-        if section != "default" and section not in gym.registry:
+        if section not in ("default", SUITES) and section not in gym.registry:
             close = difflib.get_close_matches(str(section), list(gym.registry), n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ConfigError(
@@ -129,7 +137,8 @@ def load_hyperparams(
         if not isinstance(body, dict):
             raise ConfigError(f"{path}: section {section!r} must be a mapping, got {body!r}")
     chosen = env_id if env_id in data else "default"
-    merged = deep_merge(data.get("default", {}), data.get(env_id, {}) if env_id else {})
+    merged = deep_merge(data.get("default", {}), data.get(SUITES, {}) if suite else {})
+    merged = deep_merge(merged, data.get(env_id, {}) if env_id else {})
     merged = deep_merge(merged, overrides_to_tree(overrides or {}))
     training_keys = {f.name for f in dataclasses.fields(TrainingConfig)}
     try:

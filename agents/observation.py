@@ -41,7 +41,7 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
 
     - ``2 K`` lookahead points: ``(x, y)`` of the path points ``lookahead`` metres ahead of the
       path point nearest the estimated pose, in the estimated robot frame, over ``scale``;
-    - the path length left to the goal, over the whole path length;
+    - the path length left to the current goal (negative past it), over ``scale``;
     - the current goal of the route (the task's, ``declare``: where to stop next) in the
       estimated robot frame, over ``scale`` (Habitat's GPS+compass goal vector, from the
       estimate), and the share of the route's goals still to declare;
@@ -98,10 +98,11 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         low, high = self.sonar_range
         task = self.env.unwrapped.task
         goal = (task.goal - (x, y)) @ to_robot.T / self.config.scale
+        goal_arc = task.goal_arcs[min(task.goal_index, len(task.goals) - 1)]
         features = np.concatenate(
             [
                 points.ravel(),
-                [(self.path.length - here) / self.path.length],
+                [(goal_arc - here) / self.config.scale],
                 goal,
                 [task.goals_left / len(task.goals)],
                 [math.sin(heading_error), math.cos(heading_error)],

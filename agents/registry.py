@@ -46,17 +46,21 @@ class Agent(Protocol):
 
 
 class FollowerAgent:
-    """The scripted path follower on the pose estimate, every control step."""
+    """The scripted path follower on the pose estimate: a decision every control step, or
+    every ``decision_steps`` (:class:`~stsf_gym.agents.decision_interval.DecisionInterval`, as
+    a learnt policy decides); other options override ``configs/agents/follower.yaml``."""
 
-    def __init__(self, **options) -> None:
+    def __init__(self, decision_steps: int = 1, **options) -> None:
         from stsf_gym.agents.follower import load_follower_config
 
-        self.options = options
+        self.decision_steps, self.options = decision_steps, options
         self.settings = load_follower_config(**options)  # bad options fail here, early
         self.follower = None
 
     def wrap(self, env: gym.Env) -> gym.Env:
-        return env
+        from stsf_gym.agents.decision_interval import DecisionInterval
+
+        return env if self.decision_steps == 1 else DecisionInterval(env, self.decision_steps)
 
     def begin(self, env: gym.Env) -> None:
         from stsf_gym.agents.follower import PathFollower
@@ -69,10 +73,11 @@ class FollowerAgent:
     def config(self) -> dict:
         from dataclasses import asdict
 
-        return {FOLLOWER: asdict(self.settings)}
+        interval = {} if self.decision_steps == 1 else {"decision_steps": self.decision_steps}
+        return {FOLLOWER: asdict(self.settings), **interval}
 
     def label(self) -> str:
-        return FOLLOWER
+        return FOLLOWER if self.decision_steps == 1 else f"{FOLLOWER}-k{self.decision_steps}"
 
 
 class SB3Agent:

@@ -29,19 +29,23 @@ from functools import partial
 from pathlib import Path
 
 import gymnasium as gym
+import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList, EvalCallback
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 import stsf_gym
+from stsf_gym.agents.demonstrations.dagger import demonstration_config, run_demonstrations
+from stsf_gym.agents.demonstrations.expert import ExpertLabel
 from stsf_gym.agents.hyperparams import (
     algorithm_class,
     check_timesteps,
     load_hyperparams,
     policy_kwargs_for_sb3,
 )
-from stsf_gym.agents.observation import PolicyObservation, observation_config
+from stsf_gym.agents.observation import observation_config
+from stsf_gym.agents.policy_stack import policy_stack
 from stsf_gym.agents.sb3_agent import META_KEY, model_metadata
 from stsf_gym.agents.training_log import (
     EPISODES_CSV,
@@ -86,14 +90,24 @@ def check_training_env(world: str, estimator: str, env: dict, seed: int) -> None
 
 
 def make_training_env(
-    world: str, estimator: str, env: dict, observation: dict, monitor_file: str, in_worker: bool
+    world: str,
+    estimator: str,
+    env: dict,
+    observation: dict,
+    decision_steps: int,
+    monitor_file: str,
+    in_worker: bool,
+    expert: bool = False,
 ) -> gym.Env:
-    """One monitored env with the policy's observation (built inside a worker process)."""
+    """One monitored env behind the policy's stack (built inside a worker process); with
+    ``expert`` the follower labels every state (:class:`ExpertLabel`, demonstrations)."""
     if in_worker:  # Ctrl-C is the parent's to handle: it saves a checkpoint, then closes us
         signal.signal(signal.SIGINT, signal.SIG_IGN)
-    policy_env = PolicyObservation(
-        make_episode_env(world, estimator, env, {}), observation_config(observation)
-    )
+    estimating = make_episode_env(world, estimator, env, {})
+    labelled = ExpertLabel(estimating) if expert else estimating
+    policy_env = policy_stack(labelled, observation, decision_steps)
+    if expert:  # the expert labels every control step in the policy's features
+        labelled.features = policy_env.get_wrapper_attr("observation")
     fresh = not Path(f"{monitor_file}.{Monitor.EXT}").is_file()
     return Monitor(policy_env, monitor_file, info_keywords=("is_success",), override_existing=fresh)
 
@@ -235,6 +249,38 @@ def _set_aside(out: Path) -> Path:
     return target
 
 
+def val_success(model, eval_env: VecEnv, episodes: int, seed: int) -> float:
+    """The share of ``episodes`` of the evaluation env (reseeded: the same worlds each time)
+    that ``model``'s deterministic policy finishes with success."""
+    from stable_baselines3.common.evaluation import evaluate_policy
+
+    eval_env.seed(seed)
+    successes: list[bool] = []
+
+    def record(local: dict, _: dict) -> None:
+        if local["done"]:
+            successes.append(bool(local["info"].get("is_success", False)))
+
+    evaluate_policy(model, eval_env, episodes, deterministic=True, callback=record, warn=False)
+    return float(np.mean(successes))
+
+
+def _demonstrate(model, cfg, n_envs: int, out: Path, spec: dict, eval_env, training, seed):
+    """The demonstration stage (:func:`run_demonstrations`) in envs whose states the expert
+    labels; the learner is evaluated after each round on the evaluation worlds."""
+    venv = make_vec_env(n_envs, out, "demonstrations", expert=True, **spec)
+    venv.seed(seed)
+    layout = venv.get_attr("action_layout", [0])[0]
+    stop = layout.index("stop") if "stop" in layout else None
+    evaluate = partial(
+        val_success, model, eval_env, training.n_eval_episodes, seed + EVAL_SEED_OFFSET
+    )
+    try:
+        return run_demonstrations(model, venv, cfg, stop, out, evaluate, seed)
+    finally:
+        venv.close()
+
+
 def evaluation_world(world: str) -> str:
     """Where training evaluates: generated worlds on the ``val`` split (held out from training
     and from the benchmark's ``test``), a fixed world on itself with other seeds."""
@@ -262,7 +308,9 @@ def train(
     check_pose_source(estimator)
     if suite is not None:
         world = generated_label("train")
-    hp = load_hyperparams(algo, env_id_for(world, estimator, suite), config, overrides)
+    hp = load_hyperparams(
+        algo, env_id_for(world, estimator, suite), config, overrides, suite is not None
+    )
     cfg = hp.training
     env_settings = cfg.env
     if suite is not None:  # the suite over the file's env, the command line's over both
@@ -272,15 +320,26 @@ def train(
         )
     n_envs = cfg.n_envs if n_envs is None else n_envs
     total = cfg.n_timesteps if timesteps is None else timesteps
-    if n_envs < 1 or total < 1:
-        raise ConfigError(f"--n-envs and --timesteps must be at least 1, got {n_envs}, {total}")
+    demonstrations = demonstration_config(cfg.demonstrations)
+    least = 0 if demonstrations.enabled else 1  # demonstrations alone are a whole run
+    if n_envs < 1 or total < least:
+        raise ConfigError(
+            f"--n-envs must be at least 1 and --timesteps at least {least}, got {n_envs}, {total}"
+        )
     check_timesteps(hp, n_envs, total)
     torch.set_num_threads(1)
-    check_training_env(world, estimator, env_settings, seed)
+    train_settings = deep_merge(env_settings, cfg.train_env)
+    check_training_env(world, estimator, train_settings, seed)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     observation = asdict(observation_config(cfg.observation))
-    spec = {"world": world, "estimator": estimator, "env": env_settings, "observation": observation}
+    spec = {
+        "world": world,
+        "estimator": estimator,
+        "env": env_settings,
+        "observation": observation,
+        "decision_steps": cfg.decision_steps,
+    }
     training = {k: v for k, v in asdict(cfg).items() if k not in ("env", "observation")}
     hyperparams = {"section": hp.section, **training, **hp.algo_kwargs, "n_envs": n_envs}
     resolved = {
@@ -303,7 +362,8 @@ def train(
         "provenance": provenance(resolved, [seed]),
     }
     cls = algorithm_class(algo)
-    train_env = make_vec_env(n_envs, out, "train", **spec)
+    train_spec = {**spec, "env": train_settings}
+    train_env = make_vec_env(n_envs, out, "train", **train_spec)
     eval_env = make_vec_env(1, out, "eval", **{**spec, "world": evaluation_world(world)})
     eval_env.seed(seed + EVAL_SEED_OFFSET)
     try:
@@ -319,6 +379,10 @@ def train(
                 **hp.algo_kwargs,
             )
             setattr(model, META_KEY, meta)
+        if demonstrations.enabled and model.num_timesteps == 0:  # the stage before RL
+            model.stsf_meta["demonstrations"] = _demonstrate(
+                model, demonstrations, n_envs, out, train_spec, eval_env, cfg, seed
+            )
         start = model.num_timesteps
         train_env.seed(seed + start)
         callbacks = CallbackList(

@@ -28,9 +28,7 @@ class ActionLayout:
     def __post_init__(self) -> None:
         order = [ACTION_NAMES.index(name) for name in self.names if name in ACTION_NAMES]
         if len(order) != len(self.names) or order != sorted(set(order)):
-            raise ValueError(
-                f"action entries must be a subsequence of {ACTION_NAMES}: {self.names}"
-            )
+            raise ValueError(f"action entries must follow {ACTION_NAMES}, got {self.names}")
         if self.names[:2] != ("v", "w"):
             raise ValueError(f"an action starts with v and w, got {self.names}")
 

@@ -42,7 +42,8 @@ class EpisodeSpec:
 
     @property
     def key(self) -> str:
-        return f"{self.world}-{self.estimator}-{agent_label(self.agent)}-{self.seed}"
+        label = agent_label(self.agent, self.agent_options)
+        return f"{self.world}-{self.estimator}-{label}-{self.seed}"
 
     def resolved(self) -> dict:
         """Every value this episode runs with: the env's and pose source's settings
@@ -138,9 +139,9 @@ class EpisodeResult:
 FLOOR_SETTINGS = "smoother"
 
 
-def agent_label(agent: str) -> str:
+def agent_label(agent: str, options: dict | None = None) -> str:
     """``follower``, or a saved model's file stem and content digest (a file-name part)."""
-    return make_agent(agent).label()
+    return make_agent(agent, options).label()
 
 
 def agent_config(name: str, options: dict | None = None) -> dict:
@@ -296,7 +297,7 @@ def specs_config(specs: list[EpisodeSpec]) -> dict:
     file's provenance records: every value, once per distinct combination)."""
     resolved: dict[str, dict] = {}
     for spec in specs:
-        key = f"{spec.world} / {spec.estimator} / {agent_label(spec.agent)}"
+        key = f"{spec.world} / {spec.estimator} / {agent_label(spec.agent, spec.agent_options)}"
         if key not in resolved:
             resolved[key] = spec.resolved()
     return resolved

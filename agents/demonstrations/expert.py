@@ -1,0 +1,60 @@
+"""The expert of the demonstrations: the path follower on the TRUE pose, labelling states.
+
+:class:`ExpertLabel` sits directly over the pose-estimating env, beneath the policy's stack,
+and writes the follower's action for the state just reached into ``info["expert_action"]``
+at every reset and step, whoever drives. The follower is privileged (it sees the true pose from
+``info``, as a teacher may: Chen et al. 2019, "Learning by cheating") and heads for the task's
+current goal, wherever the driver's own stops left it, so it labels any state the learner
+reaches: DAgger's requirement.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import gymnasium as gym
+import numpy as np
+
+from stsf_gym.agents.follower import PathFollower
+
+
+class ExpertLabel(gym.Wrapper):
+    """Adds ``info["expert_action"]``: the follower's action (the env's action layout, its
+    ``stop`` entry included) for the true pose and the sonar of the current observation.
+
+    With ``features`` (the policy's observation of a raw one: ``PolicyObservation.observation``)
+    it also keeps every control step's ``(features, label)``, between the policy's decisions
+    too: a state the robot passes while an action is held is a state like any other, and
+    labelling it gives the cloning ``decision_steps`` times the data for the same driving.
+    :meth:`pop_samples` hands them over.
+    """
+
+    def __init__(self, env: gym.Env, features: Callable[[dict], np.ndarray] | None = None) -> None:
+        super().__init__(env)
+        self.expert: PathFollower | None = None
+        self.features = features
+        self._samples: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def pop_samples(self) -> tuple[np.ndarray, np.ndarray]:
+        """The ``(features, labels)`` of the control steps since the last call, as arrays."""
+        samples, self._samples = self._samples, []
+        if not samples:
+            return np.zeros((0, 0), np.float32), np.zeros((0, 0), np.float32)
+        features, labels = zip(*samples, strict=True)
+        return np.array(features), np.array(labels)
+
+    def reset(self, *, seed=None, options=None):
+        obs, info = self.env.reset(seed=seed, options=options)
+        self.expert = PathFollower.for_env(self.env)  # the episode's world and goals
+        return obs, self._label(obs, info)
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        return obs, reward, terminated, truncated, self._label(obs, info)
+
+    def _label(self, obs: dict, info: dict) -> dict:
+        self.expert.follow_goal(self.env.unwrapped.task.goal_index)
+        info["expert_action"] = self.expert.act(info["true_pose"], obs["sonar"])
+        if self.features is not None:
+            self._samples.append((self.features(obs), info["expert_action"]))
+        return info
