@@ -8,6 +8,7 @@ trained on ``split="train"`` never sees a test world, and none is used to choose
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
@@ -55,23 +56,30 @@ def make_world_env(world, **kwargs: Any) -> CorridorEnv:
 
 def episode_world(world, seed: int, env: dict | None = None) -> WorldConfig:
     """The world an episode of ``world`` (a label, name, path or mapping) reset with ``seed``
-    drives in."""
-    split = parse_world(world)
+    drives in (:func:`episode_config`)."""
+    return episode_config(world, seed, env).world
+
+
+def episode_config(world, seed: int, env: dict | None = None) -> EnvConfig:
+    """The env config an episode of ``world`` reset with ``seed`` runs with: ``env`` as
+    :func:`stsf_gym.episode_env.make_episode_env` takes it (config values, and for generated
+    worlds a ``generator`` and, for ``"generated"``, a ``split``), with the episode's world."""
+    settings = dict(env or {})
+    config, generator = settings.pop("config", None), settings.pop("generator", None)
+    split = settings.pop("split", "train") if world == GENERATED else parse_world(world)
+    settings.pop("render_mode", None)
     if split is None:
-        return load_config(world=world, **(env or {})).world
-    return world_for_seed(split, seed, load_config(**(env or {})))
+        return load_config(config, world=world, **settings)
+    env_cfg = load_config(config, **settings)
+    gen = load_generator_config(generator)
+    drawn = generate_world(world_seed_for(gen.split_range(split), seed), gen, env_cfg)
+    return replace(env_cfg, world=drawn)
 
 
 def world_seed_for(world_seeds: range, seed: int) -> int:
     """The world seed that ``reset(seed=seed)`` uses: the split's world ``seed`` (modulo its
     size), so episode seeds 0..N-1 give N different worlds."""
     return world_seeds[seed % len(world_seeds)]
-
-
-def world_for_seed(split: str, seed: int, env_cfg: EnvConfig) -> WorldConfig:
-    """The world an episode of ``split`` reset with ``seed`` drives in (default generator)."""
-    gen = load_generator_config()
-    return generate_world(world_seed_for(gen.split_range(split), seed), gen, env_cfg)
 
 
 class GeneratedCorridorEnv(CorridorEnv):

@@ -16,13 +16,13 @@ from stsf_gym.experiments.benchmark.intervals import (
 from stsf_gym.experiments.benchmark.scores import episode_scores, leaderboard_row, spl
 
 
-def result(outcome: str, distance: float, route: float, stops=(), goals: int = 1) -> dict:
-    """An evaluate cell's result, made by hand."""
+def result(outcome: str, distance: float, shortest: float, stops=(), goals: int = 1) -> dict:
+    """An evaluate cell's result, made by hand (``shortest``: the route's geodesic length)."""
     return {
         "outcome": outcome,
         "distance": distance,
         "metrics": {"ate_rmse_m": 0.1},
-        "navigation": {"goals": goals, "route_length_m": route, "stops": list(stops)},
+        "navigation": {"goals": goals, "geodesic_length_m": shortest, "stops": list(stops)},
     }
 
 

@@ -42,7 +42,7 @@ from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
 from stsf_gym.results.provenance import by_digest, provenance
 
-BENCHMARK_VERSION = 1  # bumped when a cell changes meaning, so older cell files are rerun
+BENCHMARK_VERSION = 2  # bumped when a cell changes meaning, so older cell files are rerun
 WORLD = "generated:test"
 DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf", "ekf")
 

@@ -3,10 +3,14 @@
 - **success**: every goal of the route reached by a declared stop within ``task.goal_radius``
   (``outcome == "goal"``);
 - **SPL**, success weighted by path length (Anderson et al. 2018, "On evaluation of embodied
-  navigation agents"): ``S * l / max(p, l)`` with ``l`` the route's length along the world's
-  path (start to last goal: the corridor centre line, which the shortest path undercuts by at
-  most a corridor width per turn, so SPL is a slight over-estimate at worst) and ``p`` the
-  distance the robot drove (true);
+  navigation agents"): ``S * l / max(p, l)`` with ``l`` the route's geodesic length
+  (``navigation["geodesic_length_m"]``: the shortest collision-free path from the episode's
+  true start through every goal in order, walls and obstacles grown by the robot's body radius,
+  :mod:`stsf_gym.envs.worlds.geodesic`, at most a few millimetres short per turn) and ``p`` the
+  distance the robot drove (true). The centre line (``route_length_m``) would not do: a
+  follower cutting corners drives less than it, and its SPL would be 1 whatever it did. A
+  robot that drives the geodesic scores 1; one that declares its stop up to ``goal_radius``
+  short of a goal may drive a little less than ``l``, and scores 1 too;
 - the **true distance to the goal at each declared stop** (the agent's belief against the
   truth at the moment it matters); collisions, missed stops, time-outs.
 """
@@ -35,7 +39,7 @@ def episode_scores(result: dict) -> dict:
     stops = navigation["stops"]
     return {
         "success": success,
-        "spl": spl(success, navigation["route_length_m"], result["distance"]),
+        "spl": spl(success, navigation["geodesic_length_m"], result["distance"]),
         "outcome": result["outcome"],
         "stop_distances_m": [stop["true_distance_m"] for stop in stops],
         "goals_reached": sum(stop["success"] for stop in stops),

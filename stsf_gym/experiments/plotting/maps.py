@@ -51,7 +51,7 @@ def plot_trajectories(world: str, by_estimator: dict[str, list[EpisodeResult]], 
     fig, axes = plt.subplots(1, n, figsize=(5 * n, 4.5), squeeze=False)
     for ax, (name, episodes) in zip(axes[0], by_estimator.items(), strict=True):
         episode = episodes[0]
-        draw_world_config(ax, episode_world(world, episode.spec["seed"]))
+        draw_world_config(ax, episode_world(world, episode.spec["seed"], episode.spec["env"]))
         true_xy, est_xy = np.array(episode.true_xy), np.array(episode.estimate_xy)
         ax.plot(*true_xy.T, color="tab:green", label="true")
         ax.plot(*est_xy.T, color="tab:red", ls="--", label="estimate")

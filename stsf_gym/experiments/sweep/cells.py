@@ -71,9 +71,24 @@ def evaluate_cell(cell: dict) -> dict:
         "navigation": {  # what the declared-stop task scores (stsf_gym.experiments.benchmark)
             "goals": episode.goals,
             "route_length_m": episode.route_length,
+            "geodesic_length_m": route_geodesic_m(cell, episode.true_poses[0][:2]),
             "stops": episode.stops,
         },
     }
+
+
+def route_geodesic_m(cell: dict, start) -> float:
+    """SPL's shortest path of an evaluate cell's episode: the geodesic length (m) from its true
+    ``start`` (x, y) through the goals its task visits, with walls and obstacles grown by the
+    robot's radius (:mod:`stsf_gym.envs.worlds.geodesic`). The route is the whole one: an
+    episode on a training leg (``task.leg_max`` above 0) draws its goal at reset, unrecorded."""
+    from stsf_gym.envs.generated_env import episode_config
+    from stsf_gym.envs.task import PathTask
+    from stsf_gym.envs.worlds.geodesic import route_geodesic_length
+
+    cfg = episode_config(cell["world"], cell["seed"], cell["env"])
+    goals = PathTask(cfg.world, cfg.reward, cfg.task).goals
+    return route_geodesic_length(cfg.world, start, cfg.robot.body_radius, goals)
 
 
 def train_cell(cell: dict) -> dict:
