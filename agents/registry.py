@@ -38,6 +38,9 @@ class Agent(Protocol):
     def act(self, obs) -> np.ndarray:
         """The action for ``obs``, an observation of :meth:`wrap`'s env."""
 
+    def env_overrides(self) -> dict:
+        """Env settings the agent needs over an evaluation's (the action entries it drives)."""
+
     def config(self) -> dict:
         """The agent's resolved settings, for the results' provenance."""
 
@@ -69,6 +72,9 @@ class FollowerAgent:
 
     def act(self, obs) -> np.ndarray:
         return self.follower.act(obs["pose"], obs["sonar"])
+
+    def env_overrides(self) -> dict:
+        return {}  # any action layout: it stops by standing still, or by STOP if there is one
 
     def config(self) -> dict:
         from dataclasses import asdict
@@ -112,6 +118,10 @@ class SB3Agent:
     def act(self, obs) -> np.ndarray:
         action, _ = self.model.predict(obs, deterministic=True)
         return action
+
+    def env_overrides(self) -> dict:
+        stop = self.meta.get("env", {}).get("task", {}).get("stop_action", False)
+        return {"task": {"stop_action": True}} if stop else {}
 
     def config(self) -> dict:
         return {"model": str(self.path), "digest": self.digest}

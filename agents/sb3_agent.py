@@ -2,7 +2,8 @@
 
 ``stsf-gym train`` stores a ``stsf_meta`` mapping in every saved model (algorithm,
 estimator, world, env overrides, policy-input settings, wall time so far); it travels inside
-the ``.zip`` with the model, so a model file alone is enough to evaluate it.
+the ``.zip`` with the model, so a model file alone is enough to evaluate it
+(:class:`~stsf_gym.agents.registry.SB3Agent`).
 """
 
 from __future__ import annotations
@@ -10,14 +11,9 @@ from __future__ import annotations
 import hashlib
 import json
 import zipfile
-from collections.abc import Callable
 from pathlib import Path
 
-import gymnasium as gym
-import numpy as np
-
 from stsf_gym.agents.hyperparams import algorithm_class
-from stsf_gym.agents.observation import PolicyObservation, observation_config
 from stsf_gym.envs.config import ConfigError
 
 META_KEY = "stsf_meta"
@@ -71,25 +67,3 @@ def load_model(path: str | Path, env=None):
     """The saved model (its algorithm read from its metadata), on the CPU."""
     meta = model_metadata(path)
     return algorithm_class(meta["algo"]).load(str(path), env=env, device="cpu")
-
-
-def load_agent(path: str | Path, env: gym.Env) -> Callable[[dict], np.ndarray]:
-    """``obs -> action`` of a saved model for ``env`` (a :class:`PoseEstimateWrapper`): the
-    observation is turned into the policy's input as in training, the action deterministic."""
-    import torch
-
-    torch.set_num_threads(1)
-    meta = model_metadata(path)
-    model = load_model(path)
-    features = PolicyObservation(env, observation_config(meta.get("observation")))
-    if features.observation_space.shape != model.observation_space.shape:
-        raise ConfigError(
-            f"{path} expects observations of shape {model.observation_space.shape}, "
-            f"this env gives {features.observation_space.shape}"
-        )
-
-    def act(obs: dict) -> np.ndarray:
-        action, _ = model.predict(features.observation(obs), deterministic=True)
-        return action
-
-    return act

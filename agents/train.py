@@ -29,7 +29,6 @@ from functools import partial
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList, EvalCallback
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
@@ -249,9 +248,9 @@ def _set_aside(out: Path) -> Path:
     return target
 
 
-def val_success(model, eval_env: VecEnv, episodes: int, seed: int) -> float:
-    """The share of ``episodes`` of the evaluation env (reseeded: the same worlds each time)
-    that ``model``'s deterministic policy finishes with success."""
+def val_successes(model, eval_env: VecEnv, episodes: int, seed: int) -> list[bool]:
+    """Whether ``model``'s deterministic policy finishes each of ``episodes`` episodes of the
+    evaluation env (reseeded: the same worlds each time) with success."""
     from stable_baselines3.common.evaluation import evaluate_policy
 
     eval_env.seed(seed)
@@ -262,7 +261,7 @@ def val_success(model, eval_env: VecEnv, episodes: int, seed: int) -> float:
             successes.append(bool(local["info"].get("is_success", False)))
 
     evaluate_policy(model, eval_env, episodes, deterministic=True, callback=record, warn=False)
-    return float(np.mean(successes))
+    return successes
 
 
 def _demonstrate(model, cfg, n_envs: int, out: Path, spec: dict, eval_env, training, seed):
@@ -273,10 +272,11 @@ def _demonstrate(model, cfg, n_envs: int, out: Path, spec: dict, eval_env, train
     layout = venv.get_attr("action_layout", [0])[0]
     stop = layout.index("stop") if "stop" in layout else None
     evaluate = partial(
-        val_success, model, eval_env, training.n_eval_episodes, seed + EVAL_SEED_OFFSET
+        val_successes, model, eval_env, training.n_eval_episodes, seed + EVAL_SEED_OFFSET
     )
     try:
-        return run_demonstrations(model, venv, cfg, stop, out, evaluate, seed)
+        made_by = model.stsf_meta["made_by"]
+        return run_demonstrations(model, venv, cfg, stop, out, evaluate, seed, made_by)
     finally:
         venv.close()
 
@@ -380,9 +380,11 @@ def train(
             )
             setattr(model, META_KEY, meta)
         if demonstrations.enabled and model.num_timesteps == 0:  # the stage before RL
-            model.stsf_meta["demonstrations"] = _demonstrate(
+            stage = _demonstrate(
                 model, demonstrations, n_envs, out, train_spec, eval_env, cfg, seed
             )
+            model.stsf_meta["demonstrations"] = stage
+            model.stsf_meta["wall_time_s"] = stage["wall_time_s"]  # RL has not started
         start = model.num_timesteps
         train_env.seed(seed + start)
         callbacks = CallbackList(

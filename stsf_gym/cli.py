@@ -281,10 +281,14 @@ def _train(args: argparse.Namespace) -> dict:
             raise SystemExit(130) from None
         runs.append(summary)
         if not args.json:
-            rate = (summary["last_evaluation"] or {}).get("success_rate", float("nan"))
+            last = summary["last_evaluation"] or {}
+            rate = last.get("success_rate", summary.get("demonstrations", {}).get("val_success"))
+            verdict = (
+                "no evaluation ran" if rate is None else f"last evaluation: success {rate:.2f}"
+            )
             print(
-                f"seed {seed}: {summary['timesteps']} timesteps in {summary['wall_time_s']:.0f} s; "
-                f"last evaluation: success rate {rate:.2f}. "
+                f"seed {seed}: {summary['timesteps']} RL timesteps, {summary['wall_time_s']:.0f} s "
+                f"of training; {verdict}. "
                 f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
             )
     return runs[0] if len(runs) == 1 else {"runs": runs}

@@ -15,7 +15,8 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from stsf_gym.agents.hyperparams import load_hyperparams
 from stsf_gym.agents.observation import PolicyObservation
-from stsf_gym.agents.sb3_agent import load_agent, model_metadata
+from stsf_gym.agents.registry import make_agent
+from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.train import latest_checkpoint, train
 from stsf_gym.agents.training_log import EpisodeLog, read_rows
 from stsf_gym.envs.config import ConfigError
@@ -177,13 +178,13 @@ def test_loaded_agent_acts_deterministically(tmp_path, make_env):
     assert latest_checkpoint(out)[1] == 150
     assert list((out / "checkpoints").glob("model_replay_buffer_*_steps.pkl"))
     env = PoseEstimateWrapper(make_env(**NO_CAMERA), "odometry")
-    act = load_agent(out / "model.zip", env)
-    obs, _ = env.reset(seed=0)
-    action = act(obs)
+    agent = make_agent(str(out / "model.zip"))
+    obs, _ = agent.wrap(env).reset(seed=0)
+    action = agent.act(obs)
     assert action.shape == (2,) and np.all(np.abs(action) <= 1)
-    np.testing.assert_array_equal(act(obs), action)
+    np.testing.assert_array_equal(agent.act(obs), action)
     with pytest.raises(ConfigError, match="not found"):
-        load_agent(tmp_path / "missing.zip", env)
+        make_agent(str(tmp_path / "missing.zip"))
 
 
 def test_timesteps_must_be_whole_updates_and_nothing_is_written_otherwise(tmp_path):

@@ -9,12 +9,16 @@ into the policy. Rounds
 labels every state it reaches, the labels join the data set (aggregation), and the policy is
 cloned again on all of it. Plain cloning leaves the learner where the expert never was (after
 a late turn, too near a wall, past a goal) with no idea what to do; DAgger's rounds label
-exactly those states. After each round the learner is evaluated on the validation worlds and
-the round is saved (model and data), so an interrupted stage resumes at its last round.
+exactly those states. After each round the learner is evaluated on the validation worlds (the
+same ones each round) and the round is saved (model, data, log), so an interrupted stage
+resumes after its last round.
 """
 
 from __future__ import annotations
 
+import io
+import json
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -25,15 +29,13 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 
 from stsf_gym.agents.demonstrations.cloning import CloningConfig, clone, cloning_config
-from stsf_gym.agents.training_log import append_row
 from stsf_gym.envs.config import build
-from stsf_gym.io import write_atomic
+from stsf_gym.io import write_atomic, write_json
 from stsf_gym.validation import Range
 
 Episodes = Annotated[int, Range(ge=0)]
 
-DEMONSTRATIONS_CSV = "demonstrations.csv"
-COLUMNS = ["round", "control_steps", "decisions", "samples", "wall_time_s", "loss", "val_success"]
+DEMONSTRATIONS_JSON = "demonstrations.json"
 
 
 @dataclass(frozen=True)
@@ -92,17 +94,36 @@ def run_demonstrations(
     cfg: DemonstrationConfig,
     stop_index: int | None,
     out: Path,
-    evaluate: Callable[[], float],
+    evaluate: Callable[[], list[bool]],
     seed: int,
+    made_by: str,
 ) -> dict:
-    """The demonstration stage on ``model``'s policy (resumed from ``out/demonstrations``);
-    returns its totals: control steps, decisions, samples, wall time, last val success."""
+    """The demonstration stage on ``model``'s policy (resumed from ``out/demonstrations`` when
+    the same code and settings, ``made_by``, logged it); each round is logged in
+    ``out/demonstrations.json`` (its totals and the success of each validation episode);
+    returns the last round's totals."""
     folder = out / "demonstrations"
+    log = out / DEMONSTRATIONS_JSON
+    if log.is_file() and json.loads(log.read_text()).get("made_by") != made_by:
+        stale = out / "stale-demonstrations"
+        stale.mkdir(exist_ok=True)
+        target = stale / str(len(list(stale.iterdir())))
+        target.mkdir()
+        for old in (folder, log):
+            if old.exists():
+                old.rename(target / old.name)
+        print(
+            f"{out}: demonstrations made by other code or settings moved to {target}",
+            file=sys.stderr,
+        )
     folder.mkdir(parents=True, exist_ok=True)
-    done = _saved_rounds(folder)
-    data, totals = _resume(model, folder, done)
+    history = _resume(model, folder, log)
+    data = None
+    if history:
+        saved = np.load(folder / "data.npz")
+        data = (saved["observations"], saved["actions"])
     settings = cfg.clone_settings
-    for round_ in range(done + 1, cfg.rounds + 1):
+    for round_ in range(len(history), cfg.rounds + 1):
         started = time.perf_counter()
         rng = np.random.default_rng([seed, round_])
         episodes = cfg.expert_episodes if round_ == 0 else cfg.episodes_per_round
@@ -115,49 +136,54 @@ def run_demonstrations(
             )
         )
         loss = clone(model.policy, *data, stop_index, settings, rng)
-        success = evaluate()
-        totals = {
-            "round": round_,
-            "control_steps": totals["control_steps"] + steps,
-            "decisions": totals["decisions"] + decisions,
-            "samples": len(data[0]),
-            "wall_time_s": totals["wall_time_s"] + time.perf_counter() - started,
-            "loss": loss,
-            "val_success": success,
-        }
-        _save_round(model, folder, round_, data, totals)
-        append_row(out / DEMONSTRATIONS_CSV, COLUMNS, [totals[c] for c in COLUMNS])
-    return totals
+        successes = evaluate()
+        before = history[-1] if history else {"control_steps": 0, "decisions": 0, "wall_time_s": 0}
+        history.append(
+            {
+                "round": round_,
+                "control_steps": before["control_steps"] + steps,
+                "decisions": before["decisions"] + decisions,
+                "samples": len(data[0]),
+                "wall_time_s": before["wall_time_s"] + time.perf_counter() - started,
+                "loss": loss,
+                "val_success": float(np.mean(successes)),
+                "val_episodes": [int(s) for s in successes],
+            }
+        )
+        _save_round(model, folder, round_, data, log, {"made_by": made_by, "rounds": history})
+        last = history[-1]
+        print(
+            f"demonstrations round {round_}/{cfg.rounds}: {last['samples']} samples, "
+            f"{last['control_steps']} control steps, {last['wall_time_s']:.0f} s, "
+            f"val success {last['val_success']:.2f}",
+            file=sys.stderr,
+            flush=True,
+        )
+    return {k: v for k, v in history[-1].items() if k != "val_episodes"}
 
 
-def _saved_rounds(folder: Path) -> int:
-    """The last round saved in ``folder`` (-1: none)."""
-    rounds = [int(p.stem.split("_")[1]) for p in folder.glob("round_*.zip")]
-    return max(rounds, default=-1)
+def read_history(out: Path) -> list[dict]:
+    """The rounds logged in ``out/demonstrations.json`` (none: an empty list)."""
+    path = Path(out) / DEMONSTRATIONS_JSON
+    return json.loads(path.read_text())["rounds"] if path.is_file() else []
 
 
-def _resume(model, folder: Path, done: int) -> tuple[tuple | None, dict]:
-    if done < 0:
-        empty = {"control_steps": 0, "decisions": 0, "wall_time_s": 0.0}
-        return None, empty
-    model.policy.load_state_dict(type(model).load(folder / f"round_{done}.zip").policy.state_dict())
-    saved = np.load(folder / "data.npz")
-    totals = {k: float(saved[k]) for k in ("control_steps", "decisions", "wall_time_s")}
-    return (saved["observations"], saved["actions"]), totals
+def _resume(model, folder: Path, log: Path) -> list[dict]:
+    """The rounds done (their log), with the last round's policy loaded into ``model``."""
+    history = read_history(log.parent)
+    if history:
+        last = folder / f"round_{history[-1]['round']}.zip"
+        model.policy.load_state_dict(type(model).load(last, device="cpu").policy.state_dict())
+    return history
 
 
-def _save_round(model, folder: Path, round_: int, data: tuple, totals: dict) -> None:
-    """The data set, then the round's model: a round's zip implies its data (both atomic)."""
-    import io
-
+def _save_round(model, folder: Path, round_: int, data: tuple, log: Path, record: dict) -> None:
+    """The data set, the round's model, then the log (each atomic): a logged round implies
+    its model and data."""
     buffer = io.BytesIO()
-    np.savez(
-        buffer,
-        observations=data[0],
-        actions=data[1],
-        **{k: totals[k] for k in ("control_steps", "decisions", "wall_time_s")},
-    )
+    np.savez(buffer, observations=data[0], actions=data[1])
     write_atomic(folder / "data.npz", buffer.getvalue())
     buffer = io.BytesIO()
     model.save(buffer)
     write_atomic(folder / f"round_{round_}.zip", buffer.getvalue())
+    write_json(log, record)

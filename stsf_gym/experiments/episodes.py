@@ -24,6 +24,7 @@ from stsf_gym.experiments.cache import run_cached
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import sensor_model
+from stsf_gym.yaml_layers import deep_merge
 
 RESULT_VERSION = 6  # bumped when EpisodeResult changes, so older episode files are rerun
 
@@ -202,7 +203,11 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
     With ``record`` (``{"format": "mcap" | "rerun", "frames": ..., "folder": ...}``) the
     episode is also written as ``folder/<episode>.mcap`` (or ``.rrd``,
     :class:`~stsf_gym.recording.wrapper.RecordEpisode`); it runs the same either way."""
-    env = estimating = make_episode_env(spec.world, spec.estimator, spec.env, spec.options)
+    agent = make_agent(spec.agent, spec.agent_options)
+    settings = deep_merge(
+        spec.env, agent.env_overrides()
+    )  # e.g. the STOP entry it was trained with
+    env = estimating = make_episode_env(spec.world, spec.estimator, settings, spec.options)
     if record:
         from stsf_gym.recording.wrapper import RecordEpisode
 
@@ -215,7 +220,6 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             meta={"spec": asdict(spec)},
         )
     try:
-        agent = make_agent(spec.agent, spec.agent_options)
         traced = EpisodeTrace(env, estimating)
         driven = agent.wrap(traced)
         obs, _ = driven.reset(seed=spec.seed)  # a generated world is drawn here

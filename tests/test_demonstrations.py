@@ -1,0 +1,84 @@
+"""The demonstration stage: behaviour cloning into an SB3 policy, DAgger rounds that resume,
+and the trained agent evaluated behind the same policy stack it was trained with."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from gymnasium import spaces
+
+from stsf_gym.agents.demonstrations.cloning import CloningConfig, clone
+from stsf_gym.agents.demonstrations.dagger import demonstration_config
+from stsf_gym.agents.registry import SB3Agent, make_agent
+from stsf_gym.agents.train import train
+from stsf_gym.envs.config import ConfigError
+from stsf_gym.envs.suite import load_suite
+from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
+
+
+def test_cloning_fits_the_expert_and_its_rare_stops():
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    rng = np.random.default_rng(0)
+    obs = rng.normal(size=(3000, 4)).astype(np.float32)
+    drive = np.tanh(obs[:, :2] @ np.array([[0.8, -0.3], [0.2, 0.9]]))
+    stop = np.where(obs[:, 2] > 1.6, 1.0, -1.0)  # about 5 % of the states
+    actions = np.column_stack([drive, stop]).astype(np.float32)
+    policy = ActorCriticPolicy(
+        spaces.Box(-10, 10, (4,), np.float32),
+        spaces.Box(-1, 1, (3,), np.float32),
+        lambda _: 1e-3,
+        net_arch=[64, 64],
+    )
+    loss = clone(policy, obs, actions, 2, CloningConfig(epochs=30), np.random.default_rng(1))
+    predicted = policy.predict(obs, deterministic=True)[0]
+    assert np.sqrt(np.mean((predicted[:, :2] - drive) ** 2)) < 0.1
+    stops = predicted[:, 2] > 0
+    assert np.mean(stops[stop > 0]) > 0.8 and np.mean(stops[stop < 0]) < 0.05
+    assert np.isfinite(loss)
+
+
+def test_unknown_demonstration_keys_are_named():
+    with pytest.raises(ConfigError, match="rounds"):
+        demonstration_config({"rounds": -1})
+    with pytest.raises(ConfigError, match="epoch"):
+        demonstration_config({"cloning": {"epoch": 3}})
+
+
+TINY = {
+    "demonstrations.expert_episodes": 2,
+    "demonstrations.rounds": 1,
+    "demonstrations.episodes_per_round": 1,
+    "demonstrations.cloning.epochs": 2,
+    "n_eval_episodes": 1,
+    "env.sim.max_episode_seconds": 12.0,
+    "train_env.sim.max_episode_seconds": 12.0,
+    "train_env.task.leg_min": 1.0,
+    "train_env.task.leg_max": 1.5,
+}
+
+
+def test_the_demonstration_stage_resumes_and_its_agent_drives_behind_its_stack(tmp_path):
+    out = tmp_path / "run"
+    summary = train(
+        "ppo", "truth", out, 0, n_envs=1, overrides=TINY, progress_bar=False, suite="corridor"
+    )
+    log = json.loads((out / "demonstrations.json").read_text())
+    rounds = log["rounds"]
+    assert [r["round"] for r in rounds] == [0, 1] and len(rounds[1]["val_episodes"]) == 1
+    assert rounds[1]["samples"] > rounds[0]["samples"] > 0
+    # every control step is a sample (and each reset's first state), decisions every 5 steps
+    assert rounds[0]["samples"] >= rounds[0]["control_steps"] >= 4 * rounds[0]["decisions"]
+    assert summary["demonstrations"]["round"] == 1 and summary["timesteps"] == 0
+    again = train(
+        "ppo", "truth", out, 0, n_envs=1, overrides=TINY, progress_bar=False, suite="corridor"
+    )
+    assert json.loads((out / "demonstrations.json").read_text()) == log  # resumed: nothing redone
+    assert again["demonstrations"] == summary["demonstrations"]
+    agent = make_agent(str(out / "model.zip"))
+    assert isinstance(agent, SB3Agent) and agent.env_overrides() == {"task": {"stop_action": True}}
+    env = {**load_suite("corridor").episode_env, "sim": {"max_episode_seconds": 3.0}}
+    episode = run_episode(EpisodeSpec("generated:test", "truth", 0, str(out / "model.zip"), env))
+    assert episode.steps <= 30 and len(episode.true_poses) == episode.steps + 1  # every step
