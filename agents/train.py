@@ -19,6 +19,7 @@ file carry the run's provenance.
 from __future__ import annotations
 
 import io
+import os
 import re
 import signal
 import sys
@@ -60,7 +61,7 @@ from stsf_gym.envs.generated_env import generated_label, parse_world
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.io import write_atomic, write_json
-from stsf_gym.results.provenance import fingerprint, provenance
+from stsf_gym.results.provenance import fingerprint, provenance, reference_ms
 from stsf_gym.wrappers import check_pose_source
 from stsf_gym.yaml_layers import deep_merge, overrides_to_tree
 
@@ -332,6 +333,7 @@ def train(
     check_training_env(world, estimator, train_settings, seed)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    machine = {"reference_ms_before": reference_ms(), "load_average_before": os.getloadavg()}
     observation = asdict(observation_config(cfg.observation))
     spec = {
         "world": world,
@@ -435,6 +437,8 @@ def train(
         "wall_time_s": model.stsf_meta["wall_time_s"],
         "session_wall_time_s": session,
         "steps_per_second": (model.num_timesteps - start) / session if session > 0 else None,
+        # the machine's speed beside the times (stsf-gym bench's reference workload, ms)
+        "machine": {**machine, "reference_ms_after": reference_ms()},
         "last_evaluation": last_evaluation(out),
         "model": str(out / "model.zip"),
         "learning_curve": str(plot_learning_curve(out, f"{algo.upper()} on {estimator}")),

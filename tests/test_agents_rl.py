@@ -61,7 +61,8 @@ def test_policy_observation_in_the_robot_frame(make_env):
     assert features.shape == env.observation_space.shape
     np.testing.assert_allclose(features[0 : 2 * k : 2], lookahead / scale, atol=5e-3)
     np.testing.assert_allclose(features[1 : 2 * k : 2], 0.0, atol=5e-3)
-    np.testing.assert_allclose(features[2 * k], 1.0, atol=1e-3)  # the whole path is left
+    path_length = env.path.length  # the whole path is left to the only goal, its end
+    np.testing.assert_allclose(features[2 * k], path_length / scale, atol=1e-3)
     x, y, yaw = env.unwrapped.start_pose
     goal = env.unwrapped.task.goal - (x, y)
     in_robot = [goal @ (math.cos(yaw), math.sin(yaw)), goal @ (-math.sin(yaw), math.cos(yaw))]

@@ -79,6 +79,7 @@ def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_
 
     out = tmp_path / "ppo-odometry"
     small = {"n_steps": 32, "batch_size": 32, "eval_freq": 32, "n_eval_episodes": 1}
+    small |= {"demonstrations.expert_episodes": 0, "train_env.sim.max_episode_seconds": 12.0}
     for seed in (0, 1):
         summary = train(
             "ppo",

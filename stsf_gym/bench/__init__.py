@@ -23,16 +23,14 @@ from __future__ import annotations
 
 import os
 import platform
-import time
 from pathlib import Path
 
-import numpy as np
 from tqdm import tqdm
 
 from stsf_gym.bench.recording import recording_costs
 from stsf_gym.bench.speed import CASES, FAST_CASES, render_latency, run_case, vector_scaling
 from stsf_gym.io import markdown_table, write_atomic, write_json
-from stsf_gym.results.provenance import provenance
+from stsf_gym.results.provenance import provenance, reference_ms
 
 PAPER_MS = {"detect": 127.0, "localise": 332.0}  # sect. 4.3, 1 GHz Pentium IV
 PROFILED_CASE = "e: camera + detector + STSF"
@@ -55,24 +53,6 @@ def machine() -> dict:
         "python": platform.python_version(),
         "reference_ms": reference_ms(),
     }
-
-
-def reference_ms() -> float:
-    """Milliseconds of a fixed Python + numpy workload (best of 3): the machine's speed at the
-    time of the run, so figures from runs on a busy or throttled machine can be told apart."""
-
-    def work() -> None:
-        sum(i * i for i in range(300_000))
-        a = np.random.default_rng(0).standard_normal((200, 200))
-        for _ in range(20):
-            a = np.tanh(a @ a.T / 200)
-
-    best = float("inf")
-    for _ in range(3):
-        start = time.perf_counter()
-        work()
-        best = min(best, time.perf_counter() - start)
-    return 1000 * best
 
 
 def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, seed: int = 0):

@@ -23,10 +23,10 @@ from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
-from stsf_gym.wrappers import sensor_model
+from stsf_gym.wrappers import TruePose, sensor_model
 from stsf_gym.yaml_layers import deep_merge
 
-RESULT_VERSION = 6  # bumped when EpisodeResult changes, so older episode files are rerun
+RESULT_VERSION = 7  # bumped when EpisodeResult changes, so older episode files are rerun
 
 
 @dataclass(frozen=True)
@@ -165,7 +165,8 @@ class EpisodeTrace(gym.Wrapper):
 
     def reset(self, *, seed=None, options=None):
         obs, info = self.env.reset(seed=seed, options=options)
-        if "image_new" in obs:  # the floor needs the camera
+        if "image_new" in obs and not isinstance(self.estimating.estimator, TruePose):
+            # the floor needs the camera; the true pose needs no floor
             self.floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
             self.floor.reset(
                 sensor_model(self.env), self.estimating.start, self.estimating.start_cov

@@ -23,9 +23,12 @@ import platform
 import shlex
 import subprocess
 import sys
+import time
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 #: Distributions whose versions shape results (those installed are listed).
 RESULT_PACKAGES = (
@@ -165,3 +168,21 @@ def provenance(
         "seeds": sorted(set(seeds)) if seeds is not None else None,
         "config": json.loads(json.dumps(config or {}, default=_canonical)),
     }
+
+
+def reference_ms() -> float:
+    """Milliseconds of a fixed Python + numpy workload (best of 3): the machine's speed at the
+    time of the run, so figures from runs on a busy or throttled machine can be told apart."""
+
+    def work() -> None:
+        sum(i * i for i in range(300_000))
+        a = np.random.default_rng(0).standard_normal((200, 200))
+        for _ in range(20):
+            a = np.tanh(a @ a.T / 200)
+
+    best = float("inf")
+    for _ in range(3):
+        start = time.perf_counter()
+        work()
+        best = min(best, time.perf_counter() - start)
+    return 1000 * best
