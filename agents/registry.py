@@ -41,6 +41,10 @@ class Agent(Protocol):
     def env_overrides(self) -> dict:
         """Env settings the agent needs over an evaluation's (the action entries it drives)."""
 
+    def trained_on(self) -> dict | None:
+        """What a learnt agent was trained on (``algo``, ``estimator``, ``world``, ...); None
+        for an agent that drives on whatever pose source it is given."""
+
     def config(self) -> dict:
         """The agent's resolved settings, for the results' provenance."""
 
@@ -75,6 +79,9 @@ class FollowerAgent:
 
     def env_overrides(self) -> dict:
         return {}  # any action layout: it stops by standing still, or by STOP if there is one
+
+    def trained_on(self) -> dict | None:
+        return None
 
     def config(self) -> dict:
         from dataclasses import asdict
@@ -123,6 +130,11 @@ class SB3Agent:
         stop = self.meta.get("env", {}).get("task", {}).get("stop_action", False)
         return {"task": {"stop_action": True}} if stop else {}
 
+    def trained_on(self) -> dict:
+        from stsf_gym.agents.sb3_agent import training_record
+
+        return training_record(self.path)
+
     def config(self) -> dict:
         return {"model": str(self.path), "digest": self.digest}
 
@@ -139,6 +151,13 @@ def register_agent(name: str, factory: Callable[..., Agent]) -> None:
     if ":" in name or name.endswith(".zip"):
         raise ValueError(f"agent names may not contain ':' or end in .zip, got {name!r}")
     AGENTS[name] = factory
+
+
+def trained_on(name: str) -> dict | None:
+    """What agent ``name`` was trained on (:meth:`Agent.trained_on`; None if it is not learnt
+    or does not say)."""
+    agent = make_agent(name)
+    return getattr(agent, "trained_on", lambda: None)()
 
 
 def make_agent(name: str, options: dict | None = None) -> Agent:

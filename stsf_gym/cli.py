@@ -183,6 +183,14 @@ def _world_cmd(args: argparse.Namespace) -> dict:
     return {"path": str(path), "seed": args.seed, "grid": args.grid}
 
 
+def _check_agents(names: list[str]) -> None:
+    """Make each agent once, so a missing model file or an unknown name fails before any work."""
+    from stsf_gym.agents.registry import make_agent
+
+    for name in names:
+        make_agent(name)
+
+
 def _evaluate(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.evaluate import evaluate
 
@@ -190,12 +198,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
     estimators = _pose_sources(args.estimators)
     args.world = _world(args)
     agents = _names(args.agent)
-    models = {a.replace("{estimator}", e) for a in agents if a != "follower" for e in estimators}
-    if models:
-        from stsf_gym.agents.sb3_agent import model_metadata
-
-        for model in sorted(models):
-            model_metadata(model)  # a missing or foreign model file fails here, clearly
+    _check_agents(sorted({a.replace("{estimator}", e) for a in agents for e in estimators}))
     if len(agents) > 1 or "{estimator}" in args.agent:
         from stsf_gym.experiments.compare import compare
 
@@ -315,12 +318,7 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
     _check_counts(args)
     agents = _names(args.agent)
     estimators = _pose_sources(args.estimators)
-    models = [a for a in agents if a != "follower"]
-    if models:
-        from stsf_gym.agents.sb3_agent import model_metadata
-
-        for model in models:
-            model_metadata(model)  # a missing or foreign model file fails here, clearly
+    _check_agents(agents)
     try:
         levels = [float(level) for level in _names(args.levels)]
     except ValueError as err:
@@ -363,13 +361,11 @@ def _benchmark(args: argparse.Namespace) -> dict:
         raise ConfigError(f"--worlds must be at least 1, got {args.worlds}")
     if args.config or args.overrides:
         raise ConfigError("benchmark runs a suite as written: edit or copy its configs/suites file")
-    from stsf_gym.agents.sb3_agent import model_metadata
-    from stsf_gym.experiments.benchmark.trained import FOLLOWER, expand_agents
+    from stsf_gym.experiments.benchmark.trained import expand_agents
 
     estimators = _pose_sources(args.estimators)
     agents = expand_agents(_names(args.agents))
-    for model in (a for a in agents if a != FOLLOWER):
-        model_metadata(model)  # a missing or foreign model file fails here, clearly
+    _check_agents(agents)
     summary = benchmark(
         args.out / args.suite,
         args.suite,

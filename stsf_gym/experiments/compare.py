@@ -50,11 +50,10 @@ def agent_for(template: str, estimator: str) -> str:
 
 def agent_name(template: str, estimator: str) -> str:
     """A short name for the table: ``follower``, or the algorithm of the saved model."""
-    if template == "follower":
-        return template
-    from stsf_gym.agents.sb3_agent import training_record
+    from stsf_gym.agents.registry import trained_on
 
-    return training_record(agent_for(template, estimator))["algo"].upper()
+    record = trained_on(agent_for(template, estimator))
+    return template if record is None else record["algo"].upper()
 
 
 def compare(

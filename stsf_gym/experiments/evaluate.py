@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.agents.registry import trained_on
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
@@ -74,10 +75,9 @@ def evaluate(
         "rows": rows,
     }
     title = agent
-    if agent != "follower":  # a saved model: record what it was trained on
-        from stsf_gym.agents.sb3_agent import training_record
-
-        summary["trained"] = training_record(agent)
+    trained = trained_on(agent)
+    if trained is not None:  # a learnt agent: record what it was trained on
+        summary["trained"] = trained
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
     table = markdown_table([rendered(row) for row in rows])
     write_report(

@@ -8,15 +8,19 @@ from stsf_gym.io import markdown_table, save_figure
 
 
 def _label(row: dict) -> str:
-    if row["agent"] == "follower":
-        return row["estimator"]
+    if not row["agent"].endswith(".zip"):  # an agent by name drives on every pose source
+        return (
+            row["estimator"]
+            if row["agent"] == "follower"
+            else f"{row['agent']} / {row['estimator']}"
+        )
     return f"{agent_name(row['agent'])} / {row['estimator']}"
 
 
 def agent_name(agent: str) -> str:
-    """``follower``, or a model by its last two folders (``ppo-stsf/seed-0``); the JSON keeps
-    the whole path."""
-    return agent if agent == "follower" else "/".join(Path(agent).parts[-3:-1])
+    """An agent by its name, a model by its last two folders (``ppo-stsf/seed-0``); the JSON
+    keeps the whole path."""
+    return "/".join(Path(agent).parts[-3:-1]) if agent.endswith(".zip") else agent
 
 
 def leaderboard_markdown(summary: dict) -> str:

@@ -17,10 +17,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.agents.registry import trained_on
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.benchmark.intervals import iqm, stratified_bootstrap
 
-FOLLOWER = "follower"
 SEED_FOLDERS = "seed-*"
 
 
@@ -29,9 +29,7 @@ def expand_agents(agents: list[str]) -> list[str]:
     expanded = []
     for agent in agents:
         path = Path(agent)
-        if agent == FOLLOWER:
-            expanded.append(agent)
-        elif path.is_dir():
+        if path.is_dir():
             models = sorted(path.glob(f"{SEED_FOLDERS}/model.zip")) or [path / "model.zip"]
             missing = [m for m in models if not m.is_file()]
             if missing:
@@ -40,23 +38,22 @@ def expand_agents(agents: list[str]) -> list[str]:
                     "(a folder of `stsf-gym train --seeds N`, or of one run)"
                 )
             expanded.extend(str(m.resolve()) for m in models)
-        else:
+        elif path.suffix == ".zip":
             expanded.append(str(path.resolve()))
+        else:  # an agent by name (follower, a registered one, package.module:Class)
+            expanded.append(agent)
     return expanded
 
 
 def agent_pose_sources(agent: str, estimators: list[str]) -> list[str]:
-    """The pose sources ``agent`` drives on: a model its own, the follower ``estimators``."""
-    if agent == FOLLOWER:
-        return list(estimators)
-    from stsf_gym.agents.sb3_agent import model_metadata
-
-    return [model_metadata(agent)["estimator"]]
+    """The pose sources ``agent`` drives on: a learnt one its own, others ``estimators``."""
+    record = trained_on(agent)
+    return list(estimators) if record is None else [record["estimator"]]
 
 
 def training_group(agent: str) -> str | None:
-    """The training folder a model belongs to (None for the follower)."""
-    if agent == FOLLOWER:
+    """The training folder a learnt agent's model belongs to (None for other agents)."""
+    if trained_on(agent) is None:
         return None
     folder = Path(agent).parent
     return str(folder.parent if folder.match(SEED_FOLDERS) else folder)

@@ -190,11 +190,11 @@ def summarise_curve(cells: list[dict], results: list[dict]) -> dict:
 
 def agent_label(agent: str) -> str:
     """``follower``, or a saved model's algorithm and the pose source it was trained on."""
-    if agent == "follower":
-        return agent
-    from stsf_gym.agents.sb3_agent import training_record
+    from stsf_gym.agents.registry import trained_on
 
-    record = training_record(agent)
+    record = trained_on(agent)
+    if record is None:
+        return agent
     return f"{record['algo'].upper()} trained on {record['estimator']}"
 
 

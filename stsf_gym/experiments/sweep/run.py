@@ -30,6 +30,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from stsf_gym.agents.registry import make_agent
 from stsf_gym.envs.config import (
     CONFIG_DIR,
     ConfigError,
@@ -214,8 +215,9 @@ def _checked(path: Path, label: str, base: dict, point: dict, sections: tuple[st
             check_pose_source(estimator)
         if isinstance(seed, bool) or not isinstance(seed, int):
             raise ConfigError(f"seed must be an integer, got {seed!r}")
-        if agent != "follower" and not (isinstance(agent, str) and Path(agent).is_file()):
-            raise ConfigError(f"agent must be follower or a model file, got {agent!r}")
+        if not isinstance(agent, str):
+            raise ConfigError(f"agent must be an agent's name or a model file, got {agent!r}")
+        make_agent(agent)  # an unknown name or a missing model fails here
         _check_env(cell["env"], cell["world"])
         if cell.get("options") and estimator is not None:
             estimator_options(estimator, **cell["options"])
