@@ -45,6 +45,7 @@ class DemonstrationConfig:
     expert_episodes: Episodes = 0
     rounds: Episodes = 0
     episodes_per_round: Episodes = 0
+    every_control_step: bool = True  # label the held steps between decisions too (else: not)
     cloning: dict = field(default_factory=dict)  # CloningConfig's keys
 
     @property
@@ -63,15 +64,20 @@ def demonstration_config(data: dict | None) -> DemonstrationConfig:
     return cfg
 
 
-def collect(venv: VecEnv, episodes: int, policy=None) -> tuple[np.ndarray, np.ndarray, int, int]:
+def collect(
+    venv: VecEnv, episodes: int, policy=None, every_step: bool = True
+) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Drive ``venv`` until ``episodes`` episodes have ended: the expert's actions, or
-    ``policy``'s deterministic ones. Return every control step's observation (the policy's
-    features) and the expert's label for it (:meth:`ExpertLabel.pop_samples`), the control
-    steps taken and the decisions made."""
+    ``policy``'s deterministic ones. Return the observations (the policy's features) and the
+    expert's labels of every control step (:meth:`ExpertLabel.pop_samples`), or of every
+    decision only, the control steps taken and the decisions made."""
     obs = venv.reset()
     labels = np.array([info["expert_action"] for info in venv.reset_infos])
+    observations, actions = [], []
     steps = decisions = ended = 0
     while ended < episodes:
+        observations.append(obs)
+        actions.append(labels)
         chosen = labels if policy is None else policy.predict(obs, deterministic=True)[0]
         obs, _, dones, infos = venv.step(chosen)
         decisions += len(infos)
@@ -84,8 +90,10 @@ def collect(venv: VecEnv, episodes: int, policy=None) -> tuple[np.ndarray, np.nd
             ]
         )
     samples = [s for s in venv.env_method("pop_samples") if len(s[0])]
-    features, actions = (np.concatenate(part) for part in zip(*samples, strict=True))
-    return features, actions, steps, decisions
+    if not every_step:
+        return np.concatenate(observations), np.concatenate(actions), steps, decisions
+    features, labelled = (np.concatenate(part) for part in zip(*samples, strict=True))
+    return features, labelled, steps, decisions
 
 
 def run_demonstrations(
@@ -127,7 +135,8 @@ def run_demonstrations(
         started = time.perf_counter()
         rng = np.random.default_rng([seed, round_])
         episodes = cfg.expert_episodes if round_ == 0 else cfg.episodes_per_round
-        obs, actions, steps, decisions = collect(venv, episodes, None if round_ == 0 else model)
+        driver = None if round_ == 0 else model
+        obs, actions, steps, decisions = collect(venv, episodes, driver, cfg.every_control_step)
         data = (
             (obs, actions)
             if data is None
