@@ -21,6 +21,7 @@ import numpy as np
 from stsf_gym.envs.quiet import quiet_c_output
 from stsf_gym.envs.rendering.gl_renderer import GLRenderer, gl_inherited
 from stsf_gym.envs.rendering.scene import Board, Box, Scene, Shape
+from stsf_gym.validation import ConfigError
 
 with quiet_c_output():  # PyBullet's banners: envs/quiet.py
     import pybullet
@@ -92,7 +93,7 @@ class Simulator:
 
     def __init__(self, physics_hz: float, renderer: str = "auto") -> None:
         if renderer not in RENDERERS:
-            raise ValueError(f"camera.renderer must be one of {RENDERERS[:-1]}, got {renderer!r}")
+            raise ConfigError(f"camera.renderer must be one of {RENDERERS[:-1]}, got {renderer!r}")
         with quiet_c_output():
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.time_step = 1.0 / physics_hz

@@ -13,6 +13,7 @@ from pathlib import Path
 from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.io import remove_partial_writes
 from stsf_gym.results.provenance import set_command
+from stsf_gym.validation import FieldError
 
 DEFAULT_WORLD = "irl_corridor"  # --world when none is given
 
@@ -620,8 +621,10 @@ def _check_writable(out: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run a command. Bad input: a one-line error and exit code 2, before any output is
-    written; jobs that failed twice: exit code 1 (finished results kept, a rerun resumes)."""
+    """Run a command. Bad input (a :class:`ConfigError`, :class:`FieldError` or a missing or
+    unwritable path): a one-line error and exit code 2, before any output is written; jobs that
+    failed twice: exit code 1 (finished results kept, a rerun resumes). Any other exception is
+    a bug: it propagates with its traceback (exit code 1)."""
     from stsf_gym.experiments.cache import JobsFailed
 
     args = build_parser().parse_args(argv)
@@ -641,7 +644,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             _silence_c_stdout()
         result = args.run(args)
-    except (ConfigError, ValueError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
+    except (ConfigError, FieldError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
         print(f"{error} {err}", file=sys.stderr)
         return 2
     except JobsFailed as err:

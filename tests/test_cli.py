@@ -58,3 +58,25 @@ def test_bad_arguments_named(tmp_path, args, message):
 def test_help_lists_commands():
     result = subprocess.run([*CLI, "--help"], capture_output=True, text=True)
     assert result.returncode == 0 and "demo" in result.stdout
+
+
+def test_only_validation_errors_are_bad_input(tmp_path):
+    """A bad log is the user's (exit 2, one line naming the file); a ValueError from deep in a
+    run is a bug: its traceback is kept and the exit code is not 2."""
+    log = tmp_path / "not-a-log.mcap"
+    log.write_text("no MCAP here")
+    replay = ["replay", str(log), "--estimators", "odometry", "--out", str(tmp_path / "r")]
+    bad = subprocess.run([*CLI, *replay], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert f"{log}: not a readable MCAP log" in bad.stderr
+    bug = (
+        "import sys, stsf_gym.experiments.replay as r, stsf_gym.cli as c\n"
+        "def broken(*args): raise ValueError('operands could not be broadcast together')\n"
+        "r.replay_logs = broken\n"
+        "sys.exit(c.main(sys.argv[1:]))\n"
+    )
+    crash = subprocess.run(
+        [sys.executable, "-c", bug, *replay], capture_output=True, text=True, timeout=120
+    )
+    assert crash.returncode not in (0, 2), crash.stderr
+    assert "Traceback" in crash.stderr and "could not be broadcast" in crash.stderr

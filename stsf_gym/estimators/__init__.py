@@ -23,6 +23,7 @@ import sys
 
 from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
 from stsf_gym.estimators.settings import ESTIMATOR_DIR, build_settings, load_settings
+from stsf_gym.validation import ConfigError
 
 #: Estimators by name: "module:class", imported when first made. ``conventional`` is the
 #: paper's (the pose from the current two frames only), ``conventional-filter`` the same pair
@@ -62,9 +63,9 @@ def register_estimator(name: str, cls: type[PoseEstimator] | str) -> None:
     ``configs/estimators/<name>.yaml`` exists. Worker processes started by ``spawn`` import
     afresh: there a ``module:Class`` name works without registering."""
     if not name or ":" in name:
-        raise ValueError(f"an estimator name is a word without ':', got {name!r}")
+        raise ConfigError(f"an estimator name is a word without ':', got {name!r}")
     if name in PRIVILEGED or (name in ESTIMATORS and ESTIMATORS[name] != _target(cls)):
-        raise ValueError(f"estimator {name!r} is taken by {ESTIMATORS.get(name, 'a privileged')}")
+        raise ConfigError(f"estimator {name!r} is taken by {ESTIMATORS.get(name, 'a privileged')}")
     estimator_class(_target(cls))  # fails now, naming it, if it is no estimator
     ESTIMATORS[name] = _target(cls)
 
@@ -78,7 +79,7 @@ def estimator_class(name: str) -> type[PoseEstimator]:
     an unknown name lists the known ones."""
     known = {**ESTIMATORS, **PRIVILEGED}
     if name not in known and ":" not in name:
-        raise ValueError(
+        raise ConfigError(
             f"unknown estimator {name!r}; known: {', '.join(sorted(known))}, "
             "or a package.module:Class of your own"
         )
@@ -86,10 +87,10 @@ def estimator_class(name: str) -> type[PoseEstimator]:
     try:
         module = _import(module_name)
     except ImportError as err:
-        raise ValueError(f"estimator {name!r}: cannot import {module_name!r} ({err})") from err
+        raise ConfigError(f"estimator {name!r}: cannot import {module_name!r} ({err})") from err
     cls = getattr(module, class_name, None)
     if not (isinstance(cls, type) and issubclass(cls, PoseEstimator)):
-        raise ValueError(f"estimator {name!r}: {class_name!r} is no PoseEstimator class")
+        raise ConfigError(f"estimator {name!r}: {class_name!r} is no PoseEstimator class")
     return cls
 
 
@@ -110,7 +111,7 @@ def estimator_settings(name: str, **options):
     cls = estimator_class(name)
     settings_type = getattr(cls, "settings_type", None)
     if settings_type is None:
-        raise ValueError(f"estimator {name!r}: {cls.__name__} has no settings_type dataclass")
+        raise ConfigError(f"estimator {name!r}: {cls.__name__} has no settings_type dataclass")
     if ":" not in name and (ESTIMATOR_DIR / f"{name}.yaml").is_file():
         return load_settings(name, settings_type, options)
     return build_settings(name, settings_type, options)
