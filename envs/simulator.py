@@ -76,6 +76,14 @@ FORK_MESSAGE = (
 )
 
 
+NOT_COPYABLE = (
+    "a stsf-gym env cannot be copied or pickled: it holds a PyBullet physics server, which a "
+    "copy would share (stepping the copy would move the original's robot, closing it would "
+    "disconnect both). Make another env instead: gym.make(env.spec), reset with the same seed "
+    "and options for the same episode"
+)
+
+
 class Simulator:
     """A PyBullet physics client with a fixed time step, the world's scene and its renderer.
 
@@ -262,6 +270,11 @@ class Simulator:
             )
         self._frames += 1
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+
+    def __reduce_ex__(self, protocol):
+        """Refuse copy, deepcopy and pickle: a copy would hold the same PyBullet server, so
+        stepping it would move the original's robot and closing it would disconnect both."""
+        raise TypeError(NOT_COPYABLE)
 
     def close(self) -> None:
         """Disconnect; calling it again is harmless."""
