@@ -10,8 +10,10 @@ model from an env).
 estimator=...)``, ``--estimators``, sweeps, the accuracy curve, the benchmark), a
 ``package.module:Class`` works too: a :class:`PoseEstimator` subclass whose ``settings_type``
 is a dataclass; its defaults are the dataclass's own (no YAML needed) and keyword options go
-over them, checked as the package's are. The module is imported as ``python -m`` would from
-the working directory (``examples.complementary:ComplementaryFilter`` from the repository root).
+over them, checked as the package's are. A subclass of a package estimator that keeps its
+parent's settings type (or extends it) keeps the parent's ``configs/estimators/`` defaults.
+The module is imported as ``python -m`` would from the working directory
+(``examples.complementary:ComplementaryFilter`` from the repository root).
 A package that wants a short name calls :func:`register_estimator`.
 """
 
@@ -106,15 +108,36 @@ def _import(module_name: str):
 
 
 def estimator_settings(name: str, **options):
-    """The settings of estimator ``name``: its YAML file(s) with ``options`` over them; an
-    estimator without a file (your own) has its settings dataclass's defaults."""
+    """The settings of estimator ``name``: its YAML file(s) (a subclass of a package estimator
+    without a file of its own: its parent's) with ``options`` over
+    them; any other estimator (your own) has its settings dataclass's defaults."""
     cls = estimator_class(name)
     settings_type = getattr(cls, "settings_type", None)
     if settings_type is None:
         raise ConfigError(f"estimator {name!r}: {cls.__name__} has no settings_type dataclass")
-    if ":" not in name and (ESTIMATOR_DIR / f"{name}.yaml").is_file():
-        return load_settings(name, settings_type, options)
+    configured = _configured_name(name, cls)
+    if configured is not None:
+        return load_settings(configured, settings_type, options, label=name)
     return build_settings(name, settings_type, options)
+
+
+def _configured_name(name: str, cls: type[PoseEstimator]) -> str | None:
+    """The estimator whose ``configs/estimators/`` file holds ``cls``'s defaults: ``name``'s
+    own file, else the nearest package estimator that ``cls`` subclasses with the same
+    settings type or one its settings extend (a subclass keeps its parent's configured
+    defaults); ``None``: the settings dataclass's own defaults."""
+    if ":" not in name and (ESTIMATOR_DIR / f"{name}.yaml").is_file():
+        return name
+    names = {target: known for known, target in {**ESTIMATORS, **PRIVILEGED}.items()}
+    for parent in cls.__mro__[1:]:
+        known = names.get(_target(parent))
+        if (
+            known is not None
+            and (ESTIMATOR_DIR / f"{known}.yaml").is_file()
+            and issubclass(cls.settings_type, parent.settings_type)
+        ):
+            return known
+    return None
 
 
 def make_estimator(name: str, **options) -> PoseEstimator:
