@@ -282,13 +282,20 @@ def _train(args: argparse.Namespace) -> dict:
             raise SystemExit(130) from None
         runs.append(summary)
         if not args.json:
-            rate = (summary["last_evaluation"] or {}).get("success_rate", float("nan"))
             print(
                 f"seed {seed}: {summary['timesteps']} timesteps in {summary['wall_time_s']:.0f} s; "
-                f"last evaluation: success rate {rate:.2f}. "
+                f"{_evaluation_line(summary['last_evaluation'])}. "
                 f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
             )
     return runs[0] if len(runs) == 1 else {"runs": runs}
+
+
+def _evaluation_line(last: dict | None) -> str:
+    """The last evaluation of a training run in words (none runs before ``eval_freq`` steps)."""
+    if last is None:
+        return "no evaluation ran (fewer timesteps than eval_freq)"
+    rate = last["success_rate"]
+    return f"last evaluation (at {last['timesteps']} timesteps): success rate {rate:.2f}"
 
 
 def _sweep(args: argparse.Namespace) -> dict:

@@ -80,3 +80,14 @@ def test_only_validation_errors_are_bad_input(tmp_path):
     )
     assert crash.returncode not in (0, 2), crash.stderr
     assert "Traceback" in crash.stderr and "could not be broadcast" in crash.stderr
+
+
+def test_train_without_an_evaluation_says_so(tmp_path):
+    """A run shorter than eval_freq evaluates nothing: said in words, not 'success rate nan'."""
+    train = ["train", "--algo", "ppo", "--estimator", "truth", "--timesteps", "64"]
+    train += ["--n-envs", "1", "--set", "n_steps=64", "--set", "batch_size=32"]
+    train += ["--set", "env.sim.max_episode_seconds=3", "--out", str(tmp_path)]
+    result = subprocess.run([*CLI, *train], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "no evaluation ran (fewer timesteps than eval_freq)" in result.stdout
+    assert "nan" not in result.stdout
