@@ -107,6 +107,9 @@ def _recording(args: argparse.Namespace, out: Path | None = None) -> dict | None
 
 
 def _replay(args: argparse.Namespace) -> dict:
+    from stsf_gym.recording import require_recording
+
+    require_recording("stsf-gym replay")
     from stsf_gym.experiments.replay import replay_logs
 
     if args.config or args.overrides:

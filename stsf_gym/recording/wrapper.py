@@ -10,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 
 from stsf_gym.estimators import PoseEstimator
+from stsf_gym.recording import require_recording
 from stsf_gym.recording.records import (
     EpisodeStart,
     FrameDetections,
@@ -26,6 +27,7 @@ FORMATS = {"mcap": ".mcap", "rerun": ".rrd"}
 
 def make_recorder(path: str | Path, fmt: str, frames: str = "raw") -> Recorder:
     """The recorder of ``fmt`` (``mcap`` or ``rerun``) writing ``path``."""
+    require_recording(f"--record {fmt}")
     if fmt == "mcap":
         from stsf_gym.recording.mcap_writer import McapRecorder
 
