@@ -6,10 +6,12 @@
 # A CUDA build that arrives anyway is a warning with the disk space it takes, not a failure.
 PYTHON ?= python3
 VENV ?= .venv
-EXTRAS ?= dev,ray
+# `make test`: the core and these extras (`make demo`: the core only)
+EXTRAS ?= dev,ray,record
 TORCH ?= torch==2.13.0
 TORCH_INDEX ?=
 BIN := $(VENV)/bin
+CORE_STAMP := $(VENV)/.core-installed
 STAMP := $(VENV)/.installed
 
 .PHONY: demo test test-rllib lint bench docs clean
@@ -27,16 +29,22 @@ if torch.version.cuda or extra:
 endef
 export CUDA_CHECK
 
-$(STAMP): pyproject.toml
+# The core: the env, the estimators, the follower, SB3 training.
+$(CORE_STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade --quiet pip
 	# CPU PyTorch first, so nothing later pulls a CUDA build.
 	$(BIN)/python -m pip install --quiet $(if $(TORCH_INDEX),--index-url $(TORCH_INDEX)) '$(TORCH)'
-	$(BIN)/python -m pip install --quiet -e '.[$(EXTRAS)]'
+	$(BIN)/python -m pip install --quiet -e .
 	@$(BIN)/python -c "$$CUDA_CHECK"
+	touch $(CORE_STAMP)
+
+# The extras the tests need: dev (pytest, ruff, rl-zoo3, evo), ray, record (MCAP, Rerun).
+$(STAMP): $(CORE_STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[$(EXTRAS)]'
 	touch $(STAMP)
 
-demo: $(STAMP)
+demo: $(CORE_STAMP)
 	$(BIN)/stsf-gym demo
 
 test: $(STAMP)

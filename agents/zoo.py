@@ -1,5 +1,6 @@
 """Hyper-parameters for rl-zoo3 (``python -m rl_zoo3.train --conf-file stsf_gym.agents.zoo``), made
-from ``configs/agents/ppo.yaml`` as ``stsf-gym train`` reads it: one section per estimating id, with
+from ``configs/agents/ppo.yaml`` as ``stsf-gym train`` reads it: one section per estimating id
+(every world, the generated worlds and every suite, per pose source), with
 the policy observation (:class:`stsf_gym.agents.observation.PolicyObservation`) as ``env_wrapper``
 and the section's env overrides as ``env_kwargs``.
 
@@ -17,34 +18,40 @@ from __future__ import annotations
 
 import gymnasium as gym
 
-import stsf_gym
+import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.agents.hyperparams import load_hyperparams, policy_kwargs_for_sb3
 from stsf_gym.agents.observation import observation_config
+from stsf_gym.envs.config import deep_merge
 
 WRAPPER = "stsf_gym.agents.observation.PolicyObservation"
+EPISODE_ENV = "stsf_gym.episode_env:make_episode_env"  # the entry point of estimating ids
 
 
 def estimating_ids() -> list[str]:
-    """Registered ids whose env carries a pose estimate (what the policy observation needs)."""
+    """Every registered stsf-gym id whose env carries a pose estimate (what the policy
+    observation needs): each world's, the generated worlds' and each suite's, per pose source."""
     return [
-        env_id.replace("-v0", f"-{suffix}-v0")
-        for env_id in stsf_gym.ENV_WORLDS
-        for suffix in stsf_gym.ESTIMATOR_IDS
-        if env_id.replace("-v0", f"-{suffix}-v0") in gym.registry
+        env_id
+        for env_id, spec in gym.registry.items()
+        if env_id.startswith("stsf_gym/") and spec.entry_point == EPISODE_ENV
     ]
 
 
 def zoo_section(algo: str, env_id: str) -> dict:
-    """rl-zoo3's hyper-parameters of ``env_id`` from ``configs/agents/<algo>.yaml``."""
+    """rl-zoo3's hyper-parameters of ``env_id`` from ``configs/agents/<algo>.yaml``; a suite id's
+    ``env_kwargs`` hold the suite's env settings over the file's, as ``stsf-gym train --suite``
+    trains (rl-zoo3 passes them to ``gym.make``, where a section replaces the registered one)."""
     hp = load_hyperparams(algo, env_id)
     cfg = hp.training
+    registered = dict(gym.spec(env_id).kwargs.get("env") or {})
+    registered.pop("generator", None)  # stays in the registered kwargs
     return {
         "policy": cfg.policy,
         "n_envs": cfg.n_envs,
         "n_timesteps": cfg.n_timesteps,
         "policy_kwargs": policy_kwargs_for_sb3(cfg.policy_kwargs),
         "env_wrapper": [{WRAPPER: {"config": observation_config(cfg.observation)}}],
-        "env_kwargs": dict(cfg.env),
+        "env_kwargs": deep_merge(dict(cfg.env), registered),
         **hp.algo_kwargs,
     }
 

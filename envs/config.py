@@ -399,6 +399,13 @@ class EnvConfig:
 
     def __post_init__(self) -> None:
         check_clearance(self.world, self.robot.body_radius)
+        frame_period = 1 / self.camera.rate_hz
+        require(  # a frame is taken at a step's end at most: a slower step would drop frames
+            self.sim.control_dt <= frame_period * (1 + 1e-9),
+            "sim.control_dt",
+            f"must be <= 1/camera.rate_hz ({frame_period:g} s: one frame per step at most), "
+            f"got {self.sim.control_dt:g}",
+        )
         map_ids = sorted(lm.id for lm in self.world.landmarks)
         for i, fault in enumerate(self.faults):
             require(

@@ -21,6 +21,7 @@ import numpy as np
 from stsf_gym.envs.quiet import quiet_c_output
 from stsf_gym.envs.rendering.gl_renderer import GLRenderer, gl_inherited
 from stsf_gym.envs.rendering.scene import Board, Box, Scene, Shape
+from stsf_gym.validation import ConfigError
 
 with quiet_c_output():  # PyBullet's banners: envs/quiet.py
     import pybullet
@@ -75,6 +76,14 @@ FORK_MESSAGE = (
 )
 
 
+NOT_COPYABLE = (
+    "a stsf-gym env cannot be copied or pickled: it holds a PyBullet physics server, which a "
+    "copy would share (stepping the copy would move the original's robot, closing it would "
+    "disconnect both). Make another env instead: gym.make(env.spec), reset with the same seed "
+    "and options for the same episode"
+)
+
+
 class Simulator:
     """A PyBullet physics client with a fixed time step, the world's scene and its renderer.
 
@@ -92,7 +101,7 @@ class Simulator:
 
     def __init__(self, physics_hz: float, renderer: str = "auto") -> None:
         if renderer not in RENDERERS:
-            raise ValueError(f"camera.renderer must be one of {RENDERERS[:-1]}, got {renderer!r}")
+            raise ConfigError(f"camera.renderer must be one of {RENDERERS[:-1]}, got {renderer!r}")
         with quiet_c_output():
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.time_step = 1.0 / physics_hz
@@ -261,6 +270,11 @@ class Simulator:
             )
         self._frames += 1
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+
+    def __reduce_ex__(self, protocol):
+        """Refuse copy, deepcopy and pickle: a copy would hold the same PyBullet server, so
+        stepping it would move the original's robot and closing it would disconnect both."""
+        raise TypeError(NOT_COPYABLE)
 
     def close(self) -> None:
         """Disconnect; calling it again is harmless."""

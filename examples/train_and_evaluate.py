@@ -47,11 +47,21 @@ def main(argv: list[str] | None = None) -> dict[str, dict]:
             args.out / f"evaluate-{name}", ["truth"], 1, agent=agent, workers=1, env=EVALUATION_ENV
         )
         rows[name] = row = result["rows"][0]
-        print(
-            f"{name}: success {row['success_rate']['mean']:.0f}, "
-            f"path error RMS {row['path_error_rms_m']['mean']:.3f} m"
-        )
+        print(f"{name}: {outcome(row)}, ATE {row['ate_rmse_m']['mean']:.3f} m")
     return rows
+
+
+def outcome(row: dict) -> str:
+    """How the row's one episode ended, in words."""
+    if row["success_rate"]["mean"] == 1:
+        return "reached the goal"
+    distance = row["distance_before_failure_m"]["mean"]
+    if row["time_limit_rate"]["mean"] == 1:
+        limit = EVALUATION_ENV["sim"]["max_episode_seconds"]
+        return f"cut at the {limit:g} s time limit after {distance:.2f} m"
+    if row["collision_rate"]["mean"] == 1:
+        return f"collided after {distance:.2f} m"
+    return f"stopped off the goal after {distance:.2f} m"
 
 
 if __name__ == "__main__":

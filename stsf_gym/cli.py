@@ -13,6 +13,7 @@ from pathlib import Path
 from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.io import remove_partial_writes
 from stsf_gym.results.provenance import set_command
+from stsf_gym.validation import FieldError
 
 DEFAULT_WORLD = "irl_corridor"  # --world when none is given
 
@@ -106,6 +107,9 @@ def _recording(args: argparse.Namespace, out: Path | None = None) -> dict | None
 
 
 def _replay(args: argparse.Namespace) -> dict:
+    from stsf_gym.recording import require_recording
+
+    require_recording("stsf-gym replay")
     from stsf_gym.experiments.replay import replay_logs
 
     if args.config or args.overrides:
@@ -284,17 +288,24 @@ def _train(args: argparse.Namespace) -> dict:
             raise SystemExit(130) from None
         runs.append(summary)
         if not args.json:
-            last = summary["last_evaluation"] or {}
-            rate = last.get("success_rate", summary.get("demonstrations", {}).get("val_success"))
-            verdict = (
-                "no evaluation ran" if rate is None else f"last evaluation: success {rate:.2f}"
-            )
             print(
                 f"seed {seed}: {summary['timesteps']} RL timesteps, {summary['wall_time_s']:.0f} s "
-                f"of training; {verdict}. "
+                f"of training; {_evaluation_line(summary)}. "
                 f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
             )
     return runs[0] if len(runs) == 1 else {"runs": runs}
+
+
+def _evaluation_line(summary: dict) -> str:
+    """A training run's last evaluation in words: RL's (none runs before ``eval_freq`` steps),
+    else the demonstration stage's last round."""
+    last, stage = summary["last_evaluation"], summary.get("demonstrations")
+    if last is not None:
+        rate = last["success_rate"]
+        return f"last evaluation (at {last['timesteps']} timesteps): success rate {rate:.2f}"
+    if stage is not None:
+        return f"demonstrations round {stage['round']}: val success {stage['val_success']:.2f}"
+    return "no evaluation ran (fewer timesteps than eval_freq)"
 
 
 def _sweep(args: argparse.Namespace) -> dict:
@@ -620,8 +631,10 @@ def _check_writable(out: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run a command. Bad input: a one-line error and exit code 2, before any output is
-    written; jobs that failed twice: exit code 1 (finished results kept, a rerun resumes)."""
+    """Run a command. Bad input (a :class:`ConfigError`, :class:`FieldError` or a missing or
+    unwritable path): a one-line error and exit code 2, before any output is written; jobs that
+    failed twice: exit code 1 (finished results kept, a rerun resumes). Any other exception is
+    a bug: it propagates with its traceback (exit code 1)."""
     from stsf_gym.experiments.cache import JobsFailed
 
     args = build_parser().parse_args(argv)
@@ -641,7 +654,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             _silence_c_stdout()
         result = args.run(args)
-    except (ConfigError, ValueError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
+    except (ConfigError, FieldError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
         print(f"{error} {err}", file=sys.stderr)
         return 2
     except JobsFailed as err:

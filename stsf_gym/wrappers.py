@@ -7,6 +7,7 @@ turns an env into the :class:`SensorModel` an estimator runs on.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -49,12 +50,18 @@ POSE_SOURCES = (*ESTIMATORS, TRUTH, *PRIVILEGED)
 def check_pose_source(name: str) -> None:
     """Fail (:class:`ConfigError`) unless ``name`` is a pose source: one of
     :data:`POSE_SOURCES`, a registered estimator or a ``package.module:Class`` estimator."""
-    if name == TRUTH:
-        return
-    try:
+    if name != TRUTH:
         estimator_class(name)
-    except ValueError as err:
-        raise ConfigError(str(err)) from err
+
+
+def _as_json(value: Any) -> Any:
+    """``value`` with its tuples and arrays as lists and numpy scalars as numbers, as a JSON
+    round trip gives it back."""
+    if isinstance(value, dict):
+        return {key: _as_json(item) for key, item in value.items()}
+    if isinstance(value, list | tuple | np.ndarray):
+        return [_as_json(item) for item in value]
+    return value.item() if isinstance(value, np.generic) else value
 
 
 def sensor_model(env: gym.Env, belief: OdometrySettings | None = None) -> SensorModel:
@@ -172,12 +179,12 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """
 
     def __init__(self, env: gym.Env, estimator: str = "odometry", start_std=START_STD, **options):
-        gym.utils.RecordConstructorArgs.__init__(
-            self, estimator=estimator, start_std=tuple(start_std), **options
+        gym.utils.RecordConstructorArgs.__init__(  # as JSON reads them: spec.to_json round trips
+            self, estimator=estimator, **_as_json({"start_std": start_std, **options})
         )
         gym.Wrapper.__init__(self, env)
         if estimator == TRUTH and options:
-            raise ValueError(f"the truth pose source takes no options, got {sorted(options)}")
+            raise ConfigError(f"the truth pose source takes no options, got {sorted(options)}")
         self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
         check_sensors(estimator, self.estimator.sensors, env.unwrapped.config.camera.enabled)
         robot = env.unwrapped.config.robot
@@ -245,7 +252,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def _forget_start(self) -> None:
         spread = getattr(self.estimator, "spread_prior", None)
         if spread is None:
-            raise ValueError(
+            raise ConfigError(
                 f"reset option unknown_start needs an estimator that localizes globally "
                 f"(mcl), not {self.estimator.name or type(self.estimator).__name__!r}"
             )

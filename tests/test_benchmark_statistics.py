@@ -13,6 +13,7 @@ from stsf_gym.experiments.benchmark.intervals import (
     stratified_bootstrap,
     wilson,
 )
+from stsf_gym.experiments.benchmark.report import agent_name
 from stsf_gym.experiments.benchmark.scores import episode_scores, leaderboard_row, spl
 
 
@@ -95,3 +96,13 @@ def test_bootstraps_and_iqm():
     spread = stratified_bootstrap([[0.0, 1.0] * 25, [0.5] * 10])
     assert spread["low"] < spread["estimate"] < spread["high"]
     assert iqm([0, 1, 2, 3, 4, 5, 6, 100]) == pytest.approx(np.mean([2, 3, 4, 5]))
+
+
+def test_an_agent_has_one_name_in_every_table(tmp_path):
+    """A one-seed run's model and its training folder (the IQM table's row) read the same;
+    it was ``train/ppo-stsf`` in the leaderboard and ``ppo-stsf`` in the IQM table."""
+    run = tmp_path / "train" / "ppo-stsf"
+    assert agent_name(str(run / "model.zip")) == agent_name(str(run)) == "ppo-stsf"
+    assert agent_name(str(run / "seed-2" / "model.zip")) == "ppo-stsf/seed-2"
+    assert agent_name(str(tmp_path / "my_agent.zip")) == "my_agent"
+    assert agent_name("follower") == "follower"

@@ -58,3 +58,36 @@ def test_bad_arguments_named(tmp_path, args, message):
 def test_help_lists_commands():
     result = subprocess.run([*CLI, "--help"], capture_output=True, text=True)
     assert result.returncode == 0 and "demo" in result.stdout
+
+
+def test_only_validation_errors_are_bad_input(tmp_path):
+    """A bad log is the user's (exit 2, one line naming the file); a ValueError from deep in a
+    run is a bug: its traceback is kept and the exit code is not 2."""
+    log = tmp_path / "not-a-log.mcap"
+    log.write_text("no MCAP here")
+    replay = ["replay", str(log), "--estimators", "odometry", "--out", str(tmp_path / "r")]
+    bad = subprocess.run([*CLI, *replay], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert f"{log}: not a readable MCAP log" in bad.stderr
+    bug = (
+        "import sys, stsf_gym.experiments.replay as r, stsf_gym.cli as c\n"
+        "def broken(*args): raise ValueError('operands could not be broadcast together')\n"
+        "r.replay_logs = broken\n"
+        "sys.exit(c.main(sys.argv[1:]))\n"
+    )
+    crash = subprocess.run(
+        [sys.executable, "-c", bug, *replay], capture_output=True, text=True, timeout=120
+    )
+    assert crash.returncode not in (0, 2), crash.stderr
+    assert "Traceback" in crash.stderr and "could not be broadcast" in crash.stderr
+
+
+def test_train_without_an_evaluation_says_so(tmp_path):
+    """A run shorter than eval_freq evaluates nothing: said in words, not 'success rate nan'."""
+    train = ["train", "--algo", "ppo", "--estimator", "truth", "--timesteps", "64"]
+    train += ["--n-envs", "1", "--set", "n_steps=64", "--set", "batch_size=32"]
+    train += ["--set", "env.sim.max_episode_seconds=3", "--out", str(tmp_path)]
+    result = subprocess.run([*CLI, *train], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "no evaluation ran (fewer timesteps than eval_freq)" in result.stdout
+    assert "nan" not in result.stdout

@@ -89,6 +89,12 @@ IRL_LANDMARK_1 = {"id": 1, "at": [3.0, 0.8], "facing_deg": -90}
         ({"camera__near": 5.0, "camera__far": 4.0}, "camera.far must be > near (5.0), got 4.0"),
         ({"sonar__min_range": 6.0}, "sonar.max_range must be > min_range (6.0)"),
         ({"sim__control_dt": 0.11}, "sim.control_dt must be a whole number of physics steps"),
+        (  # the camera would silently run at 1/control_dt
+            {"sim__control_dt": 0.3},
+            "sim.control_dt must be <= 1/camera.rate_hz (0.2 s: one frame per step at most), "
+            "got 0.3",
+        ),
+        ({"camera__rate_hz": 20.0}, "sim.control_dt must be <= 1/camera.rate_hz (0.05 s"),
         ({"robot__nominal_speed": 1.0}, "robot.nominal_speed must be <= max_speed (0.25)"),
         ({"camera__pan_deg": 200}, "camera.pan_deg must be within robot.pan_limit_deg (±170)"),
         ({"robot__tilt_limit_deg": 95}, "robot.tilt_limit_deg must be in [0, 90], got 95.0"),

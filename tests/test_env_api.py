@@ -1,4 +1,6 @@
+import copy
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -103,3 +105,15 @@ def test_steering_change_penalty_charges_each_change_of_the_yaw_command(make_env
         rewards[penalty] = [env.step(np.array(a, np.float32))[1] for a in actions]
     difference = np.subtract(rewards[-0.1], rewards[0.0])
     np.testing.assert_allclose(difference, [0.0, -0.1, 0.0, -0.2], atol=1e-9)
+
+
+@pytest.mark.parametrize("duplicate", [copy.deepcopy, pickle.dumps])
+def test_copying_an_env_is_a_clear_error(make_env, duplicate):
+    """A copy would share the PyBullet server (stepping it moved the original's robot, closing
+    it disconnected the original): refused, saying why and what to do instead."""
+    env = make_env("stsf_gym/Corridor-STSF-v0", camera__mode="fast")
+    env.reset(seed=0)
+    with pytest.raises(TypeError, match=r"cannot be copied or pickled.*gym\.make\(env\.spec\)"):
+        duplicate(env)
+    _, _, _, _, info = env.step(np.float32([1.0, 0.0]))  # the original is untouched
+    assert info["true_pose"][0] > 0

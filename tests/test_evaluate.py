@@ -7,6 +7,7 @@ import pytest
 import stsf_gym.experiments.episodes as episodes
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.results import SCHEMA_VERSION, check_rows
+from stsf_gym.results.schema import NEES_VERDICTS
 
 FAST = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 4.0}}
 
@@ -105,6 +106,12 @@ def test_evaluate_cli_json_schema(tmp_path):
         "values": [None],
     }
     assert isinstance(ekf["ms_per_step"]["update"]["mean"], float)
+    for row in summary["rows"]:  # 3 s: cut at the time limit, neither reached nor failed
+        assert row["time_limit_rate"]["mean"] == 1.0 and row["collision_rate"]["mean"] == 0.0
+    table = (tmp_path / "results.md").read_text()
+    assert "| time limit rate | distance before failure or time limit (m) |" in table
+    verdicts = [NEES_VERDICTS[row["nees_verdict"]] for row in summary["rows"]]
+    assert all(f"| {verdict} |" in table for verdict in verdicts)  # words, not -1/0/1
 
 
 def test_unknown_estimator_rejected(tmp_path):

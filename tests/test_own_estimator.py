@@ -83,3 +83,44 @@ def test_register_and_bad_names():
     for bad in ("no_such_estimator", "stsf_gym.geometry:wrap_angle", "nosuch.module:Class"):
         with pytest.raises(ConfigError, match="estimator"):
             check_pose_source(bad)
+
+
+SUBCLASSES = '''
+from stsf_gym.estimators.dead_reckoning import OdometryEstimator
+from stsf_gym.estimators.landmark_fusion import STSFEstimator
+
+
+class MyDeadReckoning(OdometryEstimator):
+    """Dead reckoning of my own."""
+
+
+class MySTSF(STSFEstimator):
+    """STSF of my own."""
+'''
+
+
+def test_subclass_keeps_its_parents_configured_defaults(tmp_path):
+    """A user's subclass of a package estimator, in a module of their own, runs through the
+    console script on its parent's ``configs/estimators/`` defaults (it failed with ``missing
+    config key 'my_localizer:MyDeadReckoning.mount_std'``); options still go over them."""
+    (tmp_path / "my_localizer.py").write_text(SUBCLASSES)
+    command = [str(Path(sys.executable).parent / "stsf-gym"), "evaluate", "--estimators"]
+    command += ["my_localizer:MyDeadReckoning,my_localizer:MySTSF", "--seeds", "1"]
+    command += ["--workers", "1", "--set", "camera.mode=fast"]
+    command += ["--set", "sim.max_episode_seconds=5", "--out", str(tmp_path / "out"), "--json"]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    check_rows(json.loads(result.stdout)["rows"])
+    sys.path.insert(0, str(tmp_path))
+    try:
+        for name, parent in (("MyDeadReckoning", "odometry"), ("MySTSF", "stsf")):
+            own = make_estimator(f"my_localizer:{name}")
+            assert own.settings == make_estimator(parent).settings
+        tuned = make_estimator("my_localizer:MySTSF", max_track_frames=3).settings
+        assert tuned.max_track_frames == 3
+        message = r"my_localizer:MySTSF\.max_track_frames must be >= 1"
+        with pytest.raises(ConfigError, match=message):
+            make_estimator("my_localizer:MySTSF", max_track_frames=0)
+    finally:
+        sys.path.remove(str(tmp_path))
+        sys.modules.pop("my_localizer", None)

@@ -47,10 +47,14 @@ def _run(*args: str | Path, cwd: Path = ROOT, timeout: int = 600) -> str:
 
 
 def _build(hook: str, source: Path, dist: Path) -> Path:
-    """Run setuptools' PEP 517 ``hook`` (build_sdist or build_wheel) in ``source``."""
+    """Run setuptools' PEP 517 ``hook`` (build_sdist or build_wheel) in ``source``; its output
+    holds no warning (a "Package would be ignored" box per config folder read as broken)."""
     code = f"from setuptools import build_meta; print(build_meta.{hook}({str(dist)!r}))"
-    name = _run(sys.executable, "-c", code, cwd=source).strip().splitlines()[-1]
-    return dist / name
+    command = [sys.executable, "-W", "always", "-c", code]
+    done = subprocess.run(command, cwd=source, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-4000:]
+    assert "Warning" not in done.stdout + done.stderr, (done.stdout + done.stderr)[-4000:]
+    return dist / done.stdout.strip().splitlines()[-1]
 
 
 @pytest.fixture(scope="module")

@@ -3,6 +3,7 @@ on a recorded log exactly as they ran live."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
@@ -22,7 +23,8 @@ from stsf_gym.recording import topics
 from stsf_gym.recording.log_reader import read_log
 from stsf_gym.recording.replay import replay
 from stsf_gym.recording.sensor_model_json import sensor_model_dict, sensor_model_from_dict
-from stsf_gym.recording.wrapper import RecordEpisode
+from stsf_gym.recording.wrapper import RecordEpisode, make_recorder
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import PoseEstimateWrapper, sensor_model
 
 FAST = {"camera": {"mode": "fast"}}
@@ -248,3 +250,14 @@ def test_the_packed_per_step_messages_are_rosbags_bytes():
         serialized = ros.serialize(info, info.__msgtype__)
         info.header = ros.header(stamp, info.header.frame_id)
         assert cdr.restamped(serialized, stamp) == ros.serialize(info, info.__msgtype__)
+
+
+def test_recording_without_its_extra_names_it(monkeypatch, tmp_path):
+    """A core install (no ``record`` extra) asked to record says which extra it needs."""
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "rerun" else find_spec(name)
+    )
+    message = r"--record rerun needs the recording extra \(rerun not installed\): pip install"
+    with pytest.raises(ConfigError, match=message):
+        make_recorder(tmp_path / "episode.rrd", "rerun")

@@ -6,6 +6,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
@@ -41,9 +42,9 @@ def test_spec_recreates_a_hand_built_stack(make_env):
     assert names[-2:] == ["PoseEstimateWrapper", "PolicyObservation"]
     assert env.spec.additional_wrappers[-2].kwargs == {
         "estimator": "stsf",
-        "start_std": (0.02, 0.02, 0.01),
+        "start_std": [0.02, 0.02, 0.01],  # as JSON gives it back
     }
-    again = gym.make(env.spec)
+    again = gym.make(EnvSpec.from_json(env.spec.to_json()))
     try:
         assert isinstance(again, PolicyObservation)
         assert isinstance(again.env, PoseEstimateWrapper)
@@ -66,3 +67,16 @@ def test_spec_of_a_registered_estimating_id_does_not_wrap_twice(make_env):
         assert depth == 1
     finally:
         again.close()
+
+
+@pytest.mark.parametrize("env_id", sorted(i for i in gym.registry if i.startswith("stsf_gym/")))
+def test_spec_json_round_trip_on_every_id(env_id):
+    """``EnvSpec.from_json(env.spec.to_json())`` gives the same spec, and ``gym.make`` takes it
+    (a tuple recorded by a wrapper came back a list: every estimating id failed)."""
+    env = gym.make(env_id, camera={"mode": "fast"})
+    try:
+        spec = EnvSpec.from_json(env.spec.to_json())
+        assert spec == env.spec
+        gym.make(spec).close()
+    finally:
+        env.close()

@@ -6,9 +6,29 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+import stsf_gym
+from stsf_gym.agents.hyperparams import load_hyperparams
 from stsf_gym.agents.zoo import hyperparams, zoo_section
+from stsf_gym.envs.config import deep_merge
+from stsf_gym.envs.suite import load_suite
+from stsf_gym.yaml_layers import SUITE_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_every_estimating_id_has_a_section():
+    """Each world's, the generated worlds' and each suite's id per pose source (the suites'
+    were missing: ``Hyperparameters not found for ppo-stsf_gym/Suite-Corridor-STSF-v0``)."""
+    bases = [*stsf_gym.ENV_WORLDS, stsf_gym.GENERATED_ID]
+    bases += [stsf_gym.suite_id(path.stem) for path in SUITE_DIR.glob("*.yaml")]
+    expected = {b.replace("-v0", f"-{s}-v0") for b in bases for s in stsf_gym.ESTIMATOR_IDS}
+    assert len(bases) >= 6 and set(hyperparams) == expected
+    suite = zoo_section("ppo", "stsf_gym/Suite-Corridor-Odometry-v0")["env_kwargs"]
+    trained = deep_merge(load_hyperparams("ppo", None).training.env, load_suite("corridor").env)
+    assert suite == trained  # as `stsf-gym train --suite corridor` trains: the camera on (fast)
+    assert suite["camera"] == {"mode": "fast"} and suite["task"]["protocol"] == "declare"
 
 
 def test_sections_follow_the_training_config():
@@ -20,9 +40,12 @@ def test_sections_follow_the_training_config():
     assert truth["policy"] == "MlpPolicy" and truth["n_steps"] == 1024
 
 
-def test_rl_zoo3_trains_ppo_through_gym_packages(tmp_path):
+@pytest.mark.parametrize(
+    "env_id", ["stsf_gym/Straight10m-Truth-v0", "stsf_gym/Suite-Corridor-STSF-v0"]
+)
+def test_rl_zoo3_trains_ppo_through_gym_packages(tmp_path, env_id):
     command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo"]
-    command += ["--env", "stsf_gym/Straight10m-Truth-v0", "--gym-packages", "stsf_gym"]
+    command += ["--env", env_id, "--gym-packages", "stsf_gym"]
     command += [
         "--conf-file",
         "stsf_gym.agents.zoo",
@@ -45,5 +68,5 @@ def test_rl_zoo3_trains_ppo_through_gym_packages(tmp_path):
     )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     assert re.search(r"total_timesteps\s*\|\s*128\b", result.stdout), result.stdout[-2000:]
-    (model,) = tmp_path.glob("ppo/stsf_gym-Straight10m-Truth-v0_1/*.zip")
+    (model,) = tmp_path.glob(f"ppo/{env_id.replace('/', '-')}_1/*.zip")
     assert model.stat().st_size > 10_000

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration
-from stsf_gym.envs.config import CalibrationErrorConfig
+from stsf_gym.envs.config import CalibrationErrorConfig, ConfigError
 
 #: Maps OpenCV camera axes to OpenGL camera axes (and back): flip y and z.
 CV_TO_GL = np.diag([1.0, -1.0, -1.0, 1.0])
@@ -53,11 +53,11 @@ class PinholeCamera:
         dist: np.ndarray | tuple = (0.0,) * 5,
     ) -> None:
         if width <= 0 or height <= 0:
-            raise ValueError(f"camera size must be positive, got {width}x{height}")
+            raise ConfigError(f"camera size must be positive, got {width}x{height}")
         if not 0 < vfov_deg < 180:
-            raise ValueError(f"camera.vfov_deg must be in (0, 180), got {vfov_deg}")
+            raise ConfigError(f"camera.vfov_deg must be in (0, 180), got {vfov_deg}")
         if not 0 < near < far:
-            raise ValueError(f"camera near/far must satisfy 0 < near < far, got {near}, {far}")
+            raise ConfigError(f"camera near/far must satisfy 0 < near < far, got {near}, {far}")
         self.width, self.height = width, height
         self.vfov = math.radians(vfov_deg)
         self.near, self.far = near, far

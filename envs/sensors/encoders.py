@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from stsf_gym.envs.config import EncoderConfig
+from stsf_gym.envs.config import ConfigError, EncoderConfig
 from stsf_gym.geometry import OdometryCalibration
 
 
@@ -23,7 +23,7 @@ class WheelEncoders:
 
     def __init__(self, cfg: EncoderConfig, wheel_radius: float, wheelbase: float) -> None:
         if cfg.ticks_per_rev < 1:
-            raise ValueError(f"encoders.ticks_per_rev must be >= 1, got {cfg.ticks_per_rev}")
+            raise ConfigError(f"encoders.ticks_per_rev must be >= 1, got {cfg.ticks_per_rev}")
         self.cfg, self.wheel_radius, self.wheelbase = cfg, wheel_radius, wheelbase
         self.calibration = OdometryCalibration(
             cfg.ticks_per_rev, wheel_radius, wheel_radius, wheelbase

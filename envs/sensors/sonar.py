@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from stsf_gym.envs.config import SonarConfig
+from stsf_gym.envs.config import ConfigError, SonarConfig
 from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
 
@@ -22,9 +22,9 @@ class SonarRing:
 
     def __init__(self, cfg: SonarConfig, body_radius: float) -> None:
         if cfg.count < 1 or cfg.rays_per_beam < 1:
-            raise ValueError("sonar.count and sonar.rays_per_beam must be at least 1")
+            raise ConfigError("sonar.count and sonar.rays_per_beam must be at least 1")
         if not 0 < cfg.min_range < cfg.max_range:
-            raise ValueError(
+            raise ConfigError(
                 f"sonar ranges must satisfy 0 < min_range < max_range, got "
                 f"{cfg.min_range}, {cfg.max_range}"
             )

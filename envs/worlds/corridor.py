@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stsf_gym.envs.config import LandmarkSpec, WorldConfig
+from stsf_gym.envs.config import ConfigError, LandmarkSpec, WorldConfig
 from stsf_gym.envs.rendering.scene import Board, Box, Cylinder
 from stsf_gym.envs.sensors.camera import PinholeCamera
 from stsf_gym.envs.simulator import Simulator
@@ -80,7 +80,7 @@ class CorridorWorld:
         self.sim, self.cfg = sim, cfg
         ids = [spec.id for spec in cfg.landmarks]
         if len(set(ids)) != len(ids):
-            raise ValueError(f"world {cfg.name!r}: landmark ids must be unique, got {ids}")
+            raise ConfigError(f"world {cfg.name!r}: landmark ids must be unique, got {ids}")
         xy = np.array([p for w in cfg.walls for p in (w[:2], w[2:])] + list(cfg.path))
         self.bounds = np.array(
             [xy.min(axis=0) - 1.0, xy.max(axis=0) + 1.0]
@@ -148,7 +148,9 @@ class CorridorWorld:
         delta = end - start
         length = float(np.hypot(*delta))
         if length <= 0:
-            raise ValueError(f"world {self.cfg.name!r}: wall segment {list(segment)} has no length")
+            raise ConfigError(
+                f"world {self.cfg.name!r}: wall segment {list(segment)} has no length"
+            )
         t, h = self.cfg.wall_thickness, self.cfg.wall_height
         half = (length / 2 + t / 2, t / 2)
         return self._box(

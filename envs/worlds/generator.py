@@ -56,7 +56,7 @@ def generate_world(seed: int, gen: GeneratorConfig, env: EnvConfig) -> WorldConf
 def world_tree(seed: int, gen: GeneratorConfig, env: EnvConfig) -> dict:
     """The world of ``seed`` as the mapping a world YAML file holds."""
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ValueError(f"world seed must be a non-negative integer, got {seed!r}")
+        raise ConfigError(f"world seed must be a non-negative integer, got {seed!r}")
     clear = 2 * (env.robot.body_radius + gen.clutter.path_clearance)
     if gen.width[1] < clear:
         raise ConfigError(

@@ -147,7 +147,7 @@ class GeneratorConfig:
     def split_range(self, split: str) -> range:
         """World seeds of ``split`` (``"train"``, ``"val"`` or ``"test"``)."""
         if split not in SPLITS:
-            raise ValueError(f"split must be one of {list(SPLITS)}, got {split!r}")
+            raise ConfigError(f"split must be one of {list(SPLITS)}, got {split!r}")
         first, count = self.splits[split]
         return range(first, first + count)
 

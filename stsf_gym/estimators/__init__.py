@@ -10,8 +10,10 @@ model from an env).
 estimator=...)``, ``--estimators``, sweeps, the accuracy curve, the benchmark), a
 ``package.module:Class`` works too: a :class:`PoseEstimator` subclass whose ``settings_type``
 is a dataclass; its defaults are the dataclass's own (no YAML needed) and keyword options go
-over them, checked as the package's are. The module is imported as ``python -m`` would from
-the working directory (``examples.complementary:ComplementaryFilter`` from the repository root).
+over them, checked as the package's are. A subclass of a package estimator that keeps its
+parent's settings type (or extends it) keeps the parent's ``configs/estimators/`` defaults.
+The module is imported as ``python -m`` would from the working directory
+(``examples.complementary:ComplementaryFilter`` from the repository root).
 A package that wants a short name calls :func:`register_estimator`.
 """
 
@@ -23,6 +25,7 @@ import sys
 
 from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
 from stsf_gym.estimators.settings import ESTIMATOR_DIR, build_settings, load_settings
+from stsf_gym.validation import ConfigError
 
 #: Estimators by name: "module:class", imported when first made. ``conventional`` is the
 #: paper's (the pose from the current two frames only), ``conventional-filter`` the same pair
@@ -62,9 +65,9 @@ def register_estimator(name: str, cls: type[PoseEstimator] | str) -> None:
     ``configs/estimators/<name>.yaml`` exists. Worker processes started by ``spawn`` import
     afresh: there a ``module:Class`` name works without registering."""
     if not name or ":" in name:
-        raise ValueError(f"an estimator name is a word without ':', got {name!r}")
+        raise ConfigError(f"an estimator name is a word without ':', got {name!r}")
     if name in PRIVILEGED or (name in ESTIMATORS and ESTIMATORS[name] != _target(cls)):
-        raise ValueError(f"estimator {name!r} is taken by {ESTIMATORS.get(name, 'a privileged')}")
+        raise ConfigError(f"estimator {name!r} is taken by {ESTIMATORS.get(name, 'a privileged')}")
     estimator_class(_target(cls))  # fails now, naming it, if it is no estimator
     ESTIMATORS[name] = _target(cls)
 
@@ -78,7 +81,7 @@ def estimator_class(name: str) -> type[PoseEstimator]:
     an unknown name lists the known ones."""
     known = {**ESTIMATORS, **PRIVILEGED}
     if name not in known and ":" not in name:
-        raise ValueError(
+        raise ConfigError(
             f"unknown estimator {name!r}; known: {', '.join(sorted(known))}, "
             "or a package.module:Class of your own"
         )
@@ -86,10 +89,10 @@ def estimator_class(name: str) -> type[PoseEstimator]:
     try:
         module = _import(module_name)
     except ImportError as err:
-        raise ValueError(f"estimator {name!r}: cannot import {module_name!r} ({err})") from err
+        raise ConfigError(f"estimator {name!r}: cannot import {module_name!r} ({err})") from err
     cls = getattr(module, class_name, None)
     if not (isinstance(cls, type) and issubclass(cls, PoseEstimator)):
-        raise ValueError(f"estimator {name!r}: {class_name!r} is no PoseEstimator class")
+        raise ConfigError(f"estimator {name!r}: {class_name!r} is no PoseEstimator class")
     return cls
 
 
@@ -105,15 +108,36 @@ def _import(module_name: str):
 
 
 def estimator_settings(name: str, **options):
-    """The settings of estimator ``name``: its YAML file(s) with ``options`` over them; an
-    estimator without a file (your own) has its settings dataclass's defaults."""
+    """The settings of estimator ``name``: its YAML file(s) (a subclass of a package estimator
+    without a file of its own: its parent's) with ``options`` over
+    them; any other estimator (your own) has its settings dataclass's defaults."""
     cls = estimator_class(name)
     settings_type = getattr(cls, "settings_type", None)
     if settings_type is None:
-        raise ValueError(f"estimator {name!r}: {cls.__name__} has no settings_type dataclass")
-    if ":" not in name and (ESTIMATOR_DIR / f"{name}.yaml").is_file():
-        return load_settings(name, settings_type, options)
+        raise ConfigError(f"estimator {name!r}: {cls.__name__} has no settings_type dataclass")
+    configured = _configured_name(name, cls)
+    if configured is not None:
+        return load_settings(configured, settings_type, options, label=name)
     return build_settings(name, settings_type, options)
+
+
+def _configured_name(name: str, cls: type[PoseEstimator]) -> str | None:
+    """The estimator whose ``configs/estimators/`` file holds ``cls``'s defaults: ``name``'s
+    own file, else the nearest package estimator that ``cls`` subclasses with the same
+    settings type or one its settings extend (a subclass keeps its parent's configured
+    defaults); ``None``: the settings dataclass's own defaults."""
+    if ":" not in name and (ESTIMATOR_DIR / f"{name}.yaml").is_file():
+        return name
+    names = {target: known for known, target in {**ESTIMATORS, **PRIVILEGED}.items()}
+    for parent in cls.__mro__[1:]:
+        known = names.get(_target(parent))
+        if (
+            known is not None
+            and (ESTIMATOR_DIR / f"{known}.yaml").is_file()
+            and issubclass(cls.settings_type, parent.settings_type)
+        ):
+            return known
+    return None
 
 
 def make_estimator(name: str, **options) -> PoseEstimator:

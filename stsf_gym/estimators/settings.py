@@ -190,17 +190,24 @@ def build_settings(
     return build(settings_type, dict(options), name)
 
 
-def load_settings(name: str, settings_type: type[Settings], options: Mapping[str, Any]) -> Settings:
+def load_settings(
+    name: str,
+    settings_type: type[Settings],
+    options: Mapping[str, Any],
+    label: str | None = None,
+) -> Settings:
     """``settings_type`` from ``configs/estimators/<name>.yaml`` (and the files it extends)
-    with ``options`` over them; errors name the key as ``<name>.<key>`` and its file."""
+    with ``options`` over them; errors name the key as ``<label>.<key>`` (``label``: ``name``)
+    and its file."""
+    label = label or name
     tree: dict = {}
     sources = KeySources()
     for file, data in extended_files(name, ESTIMATOR_DIR, "estimator"):
         tree = deep_merge(tree, data)
-        sources.record(data, shown(file), name)
+        sources.record(data, shown(file), label)
     tree = deep_merge(tree, options)
-    sources.record(options, None, name)
+    sources.record(options, None, label)
     try:
-        return build(settings_type, tree, name)
+        return build(settings_type, tree, label)
     except ConfigError as err:
         raise sources.attribute(err) from err

@@ -34,6 +34,7 @@ SUMMARY_COLUMNS = (
     "episodes",
     "success_rate",
     "collision_rate",
+    "time_limit_rate",
     "distance_before_failure_m",
     "ate_rmse_m",
     "rpe_trans_m_per_m",

@@ -22,6 +22,7 @@ COLUMNS = [
     "estimator",
     "success_rate",
     "collision_rate",
+    "time_limit_rate",
     "ate_rmse_m",
     "final_error_m",
     "max_error_m",

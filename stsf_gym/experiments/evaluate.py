@@ -15,6 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.agents.registry import trained_on
+from stsf_gym.envs.config import ConfigError
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
@@ -52,7 +53,7 @@ def evaluate(
     """
     if faults:
         if record:
-            raise ValueError("recording (--record) is not available with --faults")
+            raise ConfigError("recording (--record) is not available with --faults")
         return evaluate_faults(
             out, estimators, seeds, seed, world, agent, workers, env or {}, faults
         )

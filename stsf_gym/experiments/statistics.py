@@ -39,6 +39,7 @@ def episode_metrics(episode: EpisodeResult) -> dict[str, float | None]:
     return {
         "success_rate": float(episode.outcome == "goal"),
         "collision_rate": float(episode.outcome == "collision"),
+        "time_limit_rate": float(episode.outcome == "time"),  # neither reached nor failed
         "ate_rmse_m": ate,
         "floor_ate_m": floor,
         "ate_vs_floor": None if not floor else ate / floor,
@@ -57,6 +58,9 @@ def episode_metrics(episode: EpisodeResult) -> dict[str, float | None]:
     }
 
 
+OUTCOME_RATES = ("success_rate", "collision_rate", "time_limit_rate")  # first in a row
+
+
 def summarise(estimator: str, episodes: list[EpisodeResult], agent: str | None = None) -> dict:
     """One results row: the metrics over ``episodes`` and their consistency tests."""
     per_episode = stats([episode_metrics(e) for e in episodes])
@@ -70,9 +74,9 @@ def summarise(estimator: str, episodes: list[EpisodeResult], agent: str | None =
         "estimator": estimator,
         "episodes": len(episodes),
         "seeds": [e.spec["seed"] for e in episodes],
-        **{k: per_episode[k] for k in ("success_rate", "collision_rate")},
+        **{k: per_episode[k] for k in OUTCOME_RATES},
         "distance_before_failure_m": stat(failed),
-        **{k: v for k, v in per_episode.items() if k not in ("success_rate", "collision_rate")},
+        **{k: v for k, v in per_episode.items() if k not in OUTCOME_RATES},
         "nees_bounds": nees_bounds,
         "nees_in_bounds": nees_in_bounds,
         **nees_time,

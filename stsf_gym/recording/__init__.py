@@ -7,3 +7,28 @@
   any pose source rerun on a log, with no simulator (docs/log_format.md: a log of your own
   robot).
 """
+
+from __future__ import annotations
+
+import importlib.util
+
+from stsf_gym.validation import ConfigError
+
+#: The modules of the ``record`` extra (``pip install 'stsf-gym[record]'``).
+EXTRA_MODULES = ("mcap", "rosbags", "rerun")
+
+
+def missing_modules() -> list[str]:
+    """The ``record`` extra's modules that are not installed here."""
+    return [name for name in EXTRA_MODULES if importlib.util.find_spec(name) is None]
+
+
+def require_recording(what: str) -> None:
+    """Raise :class:`ConfigError` when ``what`` (``--record mcap``, ``replay``) cannot run:
+    the ``record`` extra is not installed."""
+    missing = missing_modules()
+    if missing:
+        raise ConfigError(
+            f"{what} needs the recording extra ({', '.join(missing)} not installed): "
+            "pip install 'stsf-gym[record]'"
+        )

@@ -26,6 +26,7 @@ from stsf_gym.estimators import SensorModel
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording import topics
 from stsf_gym.recording.sensor_model_json import sensor_model_from_dict
+from stsf_gym.validation import ConfigError
 
 #: Topics a replay does not need (for looking at only), left unread.
 NOT_READ = frozenset({topics.TF, topics.TF_STATIC, topics.CMD_VEL, topics.CAMERA_INFO})
@@ -104,7 +105,7 @@ def decode_frame(message) -> dict:
         return {"image": cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)}
     if hasattr(message, "encoding"):  # Image
         if message.encoding != "rgb8":
-            raise ValueError(f"camera images must be rgb8, got {message.encoding!r}")
+            raise ConfigError(f"camera images must be rgb8, got {message.encoding!r}")
         data = np.asarray(message.data, np.uint8)
         return {"image": data.reshape(message.height, message.width, 3).copy()}
     ids, points = ros.slots_of(ros.detection_points(message))
@@ -112,7 +113,7 @@ def decode_frame(message) -> dict:
 
 
 def read_log(path: str | Path) -> RecordedLog:
-    """Read a log; a missing required topic or an unreadable file is a ``ValueError`` naming
+    """Read a log; a missing required topic or an unreadable file is a :class:`ConfigError` naming
     the file."""
     path = Path(path)
     if not path.is_file():
@@ -125,14 +126,14 @@ def read_log(path: str | Path) -> RecordedLog:
                 message = ros.deserialize(data, connection.msgtype)
                 by_topic[connection.topic].append(message)
     except Exception as err:
-        raise ValueError(f"{path}: not a readable MCAP log ({err})") from None
+        raise ConfigError(f"{path}: not a readable MCAP log ({err})") from None
     missing = [t for t in topics.REQUIRED if not by_topic.get(t)]
     if missing:
-        raise ValueError(f"{path}: missing topic(s) {missing} (see docs/log_format.md)")
+        raise ConfigError(f"{path}: missing topic(s) {missing} (see docs/log_format.md)")
     model = sensor_model_from_dict(json.loads(by_topic[topics.SENSOR_MODEL][0].data), str(path))
     episode = json.loads(by_topic[topics.EPISODE][0].data)
     if "control_dt" not in episode:
-        raise ValueError(f"{path}: {topics.EPISODE} lacks 'control_dt'")
+        raise ConfigError(f"{path}: {topics.EPISODE} lacks 'control_dt'")
     initial_pose, initial_cov = ros.planar_pose(by_topic[topics.INITIAL_POSE][0])
     wheels = sorted(by_topic[topics.WHEEL_TICKS], key=ros.stamp_ns)
     stamps = np.array([ros.stamp_ns(m) for m in wheels], np.int64)

@@ -22,6 +22,7 @@ from stsf_gym.recording import cdr, topics
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording.records import EpisodeStart, StepRecord, nanoseconds
 from stsf_gym.recording.sensor_model_json import sensor_model_json
+from stsf_gym.validation import ConfigError
 
 JPEG_QUALITY = 90
 PNG_COMPRESSION = 1  # zlib level: the fastest that compresses
@@ -82,7 +83,7 @@ class McapRecorder:
 
     def __init__(self, path: str | Path, frames: str = "raw") -> None:
         if frames not in topics.FRAME_FORMATS:
-            raise ValueError(
+            raise ConfigError(
                 f"frames must be one of {sorted(topics.FRAME_FORMATS)}, got {frames!r}"
             )
         self.frames = frames

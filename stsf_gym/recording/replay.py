@@ -17,6 +17,7 @@ import numpy as np
 
 from stsf_gym.estimators import PoseEstimator, make_estimator
 from stsf_gym.recording.log_reader import RecordedLog
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import TRUTH, TruePose
 
 
@@ -45,7 +46,7 @@ def replay(log: RecordedLog, name: str, observations: list[dict] | None = None, 
     estimator = pose_source(name, **options)
     privileged = hasattr(estimator, "see")
     if privileged and log.truth is None:
-        raise ValueError(f"{log.path}: {name} needs the true poses, and the log has none")
+        raise ConfigError(f"{log.path}: {name} needs the true poses, and the log has none")
     started = time.perf_counter()
     steps = iter(observations if observations is not None else log.observations())
     next(steps)  # the start: the estimator is reset, not updated

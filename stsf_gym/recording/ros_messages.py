@@ -17,6 +17,8 @@ import math
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
+from stsf_gym.validation import ConfigError
+
 TYPESTORE = get_typestore(Stores.ROS2_HUMBLE)
 _T = TYPESTORE.types
 #: Indices of the x, y, yaw block in ROS's row-major 6x6 pose covariance.
@@ -247,7 +249,9 @@ def detection_points(message) -> np.ndarray:
     """The :data:`DETECTION_POINT` rows of a :func:`detection_cloud` message."""
     names = [f.name for f in message.fields]
     if names != list(DETECTION_POINT.names) or message.point_step != DETECTION_POINT.itemsize:
-        raise ValueError(f"detections need PointCloud2 fields {DETECTION_POINT.names}, got {names}")
+        raise ConfigError(
+            f"detections need PointCloud2 fields {DETECTION_POINT.names}, got {names}"
+        )
     return np.frombuffer(np.asarray(message.data, np.uint8).tobytes(), DETECTION_POINT)
 
 

@@ -31,6 +31,7 @@ from stsf_gym.camera_model import CameraCalibration, PanTiltMount
 from stsf_gym.estimators import MapLandmark, SensorModel
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.geometry import OdometryCalibration
+from stsf_gym.validation import ConfigError
 from stsf_gym.vision.landmarks import LandmarkPattern
 
 FORMAT, VERSION = "stsf-gym sensor model", 1
@@ -76,9 +77,9 @@ def sensor_model_json(model: SensorModel) -> str:
 
 def sensor_model_from_dict(data: dict[str, Any], where: str = "sensor model") -> SensorModel:
     """The :class:`SensorModel` of a :func:`sensor_model_dict`; a missing or malformed key is
-    a ``ValueError`` naming it and ``where`` (the log file)."""
+    a :class:`ConfigError` naming it and ``where`` (the log file)."""
     if data.get("format") != FORMAT or data.get("version") != VERSION:
-        raise ValueError(
+        raise ConfigError(
             f"{where}: not a {FORMAT!r} version {VERSION} document "
             f"(format {data.get('format')!r}, version {data.get('version')!r})"
         )
@@ -110,6 +111,6 @@ def sensor_model_from_dict(data: dict[str, Any], where: str = "sensor model") ->
             walls=np.array(data["walls"], dtype=float).reshape(-1, 4),
         )
     except KeyError as err:
-        raise ValueError(f"{where}: missing key {err.args[0]!r}") from None
+        raise ConfigError(f"{where}: missing key {err.args[0]!r}") from None
     except (TypeError, ValueError) as err:
-        raise ValueError(f"{where}: {err}") from None
+        raise ConfigError(f"{where}: {err}") from None

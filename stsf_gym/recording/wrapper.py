@@ -10,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 
 from stsf_gym.estimators import PoseEstimator
+from stsf_gym.recording import require_recording
 from stsf_gym.recording.records import (
     EpisodeStart,
     FrameDetections,
@@ -17,6 +18,7 @@ from stsf_gym.recording.records import (
     RobotLayout,
     StepRecord,
 )
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import START_STD, sensor_model
 
 #: Recording formats and their file extensions.
@@ -25,6 +27,7 @@ FORMATS = {"mcap": ".mcap", "rerun": ".rrd"}
 
 def make_recorder(path: str | Path, fmt: str, frames: str = "raw") -> Recorder:
     """The recorder of ``fmt`` (``mcap`` or ``rerun``) writing ``path``."""
+    require_recording(f"--record {fmt}")
     if fmt == "mcap":
         from stsf_gym.recording.mcap_writer import McapRecorder
 
@@ -33,7 +36,7 @@ def make_recorder(path: str | Path, fmt: str, frames: str = "raw") -> Recorder:
         from stsf_gym.recording.rerun_writer import RerunRecorder
 
         return RerunRecorder(path)
-    raise ValueError(f"record format must be one of {sorted(FORMATS)}, got {fmt!r}")
+    raise ConfigError(f"record format must be one of {sorted(FORMATS)}, got {fmt!r}")
 
 
 def find_estimator(env: gym.Env) -> PoseEstimator | None:
@@ -77,7 +80,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         )
         gym.Wrapper.__init__(self, env)
         if fmt not in FORMATS:
-            raise ValueError(f"record format must be one of {sorted(FORMATS)}, got {fmt!r}")
+            raise ConfigError(f"record format must be one of {sorted(FORMATS)}, got {fmt!r}")
         self.folder, self.fmt, self.frames = Path(folder), fmt, frames
         self.name_prefix, self.meta = name_prefix, dict(meta or {})
         self.paths: list[Path] = []

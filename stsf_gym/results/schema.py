@@ -23,7 +23,8 @@ SCHEMA_VERSION = 1
 METRICS: dict[str, str] = {
     "success_rate": "success rate",
     "collision_rate": "collision rate",
-    "distance_before_failure_m": "distance before failure (m)",
+    "time_limit_rate": "time limit rate",
+    "distance_before_failure_m": "distance before failure or time limit (m)",
     "ate_rmse_m": "ATE RMSE (m)",
     "floor_ate_m": "floor ATE (m)",
     "ate_vs_floor": "ATE / floor",
@@ -47,6 +48,10 @@ METRICS: dict[str, str] = {
     "landmark_in_view": "landmark in view",
     "ms_per_step": "ms per step",
 }
+
+
+#: The words of ``nees_verdict`` in tables (results.json keeps the number).
+NEES_VERDICTS = {-1: "below: pessimistic", 0: "inside", 1: "above: over-confident"}
 
 
 def finite_or_none(value: float) -> float | None:
@@ -130,7 +135,13 @@ def rendered(
     headers: ``headers``, then :data:`METRICS`, else the key itself."""
     keys = list(columns) if columns is not None else [k for k in row if k != "seeds"]
     names = {**METRICS, **(headers or {})}
-    return {names.get(key, key): render(row.get(key)) for key in keys}
+    return {names.get(key, key): _cell(key, row.get(key)) for key in keys}
+
+
+def _cell(key: str, value: Any) -> str:
+    if key == "nees_verdict" and value in NEES_VERDICTS:
+        return NEES_VERDICTS[value]
+    return render(value)
 
 
 def _number(value: Any) -> bool:

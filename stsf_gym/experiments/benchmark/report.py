@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.experiments.benchmark.trained import SEED_FOLDERS
 from stsf_gym.io import markdown_table, save_figure
 
 
@@ -18,9 +19,16 @@ def _label(row: dict) -> str:
 
 
 def agent_name(agent: str) -> str:
-    """An agent by its name, a model by its last two folders (``ppo-stsf/seed-0``); the JSON
-    keeps the whole path."""
-    return "/".join(Path(agent).parts[-3:-1]) if agent.endswith(".zip") else agent
+    """``follower``; a training folder by its name (``ppo-stsf``); a model by its training
+    folder's name, with its seed folder (``ppo-stsf/seed-0``), or by its file's stem when
+    it is no ``model.zip``. The JSON keeps the whole path."""
+    path = Path(agent)
+    if path.suffix != ".zip":
+        return path.name
+    if path.name != "model.zip":
+        return path.stem
+    folder = path.parent
+    return f"{folder.parent.name}/{folder.name}" if folder.match(SEED_FOLDERS) else folder.name
 
 
 def leaderboard_markdown(summary: dict) -> str:
@@ -67,7 +75,7 @@ def leaderboard_markdown(summary: dict) -> str:
         text += markdown_table(
             [
                 {
-                    "agent": Path(t["agent"]).name,
+                    "agent": agent_name(t["agent"]),
                     "pose source": t["estimator"],
                     "runs x worlds": f"{t['runs']} x {t['worlds']}",
                     "success IQM (95 % CI)": _iqm(t, "success"),

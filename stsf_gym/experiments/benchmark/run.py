@@ -19,7 +19,7 @@ from __future__ import annotations
 import itertools
 from pathlib import Path
 
-from stsf_gym.envs.config import load_config
+from stsf_gym.envs.config import ConfigError, load_config
 from stsf_gym.envs.generated_env import world_seed_for
 from stsf_gym.envs.suite import Suite, load_suite
 from stsf_gym.envs.task import Polyline
@@ -89,7 +89,7 @@ def benchmark(
     too (a cell finished without its recording is run again)."""
     out, loaded = Path(out), load_suite(suite)
     if worlds < 1:
-        raise ValueError(f"--worlds must be at least 1, got {worlds}")
+        raise ConfigError(f"--worlds must be at least 1, got {worlds}")
     seeds = list(range(seed, seed + worlds))
     cells = benchmark_cells(loaded, list(agents), list(estimators), seeds)
     if record:
