@@ -4,9 +4,10 @@ steps and against wall time, IQM over training seeds with a stratified bootstrap
 Each ``FOLDER`` is one means tried (the ``OUT`` of ``stsf-gym train --seeds N``, or of one
 seed): its runs' ``demonstrations.json`` log every round (control steps, wall time, and the
 success of each validation episode, the same worlds every round). At each round the score
-matrix ``seeds x val worlds`` is aggregated as rliable does: the interquartile mean, its 95 %
-interval from resampling the seeds within each world (:mod:`~stsf_gym.experiments.benchmark.
-intervals`). The x position of a round is its median over the seeds.
+matrix ``seeds x val worlds`` is aggregated as rliable does: the interquartile mean over seeds
+of each seed's success rate, its 95 % interval from resampling worlds and seeds
+(:func:`~stsf_gym.experiments.benchmark.intervals.seed_iqm`). The x position of a round is its
+median over the seeds.
 
 Usage::
 
@@ -23,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.agents.demonstrations.dagger import read_history
-from stsf_gym.experiments.benchmark.intervals import iqm, stratified_bootstrap
+from stsf_gym.experiments.benchmark.intervals import seed_iqm
 from stsf_gym.io import save_figure, write_atomic, write_json
 
 
@@ -42,13 +43,12 @@ def curve(folder: Path) -> list[dict]:
     points = []
     for round_ in range(min(len(h) for h in histories)):
         rows = [h[round_] for h in histories]
-        by_world = np.array([row["val_episodes"] for row in rows], float).T  # worlds x seeds
-        interval = stratified_bootstrap(by_world.tolist(), iqm)
+        interval = seed_iqm([row["val_episodes"] for row in rows])  # seeds x val worlds
         points.append(
             {
                 "round": round_,
                 "seeds": len(rows),
-                "val_worlds": by_world.shape[0],
+                "val_worlds": len(rows[0]["val_episodes"]),
                 "control_steps": float(np.median([r["control_steps"] for r in rows])),
                 "wall_time_s": float(np.median([r["wall_time_s"] for r in rows])),
                 "success_iqm": interval["estimate"],

@@ -43,24 +43,30 @@ def test_aggregate_over_training_seeds():
     (row,) = aggregate_runs(scores)  # the follower is not a training run
     assert row["agent"] == "/runs/ppo-stsf" and row["runs"] == 3 and row["worlds"] == 8
     assert row["success_per_run"] == pytest.approx([0.75, 0.5, 0.125])
-    everything = np.sort(np.array([v for r in _scores_matrix(scores) for v in r]))
-    assert row["success_iqm"] == pytest.approx(everything[6:18].mean())  # the middle half of 24
+    assert row["success_iqm"] == pytest.approx(np.mean([0.75, 0.5, 0.125]))  # 3 runs: no trim
     low, high = row["success_iqm_ci95"]
     assert 0 <= low < row["success_iqm"] < high <= 1
+
+
+def test_the_iqm_is_over_runs_not_over_binary_episodes():
+    # 4 runs x 10 worlds, 80 % success each: the IQM of the flattened 0/1 matrix would be 1.0
+    scores = _scores([[1] * 8 + [0] * 2] * 4)
+    (row,) = aggregate_runs(scores)
+    assert row["success_iqm"] == pytest.approx(0.8)
+    runs = _scores([[1] * 10, [1] * 10, [1] * 9 + [0], [0] * 10])  # IQM drops the best and worst
+    (row,) = aggregate_runs(runs)
+    assert row["success_iqm"] == pytest.approx(np.mean([1.0, 0.9]))
     assert row["spl_iqm"] == pytest.approx(0.8 * row["success_iqm"])
 
 
-def _scores_matrix(scores):
-    return [
-        [float(v["success"]) for v in by_world.values()]
-        for (agent, _), by_world in scores.items()
-        if agent != "follower"
-    ]
-
-
-def test_identical_runs_give_a_point_interval():
-    (row,) = aggregate_runs(_scores([[1, 0, 1, 1]] * 3))
-    assert row["success_iqm_ci95"] == pytest.approx([row["success_iqm"]] * 2)
+def test_the_interval_carries_the_worlds_and_the_runs():
+    (row,) = aggregate_runs(_scores([[1, 1, 1, 1]] * 3))  # nothing varies: a point
+    assert row["success_iqm_ci95"] == pytest.approx([1.0, 1.0])
+    (same,) = aggregate_runs(_scores([[1, 0, 1, 1]] * 3))  # identical runs: the worlds' spread
+    (mixed,) = aggregate_runs(_scores([[1, 1, 1, 1], [1, 0, 1, 1], [0, 0, 1, 1]]))
+    assert same["success_iqm_ci95"][0] < 0.75 < same["success_iqm_ci95"][1]
+    width = [r["success_iqm_ci95"][1] - r["success_iqm_ci95"][0] for r in (same, mixed)]
+    assert width[1] > 0 and width[0] > 0
 
 
 @pytest.fixture(scope="module")

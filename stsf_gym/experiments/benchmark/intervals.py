@@ -13,7 +13,8 @@
   several strata (suites, or training seeds), bootstrapped by resampling runs *within* each
   stratum, percentile interval. rliable itself is not a dependency: it is an sdist that pulls
   in ``arch``, ``pandas`` and ``seaborn`` for these few lines.
-- :func:`iqm` -- the interquartile mean (rliable's recommended aggregate over seeds).
+- :func:`iqm` -- the interquartile mean (rliable's recommended aggregate over seeds), and
+  :func:`seed_iqm`, the IQM over training runs of their mean scores with its interval.
 
 Every draw comes from a seeded ``numpy.random.Generator``.
 """
@@ -105,4 +106,29 @@ def stratified_bootstrap(
         "estimate": float(statistic(np.concatenate(groups))),
         "low": float(low),
         "high": float(high),
+    }
+
+
+def seed_iqm(scores: Sequence[Sequence[float]], seed: int = 0) -> dict:
+    """The interquartile mean over training runs of each run's mean score over the worlds,
+    ``scores[run][world]`` (rliable's score matrix, runs x tasks, with the worlds as tasks:
+    a run's score on the suite is its mean over the worlds, then runs are aggregated). The
+    IQM of the flattened matrix would trim the failures themselves whenever outcomes are 0/1
+    and over 75 % succeed. Its 95 % interval resamples the worlds and, within the sample, the
+    runs (two-level percentile bootstrap), so it carries both the spread between worlds and
+    that between training seeds."""
+    matrix = np.asarray(scores, float)
+    runs, worlds = matrix.shape
+    rng = np.random.default_rng(seed)
+    estimates = [
+        iqm(matrix[rng.integers(runs, size=runs)][:, rng.integers(worlds, size=worlds)].mean(1))
+        for _ in range(BOOTSTRAP_SAMPLES)
+    ]
+    low, high = np.percentile(estimates, [2.5, 97.5])
+    per_run = matrix.mean(axis=1)
+    return {
+        "estimate": iqm(per_run),
+        "low": float(low),
+        "high": float(high),
+        "per_run": per_run.tolist(),
     }

@@ -7,10 +7,10 @@ training folder (the ``OUT`` of ``stsf-gym train --seeds N``: its ``seed-*/model
 
 The models of one training folder are one agent trained with several seeds: besides a row per
 model, the leaderboard aggregates them as rliable does (Agarwal et al. 2021, "Deep RL at the
-edge of the statistical precipice"): the **interquartile mean** of the score matrix
-``runs x test worlds`` (success, SPL), with a 95 % **stratified bootstrap** interval that
-resamples the runs within each world, so the interval carries the spread between training
-seeds, not only between worlds.
+edge of the statistical precipice"): the **interquartile mean** over runs of each run's mean
+score over the test worlds (success, SPL), with a 95 % two-level bootstrap interval that
+resamples worlds and runs (:func:`~stsf_gym.experiments.benchmark.intervals.seed_iqm`), so
+the interval carries the spread between training seeds, not only between worlds.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from pathlib import Path
 
 from stsf_gym.agents.registry import trained_on
 from stsf_gym.envs.config import ConfigError
-from stsf_gym.experiments.benchmark.intervals import iqm, stratified_bootstrap
+from stsf_gym.experiments.benchmark.intervals import seed_iqm
 
 SEED_FOLDERS = "seed-*"
 
@@ -52,8 +52,8 @@ def agent_pose_sources(agent: str, estimators: list[str]) -> list[str]:
 
 
 def training_group(agent: str) -> str | None:
-    """The training folder a learnt agent's model belongs to (None for other agents)."""
-    if trained_on(agent) is None:
+    """The training folder a model file belongs to (None for an agent by name)."""
+    if not agent.endswith(".zip"):
         return None
     folder = Path(agent).parent
     return str(folder.parent if folder.match(SEED_FOLDERS) else folder)
@@ -61,7 +61,7 @@ def training_group(agent: str) -> str | None:
 
 def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
     """Per training folder and pose source: IQM of success and SPL over its models' episodes
-    on the test worlds every model finished, with stratified bootstrap intervals."""
+    on the test worlds every model finished, with two-level bootstrap intervals."""
     groups: dict[tuple[str, str], list[str]] = {}
     for agent, estimator in scores:
         group = training_group(agent)
@@ -74,14 +74,10 @@ def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]
             continue
         row = {"agent": group, "estimator": estimator, "runs": len(runs), "worlds": len(worlds)}
         for key in ("success", "spl"):
-            by_world = [[float(scores[run, estimator][w][key]) for run in runs] for w in worlds]
-            interval = stratified_bootstrap(by_world, iqm)
-            per_run = [
-                sum(float(scores[run, estimator][w][key]) for w in worlds) / len(worlds)
-                for run in runs
-            ]
+            matrix = [[float(scores[run, estimator][w][key]) for w in worlds] for run in runs]
+            interval = seed_iqm(matrix)
             row[f"{key}_iqm"] = interval["estimate"]
             row[f"{key}_iqm_ci95"] = [interval["low"], interval["high"]]
-            row[f"{key}_per_run"] = per_run
+            row[f"{key}_per_run"] = interval["per_run"]
         aggregates.append(row)
     return aggregates
