@@ -1,0 +1,84 @@
+"""Learnt agents against the follower in a benchmark's ``results.json``: the IQM over training
+seeds with its interval, and each seed paired with the follower on the same worlds.
+
+Reads the per-episode values the leaderboard keeps, so an aggregate can be recomputed from a
+finished benchmark without rerunning an episode. For each training folder and pose source:
+the IQM over its runs of each run's success rate and SPL
+(:func:`~stsf_gym.experiments.benchmark.intervals.seed_iqm`), the ratio to the follower's
+success on the same pose source, and each run's paired difference from the follower
+(Newcombe's interval, :func:`~stsf_gym.experiments.benchmark.intervals.newcombe_paired`).
+
+Usage::
+
+    python benchmarks/seed_aggregate.py OUT/SUITE/results.json [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
+from stsf_gym.experiments.benchmark.trained import training_group
+
+
+def aggregate(results: dict) -> list[dict]:
+    """One entry per training folder and pose source (see the module's docstring)."""
+    rows = {(r["agent"], r["estimator"]): r for r in results["rows"]}
+    groups: dict[tuple[str, str], list[str]] = {}
+    for agent, estimator in rows:
+        group = training_group(agent)
+        if group is not None:
+            groups.setdefault((group, estimator), []).append(agent)
+    out = []
+    for (group, estimator), runs in sorted(groups.items()):
+        follower = rows.get(("follower", estimator))
+        entry = {"agent": group, "estimator": estimator, "runs": len(runs)}
+        for key in ("success_rate", "spl"):
+            interval = seed_iqm([rows[run, estimator][key]["values"] for run in runs])
+            entry[key] = {k: interval[k] for k in ("estimate", "low", "high", "per_run")}
+        if follower is not None:
+            rate = follower["success_rate"]["mean"]
+            entry["follower_success_rate"] = rate
+            entry["ratio_to_follower"] = entry["success_rate"]["estimate"] / rate if rate else None
+            entry["paired_vs_follower"] = [
+                newcombe_paired(
+                    rows[run, estimator]["success_rate"]["values"],
+                    follower["success_rate"]["values"],
+                )
+                for run in runs
+            ]
+        out.append(entry)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("results", type=Path)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    entries = aggregate(json.loads(args.results.read_text()))
+    if args.json:
+        print(json.dumps(entries, indent=1))
+        return
+    for e in entries:
+        s = e["success_rate"]
+        print(
+            f"{e['agent']} on {e['estimator']}: success IQM over {e['runs']} seeds "
+            f"{s['estimate']:.3f} [{s['low']:.3f}, {s['high']:.3f}], per seed "
+            f"{', '.join(f'{v:.2f}' for v in s['per_run'])}; SPL IQM {e['spl']['estimate']:.3f}"
+        )
+        if "ratio_to_follower" in e:
+            print(
+                f"  follower {e['follower_success_rate']:.3f}; ratio {e['ratio_to_follower']:.3f}"
+            )
+            for run, p in zip(range(e["runs"]), e["paired_vs_follower"], strict=True):
+                print(
+                    f"  seed run {run}: paired difference {p['difference']:+.2f} "
+                    f"[{p['low']:+.2f}, {p['high']:+.2f}] over {p['pairs']} worlds"
+                )
+
+
+if __name__ == "__main__":
+    main()
