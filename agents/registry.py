@@ -21,7 +21,7 @@ from typing import Protocol
 import gymnasium as gym
 import numpy as np
 
-from stsf_gym.envs.config import ConfigError
+from stsf_gym.validation import ConfigError
 
 FOLLOWER = "follower"
 

@@ -24,6 +24,9 @@ from stsf_gym.agents.observation import observation_config
 from stsf_gym.envs.config import deep_merge
 
 WRAPPER = "stsf_gym.agents.observation.PolicyObservation"
+INTERVAL = "stsf_gym.agents.decision_interval.DecisionInterval"
+SUITE_PREFIX = "stsf_gym/Suite-"  # suite ids take the file's `suites` section
+ZOO_TIMESTEPS = 307_200  # the default section's PPO budget
 EPISODE_ENV = "stsf_gym.episode_env:make_episode_env"  # the entry point of estimating ids
 
 
@@ -41,16 +44,21 @@ def zoo_section(algo: str, env_id: str) -> dict:
     """rl-zoo3's hyper-parameters of ``env_id`` from ``configs/agents/<algo>.yaml``; a suite id's
     ``env_kwargs`` hold the suite's env settings over the file's, as ``stsf-gym train --suite``
     trains (rl-zoo3 passes them to ``gym.make``, where a section replaces the registered one)."""
-    hp = load_hyperparams(algo, env_id)
+    suite = env_id.startswith(SUITE_PREFIX)
+    hp = load_hyperparams(algo, env_id, suite=suite)
     cfg = hp.training
     registered = dict(gym.spec(env_id).kwargs.get("env") or {})
     registered.pop("generator", None)  # stays in the registered kwargs
+    wrappers = [{WRAPPER: {"config": observation_config(cfg.observation)}}]
+    if cfg.decision_steps > 1:  # the learner's decision interval, outside the observation
+        wrappers.append({INTERVAL: {"steps": cfg.decision_steps}})
     return {
         "policy": cfg.policy,
         "n_envs": cfg.n_envs,
-        "n_timesteps": cfg.n_timesteps,
+        # rl-zoo3 runs RL alone (no demonstration stage): a PPO budget where the file has none
+        "n_timesteps": cfg.n_timesteps or ZOO_TIMESTEPS,
         "policy_kwargs": policy_kwargs_for_sb3(cfg.policy_kwargs),
-        "env_wrapper": [{WRAPPER: {"config": observation_config(cfg.observation)}}],
+        "env_wrapper": wrappers,
         "env_kwargs": deep_merge(dict(cfg.env), registered),
         **hp.algo_kwargs,
     }

@@ -52,14 +52,7 @@ def draw_start_pose(
         f"{room + task.goal_radius:.2f} m along its path, so at most {max(room, 0):.2f} m, "
         f"got {task.start_along:g}",
     )
-    for s in (0.0, task.start_along):  # the range's corners must be free floor
-        for offset in (-task.start_lateral, task.start_lateral):
-            require(
-                _free(world, path, s, offset, body_radius),
-                "task.start_lateral",
-                f"{task.start_lateral:g} m across the path at {s:g} m along it puts the robot "
-                f"into or beyond a wall (a body radius is {body_radius:g} m): make it smaller",
-            )
+    _check_lateral(world, path, (0.0, task.start_along), task, body_radius)
     return _draw_near(world, path, (0.0, task.start_along), task, body_radius, rng)
 
 
@@ -86,6 +79,7 @@ def draw_leg(
         "task.leg_min",
         f"this world's route is {end:.2f} m long, shorter than a leg ({task.leg_min:g} m)",
     )
+    _check_lateral(world, path, (0.0,), task, body_radius)
     for _ in range(MAX_DRAWS):
         goal_arc = rng.uniform(task.leg_min, end)
         start_arc = max(goal_arc - rng.uniform(task.leg_min, task.leg_max), 0.0)
@@ -97,6 +91,24 @@ def draw_leg(
         f"no leg start a body radius ({body_radius:g} m) clear of walls and obstacles in "
         f"{MAX_DRAWS} draws within +-{task.start_lateral:g} m of the path: make it smaller",
     )
+
+
+def _check_lateral(
+    world: WorldConfig,
+    path: Polyline,
+    arcs: tuple[float, ...],
+    task: TaskConfig,
+    body_radius: float,
+) -> None:
+    """The lateral range's corners at ``arcs`` must be free floor (else the setting is bad)."""
+    for s in arcs:
+        for offset in (-task.start_lateral, task.start_lateral):
+            require(
+                _free(world, path, s, offset, body_radius),
+                "task.start_lateral",
+                f"{task.start_lateral:g} m across the path at {s:g} m along it puts the robot "
+                f"into or beyond a wall (a body radius is {body_radius:g} m): make it smaller",
+            )
 
 
 def _draw_near(

@@ -25,10 +25,14 @@ def test_every_estimating_id_has_a_section():
     bases += [stsf_gym.suite_id(path.stem) for path in SUITE_DIR.glob("*.yaml")]
     expected = {b.replace("-v0", f"-{s}-v0") for b in bases for s in stsf_gym.ESTIMATOR_IDS}
     assert len(bases) >= 6 and set(hyperparams) == expected
-    suite = zoo_section("ppo", "stsf_gym/Suite-Corridor-Odometry-v0")["env_kwargs"]
-    trained = deep_merge(load_hyperparams("ppo", None).training.env, load_suite("corridor").env)
-    assert suite == trained  # as `stsf-gym train --suite corridor` trains: the camera on (fast)
-    assert suite["camera"] == {"mode": "fast"} and suite["task"]["protocol"] == "declare"
+    section = zoo_section("ppo", "stsf_gym/Suite-Corridor-Odometry-v0")
+    suite = section["env_kwargs"]
+    hp = load_hyperparams("ppo", "stsf_gym/Suite-Corridor-Odometry-v0", suite=True).training
+    trained = deep_merge(hp.env, load_suite("corridor").env)
+    assert suite == trained  # as `stsf-gym train --suite corridor` trains: odometry, camera off
+    assert suite["camera"] == {"mode": "fast", "enabled": False}
+    assert suite["task"]["protocol"] == "declare" and suite["task"]["stop_action"] is True
+    assert [next(iter(w)) for w in section["env_wrapper"]][-1].endswith("DecisionInterval")
 
 
 def test_sections_follow_the_training_config():
