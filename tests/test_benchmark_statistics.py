@@ -53,6 +53,10 @@ def test_wilson_interval_known_values():
     low, high = wilson(81, 263)
     assert (low, high) == pytest.approx((0.2553, 0.3662), abs=1e-4)
     assert wilson(0, 10)[0] == 0.0 and wilson(0, 10)[1] == pytest.approx(0.2775, abs=1e-4)
+    for trials in range(1, 200):  # every interval holds its rate (a plot's error bars >= 0)
+        for successes in (0, trials // 3, trials):
+            low, high = wilson(successes, trials)
+            assert low <= successes / trials <= high
 
 
 def test_paired_difference_on_synthetic_outcomes():

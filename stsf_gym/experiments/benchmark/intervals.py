@@ -38,7 +38,8 @@ def wilson(successes: int, trials: int, z: float = Z95) -> tuple[float, float]:
     denominator = 1 + z * z / trials
     centre = (p + z * z / (2 * trials)) / denominator
     half = z / denominator * math.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials))
-    return max(0.0, centre - half), min(1.0, centre + half)
+    # the interval holds p even where rounding leaves centre + half a hair below 1 at p = 1
+    return min(max(0.0, centre - half), p), max(min(1.0, centre + half), p)
 
 
 def newcombe_paired(first: Sequence[bool], second: Sequence[bool], z: float = Z95) -> dict:
