@@ -20,19 +20,14 @@ import json
 from pathlib import Path
 
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
-from stsf_gym.experiments.benchmark.trained import training_group
+from stsf_gym.experiments.benchmark.trained import training_groups
 
 
 def aggregate(results: dict) -> list[dict]:
     """One entry per training folder and pose source (see the module's docstring)."""
     rows = {(r["agent"], r["estimator"]): r for r in results["rows"]}
-    groups: dict[tuple[str, str], list[str]] = {}
-    for agent, estimator in rows:
-        group = training_group(agent)
-        if group is not None:
-            groups.setdefault((group, estimator), []).append(agent)
     out = []
-    for (group, estimator), runs in sorted(groups.items()):
+    for (group, estimator), runs in training_groups(rows).items():
         follower = rows.get(("follower", estimator))
         entry = {"agent": group, "estimator": estimator, "runs": len(runs)}
         for key in ("success_rate", "spl"):

@@ -59,16 +59,22 @@ def training_group(agent: str) -> str | None:
     return str(folder.parent if folder.match(SEED_FOLDERS) else folder)
 
 
-def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
-    """Per training folder and pose source: IQM of success and SPL over its models' episodes
-    on the test worlds every model finished, with two-level bootstrap intervals."""
+def training_groups(rows) -> dict[tuple[str, str], list[str]]:
+    """The models among ``rows`` (``(agent, estimator)`` keys) by training folder and pose
+    source, in order."""
     groups: dict[tuple[str, str], list[str]] = {}
-    for agent, estimator in scores:
+    for agent, estimator in rows:
         group = training_group(agent)
         if group is not None:
             groups.setdefault((group, estimator), []).append(agent)
+    return dict(sorted(groups.items()))
+
+
+def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
+    """Per training folder and pose source: IQM of success and SPL over its models' episodes
+    on the test worlds every model finished, with two-level bootstrap intervals."""
     aggregates = []
-    for (group, estimator), runs in sorted(groups.items()):
+    for (group, estimator), runs in training_groups(scores).items():
         worlds = sorted(set.intersection(*(set(scores[run, estimator]) for run in runs)))
         if not worlds:
             continue
