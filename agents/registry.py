@@ -65,31 +65,38 @@ class FollowerAgent:
         self.follower = None
 
     def wrap(self, env: gym.Env) -> gym.Env:
+        """The env itself, or held decisions with ``decision_steps`` above 1."""
         from stsf_gym.agents.decision_interval import DecisionInterval
 
         return env if self.decision_steps == 1 else DecisionInterval(env, self.decision_steps)
 
     def begin(self, env: gym.Env) -> None:
+        """A follower of this episode's path and goals."""
         from stsf_gym.agents.follower import PathFollower
 
         self.follower = PathFollower.for_env(env, **self.options)
 
     def act(self, obs) -> np.ndarray:
+        """Pure pursuit on ``obs["pose"]``, bent by the sonar."""
         return self.follower.act(obs["pose"], obs["sonar"])
 
     def env_overrides(self) -> dict:
+        """None needed."""
         return {}  # any action layout: it stops by standing still, or by STOP if there is one
 
     def trained_on(self) -> dict | None:
+        """Nothing: the follower is scripted."""
         return None
 
     def config(self) -> dict:
+        """The follower's resolved settings."""
         from dataclasses import asdict
 
         interval = {} if self.decision_steps == 1 else {"decision_steps": self.decision_steps}
         return {FOLLOWER: asdict(self.settings), **interval}
 
     def label(self) -> str:
+        """``follower``, or ``follower-k<steps>`` with a decision interval."""
         return FOLLOWER if self.decision_steps == 1 else f"{FOLLOWER}-k{self.decision_steps}"
 
 
@@ -105,6 +112,7 @@ class SB3Agent:
         self.model = None
 
     def wrap(self, env: gym.Env) -> gym.Env:
+        """The policy stack of the model's record over ``env``; shapes checked."""
         from stsf_gym.agents.policy_stack import policy_stack
         from stsf_gym.agents.sb3_agent import load_model
 
@@ -120,25 +128,31 @@ class SB3Agent:
         return stack
 
     def begin(self, env: gym.Env) -> None:
+        """Nothing: the policy keeps no state between steps."""
         pass
 
     def act(self, obs) -> np.ndarray:
+        """The model's deterministic action."""
         action, _ = self.model.predict(obs, deterministic=True)
         return action
 
     def env_overrides(self) -> dict:
+        """The STOP entry, if the model was trained with one."""
         stop = self.meta.get("env", {}).get("task", {}).get("stop_action", False)
         return {"task": {"stop_action": True}} if stop else {}
 
     def trained_on(self) -> dict:
+        """Algorithm, pose source, world, timesteps and digest of the model."""
         from stsf_gym.agents.sb3_agent import training_record
 
         return training_record(self.path)
 
     def config(self) -> dict:
+        """The model's path and content digest."""
         return {"model": str(self.path), "digest": self.digest}
 
     def label(self) -> str:
+        """The model file's stem and digest."""
         return f"{self.path.stem}-{self.digest}"
 
 

@@ -44,11 +44,13 @@ class ExpertLabel(gym.Wrapper):
         return np.array(features), np.array(labels)
 
     def reset(self, *, seed=None, options=None):
+        """Reset, and label the first state with a follower of the episode's goals."""
         obs, info = self.env.reset(seed=seed, options=options)
         self.expert = PathFollower.for_env(self.env)  # the episode's world and goals
         return obs, self._label(obs, info)
 
     def step(self, action):
+        """Step whatever drives, and label the state reached."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         return obs, reward, terminated, truncated, self._label(obs, info)
 

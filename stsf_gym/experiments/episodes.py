@@ -164,6 +164,7 @@ class EpisodeTrace(gym.Wrapper):
         self.floor, self.info = None, {}
 
     def reset(self, *, seed=None, options=None):
+        """Reset and record the start (the floor's too, with the camera on)."""
         obs, info = self.env.reset(seed=seed, options=options)
         if "image_new" in obs and not isinstance(self.estimating.estimator, TruePose):
             # the floor needs the camera; the true pose needs no floor
@@ -175,6 +176,7 @@ class EpisodeTrace(gym.Wrapper):
         return obs, info
 
     def step(self, action):
+        """Step and record the control step."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         self.steps += 1
         if self.floor is not None:
