@@ -7,8 +7,6 @@ observation, its decision interval) is never missing when it is evaluated.
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
 import gymnasium as gym
 
 from stsf_gym.agents.decision_interval import DecisionInterval
@@ -21,11 +19,3 @@ def policy_stack(env: gym.Env, observation: dict | None, decision_steps: int) ->
     :class:`DecisionInterval` of ``decision_steps`` (1: a decision every control step)."""
     features = PolicyObservation(env, observation_config(observation))
     return features if decision_steps == 1 else DecisionInterval(features, decision_steps)
-
-
-def stack_settings(observation: dict | None, decision_steps: int) -> dict:
-    """What a saved policy records of its stack (:func:`policy_stack`'s arguments, resolved)."""
-    return {
-        "observation": asdict(observation_config(observation)),
-        "decision_steps": decision_steps,
-    }

@@ -188,3 +188,16 @@ def test_training_and_evaluation_build_the_same_policy_stack(make_env, tmp_path,
     assert isinstance(follower.wrap(env), DecisionInterval)
     with pytest.raises(ConfigError, match="unknown agent"):
         make_agent("nobody")
+
+
+def test_a_registered_agent_is_made_by_its_name():
+    from stsf_gym.agents.registry import AGENTS, register_agent
+
+    register_agent("cautious-follower", lambda **o: FollowerAgent(decision_steps=2, **o))
+    try:
+        agent = make_agent("cautious-follower")
+        assert isinstance(agent, FollowerAgent) and agent.label() == "follower-k2"
+    finally:
+        del AGENTS["cautious-follower"]
+    with pytest.raises(ValueError, match="may not contain"):
+        register_agent("pkg.mod:Class", FollowerAgent)
