@@ -16,6 +16,7 @@ from gymnasium import spaces
 
 from stsf_gym.envs.config import build
 from stsf_gym.envs.task import Polyline
+from stsf_gym.validation import Positive
 
 STD_FLOOR, STD_CEIL = 1e-3, 10.0  # clip range of a standard deviation before its log
 TANGENT_STEP = 0.1  # m, arc length over which the path's direction is measured
@@ -25,10 +26,15 @@ FEATURE_LIMIT = 100.0  # every entry is clipped to +-this (only far-off lookahea
 @dataclass(frozen=True)
 class ObservationConfig:
     """``lookahead``: arc lengths (m) ahead of the robot's nearest path point whose positions
-    in the robot frame the policy sees; ``scale``: metres that map to 1 in those features."""
+    in the robot frame the policy sees; ``scale``: metres that map to 1 in those features;
+    ``goal_horizon``: metres beyond which the goal features saturate (None: never). An agent
+    trained on legs a few metres long meets goals 20-40 m away on a full route, inputs it has
+    never seen; saturated at a horizon its legs reach, a far goal reads as one at the horizon
+    (direction kept), and the lookahead points steer until it comes nearer."""
 
     lookahead: tuple[float, ...] = (0.0, 0.5, 1.0, 2.0, 4.0)
     scale: float = 4.0
+    goal_horizon: Positive | None = None
 
 
 def observation_config(data: dict | None) -> ObservationConfig:
@@ -44,7 +50,8 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     - the path length left to the current goal (negative past it), over ``scale``;
     - the current goal of the route (the task's, ``declare``: where to stop next) in the
       estimated robot frame, over ``scale`` (Habitat's GPS+compass goal vector, from the
-      estimate), and the share of the route's goals still to declare;
+      estimate), and the share of the route's goals still to declare; the path left and the
+      goal vector's length are cut at ``goal_horizon``;
     - ``sin`` and ``cos`` of the heading error (path direction minus estimated yaw);
     - ``log10`` of the standard deviations of the estimate along and across the robot's
       heading and of its yaw (each clipped to 1 mm..10 m or rad), over 3;
@@ -97,13 +104,18 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         stds = np.sqrt(np.maximum([*position_var, cov[2, 2]], 0.0))
         low, high = self.sonar_range
         task = self.env.unwrapped.task
-        goal = (task.goal - (x, y)) @ to_robot.T / self.config.scale
+        goal = (task.goal - (x, y)) @ to_robot.T
         goal_arc = task.goal_arcs[min(task.goal_index, len(task.goals) - 1)]
+        left = goal_arc - here
+        horizon = self.config.goal_horizon
+        if horizon is not None:
+            left = min(left, horizon)
+            goal *= min(1.0, horizon / max(float(np.hypot(*goal)), 1e-9))
         features = np.concatenate(
             [
                 points.ravel(),
-                [(goal_arc - here) / self.config.scale],
-                goal,
+                [left / self.config.scale],
+                goal / self.config.scale,
                 [task.goals_left / len(task.goals)],
                 [math.sin(heading_error), math.cos(heading_error)],
                 np.log10(np.clip(stds, STD_FLOOR, STD_CEIL)) / 3.0,

@@ -14,7 +14,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from stsf_gym.agents.hyperparams import load_hyperparams
-from stsf_gym.agents.observation import PolicyObservation
+from stsf_gym.agents.observation import ObservationConfig, PolicyObservation
 from stsf_gym.agents.registry import make_agent
 from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.train import latest_checkpoint, train
@@ -78,6 +78,25 @@ def test_policy_observation_in_the_robot_frame(make_env):
     np.testing.assert_allclose(features[2:4], [-0.3 / scale, -0.5 / scale], atol=1e-2)
     np.testing.assert_allclose(features[2 * k + 4 : 2 * k + 6], [-1.0, 0.0], atol=1e-2)
     assert features[-2:] == pytest.approx([0.0, 0.0])  # standing still
+
+
+def test_goal_features_saturate_at_the_horizon(make_env):
+    """A goal beyond ``goal_horizon`` reads as one at the horizon, in the same direction."""
+    far = PolicyObservation(PoseEstimateWrapper(make_env(**NO_CAMERA), "truth"))
+    near = PolicyObservation(
+        PoseEstimateWrapper(make_env(**NO_CAMERA), "truth"), ObservationConfig(goal_horizon=2.0)
+    )
+    k, scale = len(far.config.lookahead), far.config.scale
+    full, _ = far.reset(seed=0)
+    cut, _ = near.reset(seed=0)
+    assert full[2 * k] > 2.0 / scale  # the goal is farther than the horizon
+    assert cut[2 * k] == pytest.approx(2.0 / scale)
+    goal, goal_cut = full[2 * k + 1 : 2 * k + 3], cut[2 * k + 1 : 2 * k + 3]
+    np.testing.assert_allclose(goal_cut, goal / np.linalg.norm(goal) * 2.0 / scale, rtol=1e-5)
+    np.testing.assert_array_equal(
+        np.delete(cut, [2 * k, 2 * k + 1, 2 * k + 2]),
+        np.delete(full, [2 * k, 2 * k + 1, 2 * k + 2]),
+    )
 
 
 def _write(tmp_path, text: str):
