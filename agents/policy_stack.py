@@ -1,6 +1,6 @@
 """The wrappers between a learnt policy and the pose-estimating env, built in one place.
 
-Training (:mod:`stsf_gym.agents.train`) and evaluation (:class:`~stsf_gym.agents.registry.
+Training (:mod:`stsf_gym.agents.training.train`) and evaluation (:class:`~stsf_gym.agents.registry.
 SB3Agent`) both call :func:`policy_stack`, so a wrapper a policy was trained behind (its
 observation, its decision interval) is never missing when it is evaluated.
 """

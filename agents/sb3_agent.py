@@ -13,7 +13,7 @@ import json
 import zipfile
 from pathlib import Path
 
-from stsf_gym.agents.hyperparams import algorithm_class
+from stsf_gym.agents.training.hyperparams import algorithm_class
 from stsf_gym.envs.config import ConfigError
 
 META_KEY = "stsf_meta"

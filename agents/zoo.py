@@ -19,8 +19,8 @@ from __future__ import annotations
 import gymnasium as gym
 
 import stsf_gym  # noqa: F401 - registers the ids
-from stsf_gym.agents.hyperparams import load_hyperparams, policy_kwargs_for_sb3
 from stsf_gym.agents.observation import observation_config
+from stsf_gym.agents.training.hyperparams import load_hyperparams, policy_kwargs_for_sb3
 from stsf_gym.envs.config import deep_merge
 
 WRAPPER = "stsf_gym.agents.observation.PolicyObservation"

@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from stsf_gym.agents.train import train
+from stsf_gym.agents.training.train import train
 from stsf_gym.experiments.evaluate import evaluate
 
 #: Hyper-parameter overrides (any key of configs/agents/ppo.yaml) for a run of seconds.

@@ -256,7 +256,7 @@ def _reproduce(args: argparse.Namespace) -> dict:
 
 
 def _train(args: argparse.Namespace) -> dict:
-    from stsf_gym.agents.train import train
+    from stsf_gym.agents.training.train import train
 
     if args.suite is not None and (args.world is not None or args.split is not None):
         raise ConfigError("--suite picks the worlds (its train split): drop --world/--split")

@@ -13,12 +13,12 @@ import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-from stsf_gym.agents.hyperparams import load_hyperparams
 from stsf_gym.agents.observation import ObservationConfig, PolicyObservation
 from stsf_gym.agents.registry import make_agent
 from stsf_gym.agents.sb3_agent import model_metadata
-from stsf_gym.agents.train import latest_checkpoint, train
-from stsf_gym.agents.training_log import EpisodeLog, read_rows
+from stsf_gym.agents.training.hyperparams import load_hyperparams
+from stsf_gym.agents.training.train import latest_checkpoint, train
+from stsf_gym.agents.training.training_log import EpisodeLog, read_rows
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.wrappers import TRUTH_STD, PoseEstimateWrapper
@@ -253,7 +253,7 @@ def test_policy_env_passes_both_checkers(make_env):
 
 
 def test_an_interrupted_save_keeps_the_previous_model(tmp_path):
-    from stsf_gym.agents.train import save_atomic
+    from stsf_gym.agents.training.train import save_atomic
 
     path = tmp_path / "model.zip"
     save_atomic(lambda f: f.write(b"first"), path)

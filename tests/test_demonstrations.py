@@ -12,7 +12,7 @@ from gymnasium import spaces
 from stsf_gym.agents.demonstrations.cloning import CloningConfig, clone
 from stsf_gym.agents.demonstrations.dagger import demonstration_config
 from stsf_gym.agents.registry import SB3Agent, make_agent
-from stsf_gym.agents.train import train
+from stsf_gym.agents.training.train import train
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode

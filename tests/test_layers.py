@@ -78,7 +78,7 @@ def test_violations_are_found(tmp_path):
             "stsf_gym/estimators/__init__.py": "def f():\n    import pybullet\n",
             "stsf_gym/estimators/model.py": "from stsf_gym.envs.robot import Robot\n",
             "envs/robot.py": "from stsf_gym.estimators import model\nRobot = 1\n",
-            "agents/train.py": "from stsf_gym.experiments.runs import _private\n",
+            "agents/training/train.py": "from stsf_gym.experiments.runs import _private\n",
             "stsf_gym/experiments/__init__.py": "",
             "stsf_gym/experiments/runs.py": (
                 "from typing import TYPE_CHECKING\n"
@@ -91,7 +91,10 @@ def test_violations_are_found(tmp_path):
     assert "stsf_gym.estimators imports pybullet" in found
     assert "stsf_gym.estimators.model imports stsf_gym.envs.robot" in found
     assert "stsf_gym.envs.robot imports stsf_gym.estimators.model" in found
-    assert "stsf_gym.agents.train imports stsf_gym.experiments.runs (stsf_gym.agents ->" in found
+    assert (
+        "stsf_gym.agents.training.train imports stsf_gym.experiments.runs (stsf_gym.agents ->"
+        in found
+    )
     assert "private name stsf_gym.experiments.runs._private" in found
     assert (
         "import cycle: stsf_gym.envs.robot -> stsf_gym.estimators.model -> stsf_gym.envs.robot"

@@ -12,7 +12,7 @@ import yaml
 import stsf_gym.envs.config as env_config
 import stsf_gym.results.provenance as provenance
 from stsf_gym.agents.sb3_agent import model_metadata
-from stsf_gym.agents.train import latest_checkpoint, train
+from stsf_gym.agents.training.train import latest_checkpoint, train
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.yaml_layers import CONFIG_DIR
 

@@ -162,7 +162,7 @@ def test_training_and_evaluation_build_the_same_policy_stack(make_env, tmp_path,
     import types
 
     from stsf_gym.agents import sb3_agent
-    from stsf_gym.agents.train import make_training_env
+    from stsf_gym.agents.training.train import make_training_env
 
     settings = {"task": STOP_TASK, "camera": {"enabled": False}}
     trained = make_training_env(

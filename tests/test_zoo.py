@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import stsf_gym
-from stsf_gym.agents.hyperparams import load_hyperparams
+from stsf_gym.agents.training.hyperparams import load_hyperparams
 from stsf_gym.agents.zoo import hyperparams, zoo_section
 from stsf_gym.envs.config import deep_merge
 from stsf_gym.envs.suite import load_suite

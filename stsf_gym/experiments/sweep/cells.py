@@ -18,8 +18,9 @@ from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, deep_merge
 
-#: ``train`` keys that are arguments of ``stsf_gym.agents.train.train`` (with their defaults in a
-#: sweep: one env per cell); every other ``train`` key is a hyper-parameter override.
+#: ``train`` keys that are arguments of ``stsf_gym.agents.training.train.train`` (with their
+#: defaults in a sweep: one env per cell); every other ``train`` key is a hyper-parameter
+#: override.
 TRAIN_ARGUMENTS = {"algo": "ppo", "timesteps": None, "n_envs": 1, "config": None}
 
 
@@ -94,7 +95,7 @@ def route_geodesic_m(cell: dict, start) -> float:
 def train_cell(cell: dict) -> dict:
     """Train an SB3 agent on the cell's pose source (in ``cell["out"]``, resumable), then
     evaluate the model for one episode on an evaluation seed, as an evaluate cell does."""
-    from stsf_gym.agents.train import EVAL_SEED_OFFSET, train
+    from stsf_gym.agents.training.train import EVAL_SEED_OFFSET, train
 
     arguments, hyperparams = _train_arguments(cell)
     summary = train(
@@ -134,8 +135,8 @@ def cell_config(cell: dict) -> dict:
     resolved = resolved_config(cell["world"], cell["estimator"], cell["env"], cell["options"])
     if cell["kind"] != "train":
         return {**resolved, "agent": agent_config(cell["agent"])}
-    from stsf_gym.agents.hyperparams import load_hyperparams
-    from stsf_gym.agents.train import env_id_for
+    from stsf_gym.agents.training.hyperparams import load_hyperparams
+    from stsf_gym.agents.training.train import env_id_for
 
     arguments, hyperparams = _train_arguments(cell)
     env_id = env_id_for(cell["world"], cell["estimator"])
@@ -146,8 +147,8 @@ def cell_config(cell: dict) -> dict:
 def check_train_cell(cell: dict) -> None:
     """The trainer must be installed and the cell's hyper-parameters valid."""
     try:
-        from stsf_gym.agents.hyperparams import load_hyperparams
-        from stsf_gym.agents.train import env_id_for
+        from stsf_gym.agents.training.hyperparams import load_hyperparams
+        from stsf_gym.agents.training.train import env_id_for
     except ImportError as err:
         raise ConfigError(f"cell kind 'train' is not available: {err}") from err
     arguments, hyperparams = _train_arguments(cell)

@@ -9,7 +9,7 @@ benchmark suite's train worlds under its task and is evaluated (best model chose
 suite's ``val`` worlds, never on the benchmark's ``test`` ones. Rerunning with the same ``OUT``
 continues from the newest checkpoint (PPO checkpoints after every update, SAC every
 ``checkpoint_freq`` steps and on Ctrl-C) and ends at exactly the timesteps asked for, which must
-be a whole number of updates (:func:`~stsf_gym.agents.hyperparams.check_timesteps`). A
+be a whole number of updates (:func:`~stsf_gym.agents.training.hyperparams.check_timesteps`). A
 checkpoint made by other code or another resolved configuration (its
 :func:`~stsf_gym.results.provenance.fingerprint` differs) is not resumed: the run says so, moves
 the old checkpoints to ``stale-checkpoints/`` and starts afresh. ``train.json`` and every model
@@ -38,16 +38,16 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 import stsf_gym
 from stsf_gym.agents.demonstrations.dagger import demonstration_config, run_demonstrations
 from stsf_gym.agents.demonstrations.expert import ExpertLabel
-from stsf_gym.agents.hyperparams import (
+from stsf_gym.agents.observation import observation_config
+from stsf_gym.agents.policy_stack import policy_stack
+from stsf_gym.agents.sb3_agent import META_KEY, model_metadata
+from stsf_gym.agents.training.hyperparams import (
     algorithm_class,
     check_timesteps,
     load_hyperparams,
     policy_kwargs_for_sb3,
 )
-from stsf_gym.agents.observation import observation_config
-from stsf_gym.agents.policy_stack import policy_stack
-from stsf_gym.agents.sb3_agent import META_KEY, model_metadata
-from stsf_gym.agents.training_log import (
+from stsf_gym.agents.training.training_log import (
     EPISODES_CSV,
     EVAL_CSV,
     EpisodeLog,

@@ -1,0 +1,1 @@
+"""Training a learnt agent: hyper-parameters, the staged run, its log."""
