@@ -18,6 +18,7 @@ from stsf_gym.estimators.base import MapLandmark
 
 MIN_SIDEWAYS = 0.2  # sine of the smallest pan counted when scoring a landmark
 SWITCH_FACTOR = 1.5  # how much better another landmark must score to take over
+RANGE_MARGIN = 1e-6  # m: the range pre-filter keeps this much more than the exact test
 
 
 class LandmarkPointer:
@@ -39,9 +40,30 @@ class LandmarkPointer:
         self.max_view = math.radians(max_view_deg)
         self.target: int | None = None
 
+    @property
+    def landmarks(self) -> dict[int, MapLandmark]:
+        """The map's landmarks by id."""
+        return self._landmarks
+
+    @landmarks.setter
+    def landmarks(self, landmarks: dict[int, MapLandmark]) -> None:
+        self._landmarks = landmarks
+        self._centres = np.array([lm.centre[:2] for lm in landmarks.values()]).reshape(-1, 2)
+
     def reset(self) -> None:
         """Forget the landmark the camera was kept on."""
         self.target = None
+
+    def _in_range(self, pose: np.ndarray) -> list[MapLandmark]:
+        """The landmarks near enough to qualify, in map order: a cheap pre-filter on all of them
+        at once, wider by :data:`RANGE_MARGIN` than :meth:`_pan_to`'s exact test, which then
+        decides as before (the same choice to the last bit, in a fraction of the time)."""
+        offsets = self._centres - self._camera_xy(pose)
+        squared = offsets[:, 0] ** 2 + offsets[:, 1] ** 2
+        low = max(self.min_range - RANGE_MARGIN, 0.0) ** 2
+        high = (self.max_range + RANGE_MARGIN) ** 2
+        near = (squared >= low) & (squared <= high)
+        return [lm for lm, keep in zip(self._landmarks.values(), near, strict=True) if keep]
 
     def _camera_xy(self, pose: np.ndarray) -> np.ndarray:
         return pose[:2] + self.camera_forward * np.array([math.cos(pose[2]), math.sin(pose[2])])
@@ -75,7 +97,7 @@ class LandmarkPointer:
         """Pan towards the best-scoring landmark (0 if none qualifies). The current target
         keeps an advantage of ``SWITCH_FACTOR`` so the choice does not flicker."""
         best = None
-        for landmark in self.landmarks.values():
+        for landmark in self._in_range(pose):
             pan = self._pan_to(landmark, pose)
             if pan is None:
                 continue

@@ -1,0 +1,185 @@
+"""Env steps per second on a suite world: the cost of one 0.1 s step as learners and
+benchmarks pay it.
+
+Four cases, each on ``stsf_gym/Suite-Corridor-*`` (generated test worlds, the declared-arrival
+task): the true pose with the camera off, and STSF on the suite's fast camera, each driven by
+the follower and by random actions (a seeded generator). A case steps ``steps`` times,
+resetting at each episode's end, after ``warmup`` steps that are not timed.
+
+This file is also a script (``python step.py --json``) that needs nothing but Gymnasium and
+``stsf_gym``'s public names (its env ids and :func:`~stsf_gym.agents.registry.make_agent`), so
+:func:`side_by_side` runs the same cases on another checkout or installed version, in the same
+run, for ratios that other jobs on the machine disturb alike.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import json
+import os
+import pstats
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+#: case -> (env id, env overrides, driver)
+CASES: dict[str, tuple[str, dict, str]] = {
+    "truth, camera off, follower": (
+        "stsf_gym/Suite-Corridor-Truth-v0",
+        {"camera": {"enabled": False}},
+        "follower",
+    ),
+    "truth, camera off, random": (
+        "stsf_gym/Suite-Corridor-Truth-v0",
+        {"camera": {"enabled": False}},
+        "random",
+    ),
+    "stsf, fast camera, follower": ("stsf_gym/Suite-Corridor-STSF-v0", {}, "follower"),
+    "stsf, fast camera, random": ("stsf_gym/Suite-Corridor-STSF-v0", {}, "random"),
+}
+#: The package folders of a checkout, as ``pyproject.toml`` installs them into ``stsf_gym``.
+MAPPED_FOLDERS = ("envs", "agents", "configs")
+
+
+def measure(case: str, steps: int = 1500, warmup: int = 100, seed: int = 0) -> dict:
+    """Steps per second of wall time and of the process's CPU time for ``case``."""
+    import stsf_gym  # noqa: F401 - registers the ids
+    from stsf_gym.agents.registry import make_agent
+
+    env_id, overrides, driver = CASES[case]
+    env = gym.make(env_id, **overrides)
+    follower = make_agent("follower") if driver == "follower" else None
+    rng = np.random.default_rng(seed)
+    episodes = [seed]
+
+    def start():
+        obs, _ = env.reset(seed=episodes[-1])
+        episodes.append(episodes[-1] + 1)
+        if follower is not None:
+            follower.begin(env)
+        return obs
+
+    def drive(count: int, obs):
+        for _ in range(count):
+            if follower is None:
+                action = rng.uniform(env.action_space.low, env.action_space.high)
+            else:
+                action = follower.act(obs)
+            obs, _, terminated, truncated, _ = env.step(action.astype(np.float32))
+            if terminated or truncated:
+                obs = start()
+        return obs
+
+    obs = drive(warmup, start())
+    wall, cpu = time.perf_counter(), time.process_time()
+    drive(steps, obs)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    env.close()
+    return {
+        "case": case,
+        "steps": steps,
+        "episodes": len(episodes) - 1,
+        "steps_per_s": steps / wall,
+        "steps_per_cpu_s": steps / cpu,
+    }
+
+
+def profile(case: str, steps: int = 1500, seed: int = 0, count: int = 25) -> list[dict]:
+    """cProfile's ``count`` functions with the most own time while ``case`` runs."""
+    profiler = cProfile.Profile()
+    profiler.enable()
+    row = measure(case, steps, warmup=0, seed=seed)
+    profiler.disable()
+    total = row["steps"] / row["steps_per_s"]
+    stats = pstats.Stats(profiler).stats
+    top = sorted(stats.items(), key=lambda item: item[1][2], reverse=True)[:count]
+    return [
+        {
+            "function": f"{Path(file).name}:{line} {name}",
+            "own_share": own / total,
+            "calls": calls,
+            "cumulative_s": cumulative,
+        }
+        for (file, line, name), (_, calls, own, cumulative, _) in top
+    ]
+
+
+def measure_all(steps: int = 1500, seed: int = 0) -> list[dict]:
+    """Every case, in this process."""
+    return [measure(case, steps, seed=seed) for case in CASES]
+
+
+def side_by_side(baseline: Path, steps: int = 1500, seed: int = 0, rounds: int = 2) -> list[dict]:
+    """Each case on this code and on ``baseline`` (a checkout's folder, or a Python interpreter
+    with another ``stsf_gym`` installed), alternating ``rounds`` times so that a change of load
+    hits both; per case the best rate of each and their ratio (this code over the baseline)."""
+    rows: dict[str, dict] = {}
+    with tempfile.TemporaryDirectory() as staged:
+        other = _interpreter(Path(baseline), Path(staged))
+        for _ in range(rounds):
+            for label, command in (("this", [sys.executable]), ("baseline", other)):
+                for row in _run_script(command, steps, seed):
+                    best = rows.setdefault(row["case"], {"case": row["case"]})
+                    best[label] = max(best.get(label, 0.0), row["steps_per_s"])
+    for row in rows.values():
+        row["ratio"] = row["this"] / row["baseline"]
+    return list(rows.values())
+
+
+def _interpreter(baseline: Path, staged: Path) -> list[str]:
+    """The command that runs Python on the baseline's code: the interpreter itself, or this one
+    with the checkout's folders laid out as installed (``stsf_gym`` with ``envs``, ``agents``
+    and ``configs`` inside it) first on ``sys.path``."""
+    if baseline.is_file() and os.access(baseline, os.X_OK):
+        return [str(baseline)]
+    if not (baseline / "stsf_gym" / "__init__.py").is_file():
+        raise ValueError(
+            f"--baseline {baseline}: neither a Python interpreter nor a checkout of stsf-gym "
+            "(no stsf_gym/__init__.py in it)"
+        )
+    package = staged / "stsf_gym"
+    package.mkdir()
+    for entry in (baseline / "stsf_gym").iterdir():
+        (package / entry.name).symlink_to(entry.resolve())
+    for folder in MAPPED_FOLDERS:
+        (package / folder).symlink_to((baseline / folder).resolve())
+    return [sys.executable, "-c", f"import sys; sys.path.insert(0, {str(staged)!r}); "
+            "sys.argv = sys.argv[1:]; exec(open(sys.argv[0]).read())"]
+
+
+def _run_script(command: list[str], steps: int, seed: int) -> list[dict]:
+    """This file run as a script by ``command``: its rows."""
+    done = subprocess.run(
+        [*command, __file__, "--steps", str(steps), "--seed", str(seed)],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=tempfile.gettempdir(),  # never the checkout's folder: its stsf_gym would shadow
+    )
+    if done.returncode:
+        raise RuntimeError(f"{' '.join(command)} {__file__}: {done.stderr.strip()[-2000:]}")
+    return json.loads(done.stdout)
+
+
+def main() -> None:
+    """``python step.py [--steps N] [--seed S]``: the rows as JSON on stdout."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=1500)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--profile", choices=list(CASES))
+    args = parser.parse_args()
+    if args.profile:
+        result = profile(args.profile, args.steps, args.seed)
+    else:
+        result = measure_all(args.steps, args.seed)
+    print(json.dumps(result, indent=1))
+
+
+if __name__ == "__main__":
+    main()
