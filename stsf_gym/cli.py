@@ -417,11 +417,17 @@ def _pose_sources(text: str) -> list[str]:
 
 
 def _bench(args: argparse.Namespace) -> dict:
-    from stsf_gym.bench import run_bench
+    from stsf_gym.bench import run_bench, run_step_bench
+    from stsf_gym.bench.step import check_baseline
 
-    if args.seconds <= 0 or args.vector_steps < 1:
-        raise ConfigError("--seconds must be positive and --vector-steps at least 1")
-    summary = run_bench(args.out, args.seconds, args.vector_steps, args.seed)
+    if args.seconds <= 0 or args.vector_steps < 1 or args.steps < 1:
+        raise ConfigError("--seconds must be positive, --vector-steps and --steps at least 1")
+    if args.baseline is not None:
+        check_baseline(args.baseline)
+    if args.step_only:
+        summary = run_step_bench(args.out, args.steps, args.seed, args.baseline)
+    else:
+        summary = run_bench(args.out, args.seconds, args.vector_steps, args.seed, args.baseline)
     _print_markdown(args, args.out / "bench.md")
     return summary
 
@@ -602,6 +608,18 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=1000,
         help="vector-env steps per worker count (AsyncVectorEnv, SubprocVecEnv; rendered, fast)",
+    )
+    bench.add_argument(
+        "--step-only", action="store_true", help="only the step section (env steps/s)"
+    )
+    bench.add_argument(
+        "--steps", type=int, default=1500, help="timed env steps per step case (1500)"
+    )
+    bench.add_argument(
+        "--baseline",
+        type=Path,
+        help="another checkout's folder or a Python with another stsf-gym installed: the step "
+        "section runs on it too, side by side, with the ratio",
     )
     bench.set_defaults(run=_bench)
     return parser

@@ -29,6 +29,7 @@ from tqdm import tqdm
 
 from stsf_gym.bench.recording import recording_costs
 from stsf_gym.bench.speed import CASES, FAST_CASES, render_latency, run_case, vector_scaling
+from stsf_gym.bench.step import step_section
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.recording import missing_modules
 from stsf_gym.results.provenance import provenance, reference_ms
@@ -56,9 +57,33 @@ def machine() -> dict:
     }
 
 
-def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, seed: int = 0):
+def run_step_bench(
+    out: Path, steps: int = 1500, seed: int = 0, baseline: Path | None = None
+) -> dict:
+    """The ``step`` section alone (:mod:`stsf_gym.bench.step`); writes bench.json / bench.md."""
+    load_start = os.getloadavg()
+    step = step_section(steps, seed, baseline)
+    summary = {
+        "machine": {**machine(), "load_average": [load_start, os.getloadavg()]},
+        "step": step,
+        "provenance": provenance({"steps": steps, "baseline": step["baseline"]}),
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "bench.json", summary)
+    write_atomic(out / "bench.md", to_markdown(summary))
+    return summary
+
+
+def run_bench(
+    out: Path,
+    sim_seconds: float = 60.0,
+    vector_steps: int = 1000,
+    seed: int = 0,
+    baseline: Path | None = None,
+):
     """Run every measurement; write bench.json / bench.md; return the summary."""
     load_start = os.getloadavg()
+    step = step_section(seed=seed, baseline=baseline)
     speed = []
     for name in tqdm(CASES, desc="bench cases", unit="case"):
         fast_case = name.startswith(FAST_CASES)
@@ -68,6 +93,7 @@ def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, se
     vector = vector_scaling(vector_steps, seed)
     summary = {
         "machine": {**machine(), "load_average": [load_start, os.getloadavg()]},
+        "step": step,
         "speed": speed,
         "render": renders,
         "vector": vector,
@@ -75,7 +101,9 @@ def run_bench(out: Path, sim_seconds: float = 60.0, vector_steps: int = 1000, se
     if not missing_modules():  # the record extra: a core install measures no recording
         summary["recording"] = recording_costs(seed)
     summary["targets"] = targets(summary)
-    summary["provenance"] = provenance({"sim_seconds": sim_seconds, "vector_steps": vector_steps})
+    summary["provenance"] = provenance(
+        {"sim_seconds": sim_seconds, "vector_steps": vector_steps, "baseline": step["baseline"]}
+    )
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "bench.json", summary)
     write_atomic(out / "bench.md", to_markdown(summary))
@@ -270,9 +298,26 @@ def _load_text(m: dict) -> str:
     return f"Load average (1 / 5 / 15 min) at the start {start}, at the end {end}."
 
 
+def step_markdown(step: dict) -> str:
+    """The ``step`` section as Markdown: steps/s per case, beside the baseline's if run."""
+    against = f" against {step['baseline']}, alternating" if step["baseline"] else ""
+    return (
+        f"## Env steps per second (suite corridor world, {step['steps']} steps a case, best "
+        f"of {step['rounds']} fresh processes{against})\n\nReference workload "
+        f"{step['reference_ms']:.1f} ms.\n\n" + markdown_table(step["rows"])
+    )
+
+
 def to_markdown(summary: dict) -> str:
     """``bench.md``: the bench summary as Markdown tables, figures beside their targets."""
     m = summary["machine"]
+    if "speed" not in summary:  # the step section alone
+        return (
+            f"# stsf-gym bench: step\n\n{m['cpu']}, {m['cores']} cores, Python {m['python']}. "
+            + _load_text(m)
+            + "\n\n"
+            + step_markdown(summary["step"])
+        )
     speed_rows = [
         {
             "case": r["case"],
@@ -332,6 +377,7 @@ def to_markdown(summary: dict) -> str:
         f"(fixed Python + numpy work, best of 3): {m['reference_ms']:.1f} ms. "
         + _load_text(m)
         + "\n",
+        step_markdown(summary["step"]),
         "## Env speed (IRL corridor, follower driving)\n\nEach speed also as a ratio to the "
         "camera-off case of this run and as simulated seconds per reference workload, both from "
         "the process's CPU time (x real time, CPU: simulated s per CPU s; the wall-time figure "

@@ -115,42 +115,69 @@ def measure_all(steps: int = 1500, seed: int = 0) -> list[dict]:
     return [measure(case, steps, seed=seed) for case in CASES]
 
 
-def side_by_side(baseline: Path, steps: int = 1500, seed: int = 0, rounds: int = 2) -> list[dict]:
-    """Each case on this code and on ``baseline`` (a checkout's folder, or a Python interpreter
-    with another ``stsf_gym`` installed), alternating ``rounds`` times so that a change of load
-    hits both; per case the best rate of each and their ratio (this code over the baseline)."""
+def step_section(
+    steps: int = 1500, seed: int = 0, baseline: Path | None = None, rounds: int = 2
+) -> dict:
+    """The bench's ``step`` section: each case's steps/s (best of ``rounds`` fresh processes)
+    on this code and, with ``baseline`` (a checkout's folder, or a Python interpreter with
+    another ``stsf_gym`` installed), on that code too, the two alternating so that a change of
+    load hits both alike; their ratio, this code over the baseline."""
+    from stsf_gym.results.provenance import reference_ms
+
+    sides = {"this": [sys.executable]}
     rows: dict[str, dict] = {}
     with tempfile.TemporaryDirectory() as staged:
-        other = _interpreter(Path(baseline), Path(staged))
+        if baseline is not None:
+            sides["baseline"] = _interpreter(Path(baseline), Path(staged))
         for _ in range(rounds):
-            for label, command in (("this", [sys.executable]), ("baseline", other)):
+            for label, command in sides.items():
                 for row in _run_script(command, steps, seed):
                     best = rows.setdefault(row["case"], {"case": row["case"]})
                     best[label] = max(best.get(label, 0.0), row["steps_per_s"])
-    for row in rows.values():
-        row["ratio"] = row["this"] / row["baseline"]
-    return list(rows.values())
+    if baseline is not None:
+        for row in rows.values():
+            row["ratio"] = row["this"] / row["baseline"]
+    return {
+        "steps": steps,
+        "rounds": rounds,
+        "baseline": None if baseline is None else str(baseline),
+        "reference_ms": reference_ms(),
+        "rows": list(rows.values()),
+    }
+
+
+def check_baseline(baseline: Path) -> None:
+    """Refuse a ``--baseline`` that is neither a Python interpreter nor a checkout."""
+    if baseline.is_file() and os.access(baseline, os.X_OK):
+        return
+    if not (baseline / "stsf_gym" / "__init__.py").is_file():
+        from stsf_gym.envs.config import ConfigError
+
+        raise ConfigError(
+            f"--baseline {baseline}: neither a Python interpreter nor a checkout of stsf-gym "
+            "(no stsf_gym/__init__.py in it)"
+        )
 
 
 def _interpreter(baseline: Path, staged: Path) -> list[str]:
     """The command that runs Python on the baseline's code: the interpreter itself, or this one
     with the checkout's folders laid out as installed (``stsf_gym`` with ``envs``, ``agents``
     and ``configs`` inside it) first on ``sys.path``."""
-    if baseline.is_file() and os.access(baseline, os.X_OK):
+    check_baseline(baseline)
+    if baseline.is_file():
         return [str(baseline)]
-    if not (baseline / "stsf_gym" / "__init__.py").is_file():
-        raise ValueError(
-            f"--baseline {baseline}: neither a Python interpreter nor a checkout of stsf-gym "
-            "(no stsf_gym/__init__.py in it)"
-        )
     package = staged / "stsf_gym"
     package.mkdir()
     for entry in (baseline / "stsf_gym").iterdir():
         (package / entry.name).symlink_to(entry.resolve())
     for folder in MAPPED_FOLDERS:
         (package / folder).symlink_to((baseline / folder).resolve())
-    return [sys.executable, "-c", f"import sys; sys.path.insert(0, {str(staged)!r}); "
-            "sys.argv = sys.argv[1:]; exec(open(sys.argv[0]).read())"]
+    return [
+        sys.executable,
+        "-c",
+        f"import sys; sys.path.insert(0, {str(staged)!r}); "
+        "sys.argv = sys.argv[1:]; exec(open(sys.argv[0]).read())",
+    ]
 
 
 def _run_script(command: list[str], steps: int, seed: int) -> list[dict]:
