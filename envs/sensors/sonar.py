@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from stsf_gym.envs.config import ConfigError, SonarConfig
+from stsf_gym.envs.sensors.plane_cast import PlaneCaster
 from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
 
@@ -39,6 +40,7 @@ class SonarRing:
             np.column_stack([np.cos(self.axes), np.sin(self.axes)]), cfg.rays_per_beam, axis=0
         )
         self._directions = np.column_stack([np.cos(ray_angles), np.sin(ray_angles)])
+        self._plane = PlaneCaster(cfg.height) if cfg.cast == "plane" else None
 
     def true_ranges(
         self, sim: Simulator, pose: np.ndarray, transducers: np.ndarray | None = None
@@ -57,14 +59,14 @@ class SonarRing:
         rotation = np.array([[c, -s], [s, c]])
         rays = self._rays(transducers)
         starts = self._origins[rays] @ rotation.T + (x, y)
-        ends = starts + self.cfg.max_range * self._directions[rays] @ rotation.T
-        z = np.full((len(starts), 1), self.cfg.height)
-        hits = sim.client.rayTestBatch(
-            np.hstack([starts, z]).tolist(), np.hstack([ends, z]).tolist()
-        )
-        fractions = np.array([hit[2] if hit[0] >= 0 else 1.0 for hit in hits])
-        normals = np.array([hit[4][:2] if hit[0] >= 0 else (0.0, 0.0) for hit in hits])
         directions = self._directions[rays] @ rotation.T
+        if self._plane is not None:
+            fractions, normals = self._plane.cast(
+                sim.scene, np.array([x, y]), starts, directions, self.cfg.max_range
+            )
+        else:
+            ends = starts + self.cfg.max_range * self._directions[rays] @ rotation.T
+            fractions, normals = _bullet_cast(sim, starts, ends, self.cfg.height)
         incidence = np.arccos(np.clip(-np.sum(normals * directions, axis=1), -1.0, 1.0))
         shape = (-1, self.cfg.rays_per_beam)
         return fractions.reshape(shape), incidence.reshape(shape)
@@ -100,3 +102,16 @@ class SonarRing:
         noisy = np.where(hit, noisy, cfg.max_range)
         noisy[rng.random(count) < cfg.dropout_prob] = cfg.max_range
         return np.clip(noisy, cfg.min_range, cfg.max_range).astype(np.float32)
+
+
+def _bullet_cast(
+    sim: Simulator, starts: np.ndarray, ends: np.ndarray, height: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Hit fraction and 2-D normal of each ray from ``starts`` to ``ends`` (N, 2) at
+    ``height``, by PyBullet's ``rayTestBatch`` (the reference the plane cast is tested
+    against)."""
+    z = np.full((len(starts), 1), height)
+    hits = sim.client.rayTestBatch(np.hstack([starts, z]).tolist(), np.hstack([ends, z]).tolist())
+    fractions = np.array([hit[2] if hit[0] >= 0 else 1.0 for hit in hits])
+    normals = np.array([hit[4][:2] if hit[0] >= 0 else (0.0, 0.0) for hit in hits])
+    return fractions, normals

@@ -1,0 +1,135 @@
+"""The sonar's rays cast in the plane of the ring, against the world's footprints there.
+
+Every collision shape of a world stands upright on the floor (walls and clutter are boxes
+turned about z, pillars are cylinders), so at the ring's height ``h`` a shape is a rectangle or
+a circle, or nothing where it does not reach ``h``. A horizontal ray meets an upright shape
+where it meets its footprint, and the face it meets is vertical, so its normal lies in the
+plane: the 2-D cast gives PyBullet's ``rayTestBatch`` hit (fraction of the ray and normal)
+exactly, up to rounding, for all the rays of a ring at once in numpy.
+
+A ray ``o + t d`` (``|d| = 1``, ``0 <= t <= L``) meets a footprint edge ``p + u e`` (``0 <= u
+<= 1``) at ``t = (p - o) x e / (d x e)``, ``u = (p - o) x d / (d x e)``, where the edge faces
+the ray (``d . n < 0``, ``n`` its outward normal); a circle of centre ``c`` and radius ``r`` at
+``t = -b - sqrt(b^2 - |o - c|^2 + r^2)``, ``b = d . (o - c)``. The nearest such ``t`` is the
+hit; its fraction ``t / L``, its normal the edge's ``n`` or ``(o + t d - c) / r``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stsf_gym.envs.rendering.scene import Box, Cylinder, Scene
+
+#: outward normals of a box's four faces in its own frame, and the corner each face starts at
+FACE_NORMALS = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+FACE_STARTS = np.array([[1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0]])
+
+
+class PlaneCaster:
+    """Ray casts at height ``height`` against a :class:`Scene`'s shown shapes; the footprints
+    are rebuilt only when the scene changes (:attr:`Scene.version`)."""
+
+    def __init__(self, height: float) -> None:
+        self.height = height
+        self._built: tuple[int, int] | None = None  # (id of the scene, its version)
+
+    def cast(
+        self,
+        scene: Scene,
+        centre: np.ndarray,
+        starts: np.ndarray,
+        directions: np.ndarray,
+        length: float,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Hit fraction of ``length`` (1: no hit) and 2-D hit normal (0 without a hit) of each
+        ray from ``starts`` (N, 2), all within ``self``'s ring of ``centre``, along unit
+        ``directions`` (N, 2)."""
+        self._footprints(scene)
+        t = np.full(len(starts), np.inf)
+        normals = np.zeros((len(starts), 2))
+        edges = self._reachable(centre, max(np.hypot(*(starts - centre).T)) + length)
+        if len(edges):
+            self._edge_hits(edges, starts, directions, t, normals)
+        if len(self._circles):
+            self._circle_hits(starts, directions, t, normals)
+        hit = t <= length
+        fractions = np.where(hit, t / length, 1.0)
+        return fractions, np.where(hit[:, None], normals, 0.0)
+
+    def _reachable(self, centre: np.ndarray, reach: float) -> np.ndarray:
+        """The edges a ray from within ``reach`` of ``centre`` can enter: those nearer than
+        ``reach`` whose outside faces ``centre`` or passes within ``reach`` of it (a wall's
+        far face is out of every ray's reach from the corridor: half the edges)."""
+        p, e, n = self._edges[:, 0:2], self._edges[:, 2:4], self._edges[:, 4:6]
+        to_centre = centre - p
+        along = np.clip(np.sum(to_centre * e, axis=1) / np.sum(e * e, axis=1), 0.0, 1.0)
+        gap = np.hypot(*(to_centre - along[:, None] * e).T)
+        return self._edges[(gap <= reach) & (np.sum(to_centre * n, axis=1) > -reach)]
+
+    def _edge_hits(
+        self, edges: np.ndarray, o: np.ndarray, d: np.ndarray, t: np.ndarray, normals: np.ndarray
+    ):
+        """The nearest edge each ray enters (``t`` and ``normals`` updated in place). With
+        ``a x b = a_x b_y - a_y b_x``: ``t = (p x e - o x e) / (d x e)`` and ``u = (p x d - o x
+        d) / (d x e)``, each term an outer product of a ray and an edge quantity."""
+        px, py, ex, ey, nx, ny = edges.T
+        (ox, oy), (dx, dy) = o.T[:, :, None], d.T[:, :, None]
+        facing = dx * nx + dy * ny < 0  # (N, S): the edge's outside is towards the ray
+        denominator = dx * ey - dy * ex
+        with np.errstate(divide="ignore", invalid="ignore"):
+            along = (px * ey - py * ex - (ox * ey - oy * ex)) / denominator
+            across = (px * dy - py * dx - (ox * dy - oy * dx)) / denominator
+        along[~(facing & (along >= 0) & (across >= 0) & (across <= 1))] = np.inf
+        nearest = np.argmin(along, axis=1)
+        best = along[np.arange(len(o)), nearest]
+        closer = best < t
+        t[closer] = best[closer]
+        normals[closer] = edges[nearest[closer], 4:6]
+
+    def _circle_hits(self, o: np.ndarray, d: np.ndarray, t: np.ndarray, normals: np.ndarray):
+        """The nearest circle each ray enters (``t`` and ``normals`` updated in place)."""
+        c, r = self._circles[:, 0:2], self._circles[:, 2]
+        oc = o[:, None, :] - c[None, :, :]
+        b = np.einsum("nk,nsk->ns", d, oc)
+        disc = b * b - np.einsum("nsk,nsk->ns", oc, oc) + r[None, :] ** 2
+        with np.errstate(invalid="ignore"):
+            along = np.where(disc >= 0, -b - np.sqrt(disc), np.inf)
+        along = np.where(along >= 0, along, np.inf)
+        nearest = np.argmin(along, axis=1)
+        best = along[np.arange(len(o)), nearest]
+        closer = best < t
+        t[closer] = best[closer]
+        point = o[closer] + best[closer, None] * d[closer]
+        normals[closer] = (point - c[nearest[closer]]) / r[nearest[closer], None]
+
+    def _footprints(self, scene: Scene) -> None:
+        """Edges (start, edge vector, outward normal) of the shown boxes and circles (centre,
+        radius) of the shown cylinders that reach the ring's height."""
+        if self._built == (id(scene), scene.version):
+            return
+        edges, circles = [np.zeros((0, 6))], []
+        for body, shape in scene.shapes.items():
+            if body in scene.hidden:
+                continue
+            if isinstance(shape, Box) and _spans(shape.centre[2], shape.half[2], self.height):
+                edges.append(_box_edges(shape))
+            elif isinstance(shape, Cylinder) and 0.0 <= self.height <= shape.height:
+                circles.append([*shape.xy, shape.radius])
+        self._edges = np.concatenate(edges)
+        self._circles = np.array(circles, dtype=float).reshape(-1, 3)
+        self._built = (id(scene), scene.version)
+
+
+def _spans(centre: float, half: float, height: float) -> bool:
+    """Whether a shape from ``centre - half`` to ``centre + half`` reaches ``height``."""
+    return centre - half <= height <= centre + half
+
+
+def _box_edges(box: Box) -> np.ndarray:
+    """The four faces of ``box``'s footprint: start corner, edge vector, outward normal."""
+    c, s = np.cos(box.yaw), np.sin(box.yaw)
+    rotation = np.array([[c, -s], [s, c]])
+    half = np.asarray(box.half[:2], dtype=float)
+    starts = (FACE_STARTS * half) @ rotation.T + box.centre[:2]
+    ends = np.roll(starts, -1, axis=0)
+    return np.hstack([starts, ends - starts, FACE_NORMALS @ rotation.T])
