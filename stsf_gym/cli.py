@@ -187,6 +187,41 @@ def _world_cmd(args: argparse.Namespace) -> dict:
     return {"path": str(path), "seed": args.seed, "grid": args.grid}
 
 
+def _expanded(names: list[str]) -> list[str]:
+    """Training folders and shipped agents (``pretrained:...``) as their models, one per seed."""
+    from stsf_gym.experiments.benchmark.trained import expand_agents
+
+    return expand_agents(names)
+
+
+def _agents(args: argparse.Namespace) -> dict | list:
+    from stsf_gym.agents import pretrained
+    from stsf_gym.io import markdown_table
+
+    if args.ship is not None:
+        if args.suite is None:
+            raise ConfigError("--ship needs --suite: the suite the runs were trained on")
+        name = pretrained.ship(args.ship, args.suite)
+        if not args.json:
+            print(f"Shipped {name}")
+        return pretrained.summary(name)
+    rows = pretrained.listing()
+    if not args.json:
+        table = [
+            {
+                "name": r["name"],
+                "algo": r["algo"],
+                "suite": r["suite"],
+                "pose source": r["pose_source"],
+                "seeds": len(r["seeds"]),
+                "val success": ", ".join(f"{v:.2f}" for v in r["val_success"].values()),
+            }
+            for r in rows
+        ]
+        print(markdown_table(table) if table else "No shipped agents.")
+    return rows
+
+
 def _check_agents(names: list[str]) -> None:
     """Make each agent once, so a missing model file or an unknown name fails before any work."""
     from stsf_gym.agents.registry import make_agent
@@ -201,7 +236,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
     _check_counts(args)
     estimators = _pose_sources(args.estimators)
     args.world = _world(args)
-    agents = _names(args.agent)
+    agents = _expanded(_names(args.agent))
     _check_agents(sorted({a.replace("{estimator}", e) for a in agents for e in estimators}))
     if len(agents) > 1 or "{estimator}" in args.agent:
         from stsf_gym.experiments.compare import compare
@@ -598,6 +633,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--grid", type=int, help="draw this many worlds from --seed on as one PNG (--out)"
     )
     world.set_defaults(run=_world_cmd, out_is_file=True)
+    shipped = commands.add_parser("agents", help="the agents shipped trained (pretrained:...)")
+    shipped.add_argument("--json", action="store_true", help="print the list as JSON on stdout")
+    shipped.add_argument(
+        "--ship", type=Path, help="a `train --seeds N` folder to ship as a pretrained agent"
+    )
+    shipped.add_argument("--suite", choices=suite_names(), help="the suite it was trained on")
+    shipped.add_argument("--verbose", action="store_true", help="show PyBullet's C banners")
+    shipped.set_defaults(run=_agents)
     bench = commands.add_parser("bench", help="the speed figures beside their targets")
     _common(bench, "out/bench")
     bench.add_argument(

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.agents import pretrained
 from stsf_gym.agents.registry import trained_on
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.benchmark.intervals import seed_iqm
@@ -25,11 +26,14 @@ SEED_FOLDERS = "seed-*"
 
 
 def expand_agents(agents: list[str]) -> list[str]:
-    """``follower`` and model files as given (resolved), training folders as their models."""
+    """``follower`` and model files as given (resolved), training folders and shipped agents
+    (``pretrained:<suite>/<algo>-<pose source>``) as their models, one per training seed."""
     expanded = []
     for agent in agents:
         path = Path(agent)
-        if path.is_dir():
+        if agent.startswith(pretrained.PREFIX):
+            expanded.extend(str(m) for m in pretrained.models(agent))
+        elif path.is_dir():
             models = sorted(path.glob(f"{SEED_FOLDERS}/model.zip")) or [path / "model.zip"]
             missing = [m for m in models if not m.is_file()]
             if missing:
@@ -55,6 +59,9 @@ def training_group(agent: str) -> str | None:
     """The training folder a model file belongs to (None for an agent by name)."""
     if not agent.endswith(".zip"):
         return None
+    shipped = pretrained.shipped_name(agent)
+    if shipped is not None:
+        return shipped
     folder = Path(agent).parent
     return str(folder.parent if folder.match(SEED_FOLDERS) else folder)
 

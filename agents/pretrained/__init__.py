@@ -1,0 +1,142 @@
+"""Agents shipped trained, with their settings and provenance (as rl-baselines3-zoo ships
+its agents): named ``pretrained:<suite>/<algo>-<pose source>`` wherever an agent is named.
+
+Each lives in ``models/<suite>/<algo>-<pose source>/``: ``seed-S.zip`` per training seed (the
+model, its settings inside it), ``seed-S.json`` (its ``train.json``: code digest, config,
+machine, validation rounds) and ``agent.json`` (the summary ``stsf-gym agents`` lists, and
+what the agent saw when it was shipped: the policy's inputs over the first
+:data:`SEEN_STEPS` decisions of a fixed test world, by seed). A change of the code that moves
+what an agent sees (its sensors, its observation, its action layout) makes it **stale**
+(:func:`stale`): it must be trained again.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from stsf_gym.envs.config import ConfigError
+from stsf_gym.io import write_json
+
+PREFIX = "pretrained:"
+MODELS = Path(__file__).parent / "models"
+SEEN_STEPS = 40  # decisions of the fixed episode whose inputs are kept (20 s at 0.5 s)
+SEEN_WORLD_SEED = 0  # the test world of that episode
+SEEN_TOLERANCE = 1e-5  # inputs within this of the shipped ones are the same
+
+
+def names() -> list[str]:
+    """Every shipped agent's name, as ``--agents`` takes it."""
+    return [PREFIX + f"{d.parent.name}/{d.name}" for d in sorted(MODELS.glob("*/*")) if d.is_dir()]
+
+
+def folder(name: str) -> Path:
+    """The folder of shipped agent ``name`` (``pretrained:<suite>/<algo>-<pose source>``)."""
+    key = name.removeprefix(PREFIX)
+    path = MODELS / key
+    if not name.startswith(PREFIX) or key.count("/") != 1 or not (path / "agent.json").is_file():
+        raise ConfigError(
+            f"no shipped agent {name!r}; shipped: {', '.join(names()) or 'none'} "
+            "(`stsf-gym agents` lists them)"
+        )
+    return path
+
+
+def models(name: str) -> list[Path]:
+    """The model file of each training seed of shipped agent ``name``."""
+    return [folder(name) / f"seed-{seed}.zip" for seed in summary(name)["seeds"]]
+
+
+def summary(name: str) -> dict:
+    """``agent.json`` of shipped agent ``name``: name, algo, suite, pose source, seeds, val
+    success per seed, provenance."""
+    return json.loads((folder(name) / "agent.json").read_text())
+
+
+def listing() -> list[dict]:
+    """Every shipped agent's summary, without the inputs it saw."""
+    return [{k: v for k, v in summary(n).items() if k != "seen"} for n in names()]
+
+
+def shipped_name(model: str | Path) -> str | None:
+    """The shipped agent a model file belongs to (None for any other file)."""
+    path = Path(model).resolve()
+    if path.parent.parent.parent != MODELS.resolve():
+        return None
+    return PREFIX + f"{path.parent.parent.name}/{path.parent.name}"
+
+
+def seen_inputs(model: Path, suite: str, pose_source: str) -> np.ndarray:
+    """The policy's inputs over the first :data:`SEEN_STEPS` decisions of ``model`` driving
+    test world :data:`SEEN_WORLD_SEED` of ``suite`` on ``pose_source``."""
+    from stsf_gym.agents.registry import SB3Agent
+    from stsf_gym.envs.suite import load_suite
+    from stsf_gym.episode_env import make_episode_env
+    from stsf_gym.yaml_layers import deep_merge
+
+    agent = SB3Agent(str(model))
+    settings = deep_merge(load_suite(suite).episode_env, agent.env_overrides())
+    env = agent.wrap(make_episode_env("generated:test", pose_source, settings))
+    try:
+        obs, _ = env.reset(seed=SEEN_WORLD_SEED)
+        inputs = []
+        for _ in range(SEEN_STEPS):
+            inputs.append(obs)
+            obs, _, terminated, truncated, _ = env.step(agent.act(obs))
+            if terminated or truncated:
+                break
+        return np.array(inputs, dtype=np.float32)
+    finally:
+        env.close()
+
+
+def stale() -> list[str]:
+    """The shipped agents whose inputs on their fixed episode differ from those recorded when
+    they were shipped: the code now shows them something else."""
+    found = []
+    for name in names():
+        record = summary(name)
+        for seed, model in zip(record["seeds"], models(name), strict=True):
+            now = seen_inputs(model, record["suite"], record["pose_source"])
+            then = np.array(record["seen"][str(seed)], dtype=np.float32)
+            if now.shape != then.shape or not np.allclose(now, then, atol=SEEN_TOLERANCE):
+                found.append(f"{name} (seed {seed})")
+    return found
+
+
+def ship(training: Path, suite: str) -> str:
+    """Copy the runs of ``training`` (``stsf-gym train --seeds N`` output: ``seed-S/``
+    folders with ``model.zip`` and ``train.json``) into the package as a shipped agent of
+    ``suite``; returns its name."""
+    runs = sorted(Path(training).glob("seed-*"), key=lambda p: int(p.name.split("-")[1]))
+    if not runs or not all((r / "model.zip").is_file() for r in runs):
+        raise ConfigError(f"{training}: no seed-S/model.zip to ship (a `train --seeds N` folder)")
+    records = [json.loads((r / "train.json").read_text()) for r in runs]
+    algo, pose_source = records[0]["algo"], records[0]["estimator"]
+    target = MODELS / suite / f"{algo}-{pose_source}"
+    target.mkdir(parents=True, exist_ok=True)
+    seen, val = {}, {}
+    for run, record in zip(runs, records, strict=True):
+        seed = record["seed"]
+        shutil.copyfile(run / "model.zip", target / f"seed-{seed}.zip")
+        write_json(target / f"seed-{seed}.json", record)
+        seen[str(seed)] = seen_inputs(target / f"seed-{seed}.zip", suite, pose_source).tolist()
+        val[str(seed)] = (record.get("demonstrations") or {}).get("val_success")
+    name = PREFIX + f"{suite}/{algo}-{pose_source}"
+    write_json(
+        target / "agent.json",
+        {
+            "name": name,
+            "algo": algo,
+            "suite": suite,
+            "pose_source": pose_source,
+            "seeds": [r["seed"] for r in records],
+            "val_success": val,
+            "provenance": {str(r["seed"]): r["made_by"] for r in records},
+            "seen": seen,
+        },
+    )
+    return name

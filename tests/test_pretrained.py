@@ -1,0 +1,78 @@
+"""Agents shipped trained: each loads and drives an episode, is listed, and is flagged stale
+when the code changes what it sees."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from stsf_gym.agents import pretrained
+from stsf_gym.agents.registry import make_agent
+from stsf_gym.envs.config import ConfigError
+from stsf_gym.episode_env import make_episode_env
+from stsf_gym.experiments.benchmark.trained import expand_agents, training_group
+from stsf_gym.yaml_layers import deep_merge
+
+SHIPPED = pretrained.names()
+
+
+def test_agents_are_shipped():
+    assert "pretrained:corridor/ppo-truth" in SHIPPED
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_each_seed_loads_and_drives_an_episode(name):
+    from stsf_gym.envs.suite import load_suite
+
+    record = pretrained.summary(name)
+    for model in pretrained.models(name):
+        agent = make_agent(str(model))
+        assert agent.trained_on()["estimator"] == record["pose_source"]
+        settings = deep_merge(load_suite(record["suite"]).episode_env, agent.env_overrides())
+        settings = deep_merge(settings, {"sim": {"max_episode_seconds": 10.0}})
+        env = agent.wrap(make_episode_env("generated:test", record["pose_source"], settings))
+        obs, _ = env.reset(seed=1)
+        agent.begin(env)
+        done, steps = False, 0
+        while not done:
+            obs, _, terminated, truncated, info = env.step(agent.act(obs))
+            done, steps = terminated or truncated, steps + 1
+        env.close()
+        assert steps >= 20 and info["distance_travelled"] > 0.5  # it drove, to the end
+
+
+def test_stsf_gym_agents_lists_them_as_json():
+    done = subprocess.run(
+        [sys.executable, "-m", "stsf_gym.cli", "agents", "--json"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    rows = json.loads(done.stdout.strip().splitlines()[-1])
+    assert [r["name"] for r in rows] == SHIPPED
+    for row in rows:
+        assert {"algo", "suite", "pose_source", "seeds", "val_success", "provenance"} <= set(row)
+        assert len(row["val_success"]) == len(row["seeds"]) >= 1
+
+
+def test_none_is_stale_and_a_change_of_what_they_see_is_flagged(monkeypatch):
+    assert pretrained.stale() == []
+    from stsf_gym.agents.observation import PolicyObservation
+
+    seen = PolicyObservation.observation
+    monkeypatch.setattr(
+        PolicyObservation, "observation", lambda self, obs: seen(self, obs) + np.float32(1e-3)
+    )
+    assert pretrained.stale() == [
+        f"{n} (seed {s})" for n in SHIPPED for s in pretrained.summary(n)["seeds"]
+    ]
+
+
+def test_a_shipped_name_expands_to_its_seeds_and_groups_under_its_name():
+    models = expand_agents(["pretrained:corridor/ppo-truth"])
+    assert len(models) == len(pretrained.summary("pretrained:corridor/ppo-truth")["seeds"])
+    assert {training_group(m) for m in models} == {"pretrained:corridor/ppo-truth"}
+    with pytest.raises(ConfigError, match="no shipped agent 'pretrained:corridor/ppo-nothing'"):
+        expand_agents(["pretrained:corridor/ppo-nothing"])
