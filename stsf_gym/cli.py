@@ -409,7 +409,7 @@ def _benchmark(args: argparse.Namespace) -> dict:
         raise ConfigError("benchmark runs a suite as written: edit or copy its configs/suites file")
     from stsf_gym.experiments.benchmark.trained import expand_agents
 
-    estimators = _pose_sources(args.estimators)
+    estimators = None if args.estimators is None else _pose_sources(args.estimators)
     agents = expand_agents(_names(args.agents))
     _check_agents(agents)
     summary = benchmark(
@@ -618,8 +618,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench_suite.add_argument(
         "--estimators",
-        default="odometry,conventional,conventional-filter,stsf,ekf",
-        help="pose sources, comma-separated",
+        help="pose sources, comma-separated: every agent drives on each (a learnt agent "
+        "trained on one, deployed on each); without it, a learnt agent drives on its own and "
+        "the follower on odometry, conventional, conventional-filter, stsf and ekf",
     )
     bench_suite.add_argument("--worlds", type=int, default=100, help="test worlds (100)")
     _backend_args(bench_suite)

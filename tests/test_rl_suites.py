@@ -103,12 +103,17 @@ def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_
         assert summary["env"]["task"]["protocol"] == "declare"  # the suite's task
         assert summary["env"]["task"]["start_along"] == 1.0  # the hyper-parameters' starts
         assert summary["env"]["sim"]["max_episode_seconds"] == 12.0  # the suite over them
-    result = benchmark(
-        tmp_path / "bench", str(short_suite), [str(out), "follower"], ["stsf"], 2, workers=1
-    )
-    agents = {(r["agent"], r["estimator"]) for r in result["rows"]}
     models = {str((out / f"seed-{s}" / "model.zip").resolve()) for s in (0, 1)}
-    assert agents == {("follower", "stsf")} | {(m, "odometry") for m in models}  # own source
+    # protocol (a): trained on odometry, deployed on every pose source named, the follower too
+    deployed = benchmark(
+        tmp_path / "deployed", str(short_suite), [str(out), "follower"], ["stsf"], 1
+    )
+    rows = {(r["agent"], r["estimator"]) for r in deployed["rows"]}
+    assert rows == {("follower", "stsf")} | {(m, "stsf") for m in models}
+    # protocol (b): no pose source named, each learnt agent drives on its own
+    result = benchmark(tmp_path / "bench", str(short_suite), [str(out)], None, 2, workers=1)
+    agents = {(r["agent"], r["estimator"]) for r in result["rows"]}
+    assert agents == {(m, "odometry") for m in models}  # own source
     (trained,) = result["trained"]
     assert trained["agent"] == str(out.resolve()) and trained["runs"] == 2
     assert trained["worlds"] == 2 and len(trained["success_per_run"]) == 2

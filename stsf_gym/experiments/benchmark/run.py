@@ -44,13 +44,14 @@ from stsf_gym.results.provenance import by_digest, provenance
 
 BENCHMARK_VERSION = 2  # bumped when a cell changes meaning, so older cell files are rerun
 WORLD = "generated:test"
-DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf", "ekf")
 
 
-def benchmark_cells(suite: Suite, agents: list[str], estimators: list[str], seeds: list[int]):
-    """One evaluate cell per agent, pose source and episode seed (a trained model on its own
-    pose source only, :mod:`~stsf_gym.experiments.benchmark.trained`); per agent seed by seed,
-    so a run cut short has every pose source on the same worlds."""
+def benchmark_cells(
+    suite: Suite, agents: list[str], estimators: list[str] | None, seeds: list[int]
+):
+    """One evaluate cell per agent, pose source and episode seed (the pose sources of
+    :func:`~stsf_gym.experiments.benchmark.trained.agent_pose_sources`); per agent seed by
+    seed, so a run cut short has every pose source on the same worlds."""
     cells = []
     for agent in expand_agents(agents):
         pose_sources = agent_pose_sources(agent, estimators)
@@ -76,7 +77,7 @@ def benchmark(
     out: str | Path,
     suite: str,
     agents: list[str] = ("follower",),
-    estimators: list[str] = DEFAULT_ESTIMATORS,
+    estimators: list[str] | None = None,
     worlds: int = 100,
     seed: int = 0,
     backend: str = "local",
@@ -91,7 +92,7 @@ def benchmark(
     if worlds < 1:
         raise ConfigError(f"--worlds must be at least 1, got {worlds}")
     seeds = list(range(seed, seed + worlds))
-    cells = benchmark_cells(loaded, list(agents), list(estimators), seeds)
+    cells = benchmark_cells(loaded, list(agents), estimators, seeds)
     if record:
         cells = [{**cell, "record": record} for cell in cells]
     forget_failures(cells, out / "cells")

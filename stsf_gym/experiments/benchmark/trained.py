@@ -25,6 +25,10 @@ from stsf_gym.experiments.benchmark.intervals import seed_iqm
 SEED_FOLDERS = "seed-*"
 
 
+#: The pose sources of agents with none of their own when ``--estimators`` is not given.
+DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf", "ekf")
+
+
 def expand_agents(agents: list[str]) -> list[str]:
     """``follower`` and model files as given (resolved), training folders and shipped agents
     (``pretrained:<suite>/<algo>-<pose source>``) as their models, one per training seed."""
@@ -49,10 +53,14 @@ def expand_agents(agents: list[str]) -> list[str]:
     return expanded
 
 
-def agent_pose_sources(agent: str, estimators: list[str]) -> list[str]:
-    """The pose sources ``agent`` drives on: a learnt one its own, others ``estimators``."""
+def agent_pose_sources(agent: str, estimators: list[str] | None) -> list[str]:
+    """The pose sources ``agent`` drives on: those of ``estimators`` when given (a learnt agent
+    trained on one, deployed on each: protocol (a)); without, a learnt agent its own (protocol
+    (b)) and any other :data:`DEFAULT_ESTIMATORS`."""
+    if estimators is not None:
+        return list(estimators)
     record = trained_on(agent)
-    return list(estimators) if record is None else [record["estimator"]]
+    return list(DEFAULT_ESTIMATORS) if record is None else [record["estimator"]]
 
 
 def training_group(agent: str) -> str | None:
