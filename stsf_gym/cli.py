@@ -99,9 +99,13 @@ def _record_args(parser: argparse.ArgumentParser) -> None:
 
 def _recording(args: argparse.Namespace, out: Path | None = None) -> dict | None:
     """The ``record`` setting of the episode runners, from ``--record``/``--record-frames``:
-    files in ``<out or --out>/recordings/``."""
+    files in ``<out or --out>/recordings/``. Without the ``record`` extra: bad input, before
+    any episode runs."""
     if args.record is None:
         return None
+    from stsf_gym.recording import require_recording
+
+    require_recording(f"--record {args.record}")
     folder = str(((out or args.out) / "recordings").absolute())
     return {"format": args.record, "frames": args.record_frames, "folder": folder}
 

@@ -1,9 +1,12 @@
 """Installable like a library: the sdist builds a wheel with every module and config inside one
-``stsf_gym`` namespace, and that wheel, installed (not editable) into a fresh virtual environment,
+``stsf_gym`` namespace, and that wheel, installed (not editable) into a fresh virtual environment
+with its core dependencies only (no extra's module importable there), runs the quick start and
 works from a folder that holds its own ``envs`` and ``agents`` packages."""
 
 from __future__ import annotations
 
+import importlib.metadata
+import importlib.util
 import json
 import subprocess
 import sys
@@ -13,6 +16,8 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Repository folder -> the import package it installs as (pyproject's package-dir).
@@ -96,10 +101,50 @@ def test_the_sdist_holds_the_repository_folders(built):
         assert f"{root}/{path}" in names, path
 
 
+#: Distributions a fresh virtual environment has without asking (pip's own).
+VENV_OWN = {"pip", "setuptools", "wheel"}
+
+
+def core_closure(wheel: Path) -> set[str]:
+    """The distributions the wheel's core needs (its requirements without an extra, and
+    theirs, as installed here), by canonical name."""
+    metadata = zipfile.ZipFile(wheel).read("stsf_gym-0.1.0.dist-info/METADATA").decode()
+    todo = [
+        line.split(":", 1)[1] for line in metadata.splitlines() if line.startswith("Requires-Dist:")
+    ]
+    needed: set[str] = set()
+    while todo:
+        requirement = Requirement(todo.pop())
+        name = canonicalize_name(requirement.name)
+        if name in needed or (
+            requirement.marker and not requirement.marker.evaluate({"extra": ""})
+        ):
+            continue
+        needed.add(name)
+        try:
+            todo += importlib.metadata.distribution(name).requires or []
+        except importlib.metadata.PackageNotFoundError:
+            continue
+    return needed
+
+
+def extras_only_modules(wheel: Path) -> list[str]:
+    """Top-level modules installed here by distributions outside the core (the extras' and the
+    test tools'): a core install would not have them."""
+    allowed = core_closure(wheel) | VENV_OWN | {"stsf-gym"}
+    return sorted(
+        module
+        for module, dists in importlib.metadata.packages_distributions().items()
+        if not any(canonicalize_name(d) in allowed for d in dists)
+    )
+
+
 @pytest.fixture(scope="module")
 def installed(built, tmp_path_factory) -> Path:
     """A fresh virtual environment with the wheel installed (no editable install, no access
-    to the checkout); the dependencies come from this test's environment, read only."""
+    to the checkout); the core dependencies come from this test's environment, read only, and
+    every module only an extra or a test tool installs is made unimportable there (a core
+    install: ``import mcap`` fails as if it were not installed)."""
     venv = tmp_path_factory.mktemp("venv")
     _run(sys.executable, "-m", "venv", venv)
     python = venv / "bin" / "python"
@@ -108,7 +153,25 @@ def installed(built, tmp_path_factory) -> Path:
     # the dependencies, appended after the venv's own site-packages (a .pth file adds a path;
     # the .pth files inside that path, such as this checkout's editable install, are not read)
     Path(site.strip(), "dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    absent = dict.fromkeys(extras_only_modules(built["wheel"]))
+    Path(site.strip(), "core_only.pth").write_text(f"import sys; sys.modules.update({absent!r})\n")
     return venv
+
+
+def test_a_core_install_runs_the_quick_start_and_names_the_missing_extra(installed, tmp_path):
+    python, cli = installed / "bin" / "python", installed / "bin" / "stsf-gym"
+    for extra_module in ("mcap", "rosbags", "rerun", "ray", "rl_zoo3"):
+        if importlib.util.find_spec(extra_module) is not None:  # installed here, hidden there
+            done = subprocess.run([python, "-c", f"import {extra_module}"], capture_output=True)
+            assert done.returncode != 0, extra_module
+    args = ["evaluate", "--estimators", "odometry,stsf,ekf", "--seeds", "1", "--workers", "1"]
+    args += ["--set", "camera.mode=fast", "--set", "sim.max_episode_seconds=3", "--json"]
+    summary = json.loads(_run(cli, *args, "--out", tmp_path / "quick", cwd=tmp_path))
+    assert [row["estimator"] for row in summary["rows"]] == ["odometry", "stsf", "ekf"]
+    done = subprocess.run(
+        [cli, *args, "--record", "mcap", "--out", tmp_path / "rec"], capture_output=True, text=True
+    )
+    assert done.returncode == 2 and "pip install 'stsf-gym[record]'" in done.stderr, done.stderr
 
 
 def test_the_installed_wheel_works_beside_a_users_own_envs_and_agents(installed, tmp_path):

@@ -18,7 +18,7 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from stsf_gym.camera_model import rot_z
-from stsf_gym.recording import cdr, topics
+from stsf_gym.recording import cdr, qos, topics
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording.records import EpisodeStart, StepRecord, nanoseconds
 from stsf_gym.recording.sensor_model_json import sensor_model_json
@@ -32,7 +32,11 @@ class McapLogWriter:
     """An MCAP file of ROS 2 messages on the log's topics (:mod:`.topics`), written atomically
     (a temporary file renamed at :meth:`close`): ``write(topic, stamp_ns, message)`` with a
     message from :mod:`.ros_messages`. What a plain script uses to write a log of its own
-    robot (``examples/own_robot_log.py``)."""
+    robot (``examples/own_robot_log.py``).
+
+    Each channel carries the QoS profile rosbag2 would have recorded (:mod:`.qos`), and messages
+    go in in time order (a stamp before the last one is refused), so the log times never
+    decrease through the file and its chunks do not overlap in time."""
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
@@ -43,6 +47,7 @@ class McapLogWriter:
         self._writer.start(profile="ros2", library="stsf-gym")
         self._channels: dict[str, int] = {}
         self._schemas: dict[str, int] = {}
+        self._last_stamp = 0
 
     def write(self, topic: str, stamp: int, message) -> None:
         """Serialize ``message`` with its topic's ROS 2 type and write it at ``stamp`` (ns)."""
@@ -50,6 +55,12 @@ class McapLogWriter:
 
     def write_cdr(self, topic: str, stamp: int, data: bytes) -> None:
         """Write a message already serialized (:mod:`.cdr`)."""
+        if stamp < self._last_stamp:
+            raise ConfigError(
+                f"{topic}: stamp {stamp} ns is before the last message written "
+                f"({self._last_stamp} ns); write a log's messages in time order"
+            )
+        self._last_stamp = stamp
         if topic not in self._channels:
             msgtype = topics.type_of(topic)
             if msgtype not in self._schemas:
@@ -58,7 +69,7 @@ class McapLogWriter:
                     msgtype, "ros2msg", definition
                 )
             self._channels[topic] = self._writer.register_channel(
-                topic, "cdr", self._schemas[msgtype]
+                topic, "cdr", self._schemas[msgtype], qos.channel_metadata(topic)
             )
         self._writer.add_message(self._channels[topic], stamp, data, stamp)
 

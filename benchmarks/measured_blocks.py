@@ -1,0 +1,201 @@
+"""Measured blocks of README.md and docs/: which quote results made by the code as it is now.
+
+A measured block lies between ``<!-- measured: NAME (begin) -->`` and
+``<!-- measured: NAME (end) -->``. A block is **tied** when its begin marker names the results
+files it quotes, ``<!-- measured: NAME (begin) results: PATH, PATH -->`` (repository paths), each
+with its ``provenance`` (``command``, ``stsf_gym.source_digest``, ``stsf_gym.commit``), and its
+text shows each file's command and code digest. A tied block is **current** when every file's
+digest is the digest of the measured code now
+(:func:`stsf_gym.results.provenance.source_digest`: every module and config of stsf_gym/,
+envs/, agents/ and configs/), else **stale**: its results were made by code that has changed
+since. A block that names no results is **not tied**; it must be listed in
+``benchmarks/measured_not_tied.yaml`` with the reason, so the list stays visible.
+
+Rules (``tests/test_measured_blocks.py`` runs them in ``make test``): markers pair up and names
+are unique; a tied block's files exist, carry provenance and are shown in its text; an untied
+block is listed with a reason, and the list names no other block; README.md's blocks are
+current (the README quotes no stale figure).
+
+Usage::
+
+    python benchmarks/measured_blocks.py [--json]    # every block; exit 1 when a rule is broken
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import yaml
+
+from stsf_gym.results.provenance import source_digest
+
+ROOT = Path(__file__).resolve().parent.parent
+NOT_TIED = Path("benchmarks/measured_not_tied.yaml")  # relative to the repository
+#: The Markdown files searched: the README and every page of the site.
+PAGES = ("README.md", "docs")
+#: The folders whose code the digest covers (pyproject's package-dir).
+CODE = ("stsf_gym", "envs", "agents", "configs")
+MARKER = re.compile(
+    r"<!-- measured: (?P<name>.+?) \((?P<edge>begin|end)\)(?: results: (?P<results>[^>]*?))? -->"
+)
+
+
+@dataclass
+class Block:
+    """One measured block: where it is, what it quotes, and what the check found."""
+
+    name: str
+    page: str
+    line: int
+    results: list[str]
+    text: str = field(repr=False)
+    state: str = "not tied"  # "current", "stale" or "not tied"
+    notes: list[str] = field(default_factory=list)
+
+
+def markdown_files(root: Path = ROOT) -> list[Path]:
+    """README.md and every Markdown page under docs/."""
+    files = []
+    for entry in PAGES:
+        path = root / entry
+        files += sorted(path.rglob("*.md")) if path.is_dir() else [path]
+    return files
+
+
+def find_blocks(root: Path = ROOT) -> tuple[list[Block], list[str]]:
+    """Every measured block of the pages, and the marker problems found on the way."""
+    blocks, problems = [], []
+    for path in markdown_files(root):
+        page = path.relative_to(root).as_posix()
+        text = path.read_text()
+        open_block: tuple[re.Match, int] | None = None
+        for match in MARKER.finditer(text):
+            line = text.count("\n", 0, match.start()) + 1
+            where = f"{page}:{line}"
+            if match["edge"] == "begin":
+                if open_block is not None:
+                    problems.append(f"{where}: {match['name']!r} begins inside another block")
+                open_block = (match, line)
+                continue
+            if open_block is None or open_block[0]["name"] != match["name"]:
+                problems.append(f"{where}: end of {match['name']!r} without its begin")
+                open_block = None
+                continue
+            begin, begin_line = open_block
+            results = [p.strip() for p in (begin["results"] or "").split(",") if p.strip()]
+            body = text[begin.end() : match.start()]
+            blocks.append(Block(begin["name"], page, begin_line, results, body))
+            open_block = None
+        if open_block is not None:
+            problems.append(f"{page}:{open_block[1]}: {open_block[0]['name']!r} never ends")
+    names = [block.name for block in blocks]
+    problems += [
+        f"block name {name!r} is used twice" for name in sorted(set(names)) if names.count(name) > 1
+    ]
+    return blocks, problems
+
+
+def _git(*args: str, root: Path) -> str | None:
+    done = subprocess.run(["git", *args], cwd=root, capture_output=True, text=True)
+    return done.stdout.strip() if done.returncode == 0 else None
+
+
+def changes_since(commit: str | None, root: Path = ROOT) -> str:
+    """How the measured code has changed since ``commit``, in words."""
+    if not commit:
+        return "the run recorded no commit (its code was no git checkout)"
+    count = _git("rev-list", "--count", f"{commit}..HEAD", "--", *CODE, root=root)
+    if count is None:
+        return f"commit {commit[:10]} is not in this repository's history"
+    return f"made at commit {commit[:10]}; {count} later commits changed the code"
+
+
+def judge(block: Block, digest: str, root: Path = ROOT) -> list[str]:
+    """Set ``block.state`` and ``block.notes``; return the rules it breaks."""
+    problems = []
+    where = f"{block.page}:{block.line} {block.name!r}"
+    stale = False
+    for name in block.results:
+        path = root / name
+        if not path.is_file():
+            problems.append(f"{where}: results file {name} does not exist")
+            continue
+        made_by = json.loads(path.read_text()).get("provenance") or {}
+        code = made_by.get("stsf_gym") or {}
+        if not made_by.get("command") or not code.get("source_digest"):
+            problems.append(f"{where}: {name} carries no provenance (command, source_digest)")
+            continue
+        for shown in (made_by["command"], code["source_digest"]):
+            if shown not in block.text:
+                problems.append(f"{where}: the block does not show {name}'s {shown!r}")
+        if code["source_digest"] != digest:
+            stale = True
+            block.notes.append(
+                f"{name}: digest {code['source_digest']}, {changes_since(code.get('commit'), root)}"
+            )
+    if block.results:
+        block.state = "stale" if stale else "current"
+    return problems
+
+
+def check(root: Path = ROOT, digest: str | None = None) -> tuple[list[Block], list[str]]:
+    """Every block judged against the code's ``digest`` (default: the package's now), and the
+    problems: broken rules (see the module's docstring)."""
+    digest = digest or source_digest()
+    blocks, problems = find_blocks(root)
+    not_tied = yaml.safe_load((root / NOT_TIED).read_text()) or {}
+    for block in blocks:
+        problems += judge(block, digest, root)
+        if block.results:
+            if block.name in not_tied:
+                problems.append(f"{block.name!r} is tied but listed in {NOT_TIED.name}")
+        elif block.name in not_tied:
+            block.notes.append(str(not_tied[block.name]))
+        else:
+            problems.append(
+                f"{block.page}:{block.line} {block.name!r} names no results and "
+                f"{NOT_TIED.name} gives no reason"
+            )
+        if block.page == "README.md" and block.state != "current":
+            problems.append(f"README.md quotes {block.name!r}, which is {block.state}")
+    known = {block.name for block in blocks}
+    problems += [
+        f"{NOT_TIED.name} lists {name!r}, which is no block"
+        for name in not_tied
+        if name not in known
+    ]
+    return blocks, problems
+
+
+def listing(blocks: list[Block]) -> str:
+    """One line per block (state, name, where), its notes indented below."""
+    lines = []
+    for block in blocks:
+        lines.append(f"{block.state:9} {block.name} ({block.page}:{block.line})")
+        lines += [f"          {note}" for note in block.notes]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """List every measured block; exit 1 when a rule is broken."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print the blocks as JSON")
+    args = parser.parse_args(argv)
+    blocks, problems = check()
+    if args.json:
+        rows = [{k: v for k, v in asdict(b).items() if k != "text"} for b in blocks]
+        print(json.dumps({"blocks": rows, "problems": problems}, indent=2))
+    else:
+        print(listing(blocks))
+        print("\n".join(f"problem: {p}" for p in problems))
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
