@@ -295,6 +295,8 @@ def _reproduce(args: argparse.Namespace) -> dict:
 
 
 def _train(args: argparse.Namespace) -> dict:
+    from tqdm import tqdm
+
     from stsf_gym.agents.training.train import train
 
     if args.suite is not None and (args.world is not None or args.split is not None):
@@ -302,13 +304,17 @@ def _train(args: argparse.Namespace) -> dict:
     args.world = _world(args)
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+    campaign = args.estimators is not None  # the cross product: OUT/<pose source>/seed-<s>/
+    estimators = _pose_sources(args.estimators) if campaign else [args.estimator]
+    units = [(e, s) for e in estimators for s in range(args.seed, args.seed + args.seeds)]
     runs = []
-    for seed in range(args.seed, args.seed + args.seeds):
-        out = args.out / f"seed-{seed}" if args.seeds > 1 else args.out
+    for estimator, seed in tqdm(units, desc="campaign", unit="run", disable=not campaign):
+        out = args.out / estimator if campaign else args.out
+        out = out / f"seed-{seed}" if campaign or args.seeds > 1 else out
         try:
             summary = train(
                 args.algo,
-                args.estimator,
+                estimator,
                 out,
                 args.timesteps,
                 seed,
@@ -316,7 +322,7 @@ def _train(args: argparse.Namespace) -> dict:
                 args.config,
                 parse_overrides(args.overrides),
                 args.n_envs,
-                progress_bar=not args.json,
+                progress_bar=not (args.json or campaign),
                 suite=args.suite,
             )
         except KeyboardInterrupt:
@@ -328,8 +334,8 @@ def _train(args: argparse.Namespace) -> dict:
         runs.append(summary)
         if not args.json:
             print(
-                f"seed {seed}: {summary['timesteps']} RL timesteps, {summary['wall_time_s']:.0f} s "
-                f"of training; {_evaluation_line(summary)}. "
+                f"{estimator} seed {seed}: {summary['timesteps']} RL timesteps, "
+                f"{summary['wall_time_s']:.0f} s of training; {_evaluation_line(summary)}. "
                 f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
             )
     return runs[0] if len(runs) == 1 else {"runs": runs}
@@ -559,6 +565,11 @@ def build_parser() -> argparse.ArgumentParser:
     _common(train, "out/train", "hyper-parameter YAML (default configs/agents/ALGO.yaml)")
     train.add_argument("--algo", choices=["ppo", "sac"], default="ppo", help="algorithm (ppo)")
     train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
+    train.add_argument(
+        "--estimators",
+        help="a campaign: one run per pose source (comma-separated) and seed, each in "
+        "OUT/<pose source>/seed-<s>/; a rerun resumes where it stopped",
+    )
     train.add_argument("--timesteps", type=int, help="total env steps (hyper-parameter file)")
     train.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
     train.add_argument(

@@ -133,3 +133,29 @@ def test_recording_targets_are_judged(fast_row):
     summary["targets"] = targets(summary)
     text = to_markdown(summary)
     assert "## Recording" in text and "mcap_writer 0.30, rerun_writer 0.50" in text
+
+
+def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
+    """The step cases on this code and on a checkout (this one, laid out as installed): both
+    measured in fresh processes, the ratio of this code over it, the section in bench.md."""
+    from pathlib import Path
+
+    from stsf_gym.bench import run_step_bench
+    from stsf_gym.bench.step import CASES
+
+    checkout = Path(__file__).resolve().parents[1]
+    summary = run_step_bench(tmp_path, steps=5, baseline=checkout, rounds=1)
+    rows = summary["step"]["rows"]
+    assert [r["case"] for r in rows] == list(CASES)
+    for row in rows:
+        assert row["this"] > 0 and row["baseline"] > 0
+        assert row["ratio"] == pytest.approx(row["this"] / row["baseline"])
+    assert "Env steps per second" in (tmp_path / "bench.md").read_text()
+
+
+def test_a_baseline_that_is_no_checkout_is_refused(tmp_path):
+    from stsf_gym.bench.step import check_baseline
+    from stsf_gym.envs.config import ConfigError
+
+    with pytest.raises(ConfigError, match="neither a Python interpreter nor a checkout"):
+        check_baseline(tmp_path)

@@ -40,6 +40,9 @@ SWEEP = {
 CURVE = "accuracy-curve --agent follower --world straight_10m --seeds 1 --levels 1,4"
 TRAIN = "train --algo ppo --estimator truth --timesteps 640 --n-envs 1 --set n_steps=64"
 TRAIN += " --set batch_size=32 --set checkpoint_freq=128 --set eval_freq=100000"
+CAMPAIGN = "train --suite corridor --estimators truth,odometry --seeds 1 --n-envs 1"
+CAMPAIGN += " --set demonstrations.expert_episodes=1 --set demonstrations.rounds=0"
+CAMPAIGN += " --set n_eval_episodes=1 --set env.sim.max_episode_seconds=10"
 #: command (after ``stsf-gym``), the units it saves as they finish (glob under --out)
 COMMANDS = {
     "fig10": ([*"reproduce fig10 --seeds 2 --workers 2".split(), *FAST], "fig10/episodes/*.json"),
@@ -60,6 +63,10 @@ COMMANDS = {
     "train": (
         [*TRAIN.split(), "--set", "env.sim.max_episode_seconds=3"],
         "checkpoints/model_*_steps.zip",
+    ),
+    "campaign": (  # two runs of the learner, tiny: one expert leg, no DAgger round, 1 val route
+        [*CAMPAIGN.split(), "--set", "train_env.sim.max_episode_seconds=8"],
+        "*/seed-0/train.json",
     ),
 }
 

@@ -19,6 +19,7 @@ file carry the run's provenance.
 from __future__ import annotations
 
 import io
+import json
 import os
 import re
 import signal
@@ -288,6 +289,17 @@ def evaluation_world(world: str) -> str:
     return generated_label("val") if parse_world(world) is not None else world
 
 
+def _finished(out: Path, made_by: dict, total: int) -> dict | None:
+    """The summary of a run in ``out`` that the same code and settings finished (its model
+    saved, ``total`` timesteps reached), else None."""
+    path = out / "train.json"
+    if not (path.is_file() and (out / "model.zip").is_file()):
+        return None
+    summary = json.loads(path.read_text())
+    done = summary.get("made_by") == made_by and summary.get("timesteps", -1) >= total
+    return summary if done else None
+
+
 def train(
     algo: str,
     estimator: str,
@@ -363,6 +375,9 @@ def train(
         "made_by": fingerprint(resolved),
         "provenance": provenance(resolved, [seed]),
     }
+    finished = _finished(out, meta["made_by"], total)
+    if finished is not None:  # a campaign's rerun: this run is done, its files stay untouched
+        return finished
     cls = algorithm_class(algo)
     train_spec = {**spec, "env": train_settings}
     train_env = make_vec_env(n_envs, out, "train", **train_spec)

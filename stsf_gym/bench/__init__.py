@@ -58,11 +58,11 @@ def machine() -> dict:
 
 
 def run_step_bench(
-    out: Path, steps: int = 1500, seed: int = 0, baseline: Path | None = None
+    out: Path, steps: int = 1500, seed: int = 0, baseline: Path | None = None, rounds: int = 2
 ) -> dict:
     """The ``step`` section alone (:mod:`stsf_gym.bench.step`); writes bench.json / bench.md."""
     load_start = os.getloadavg()
-    step = step_section(steps, seed, baseline)
+    step = step_section(steps, seed, baseline, rounds)
     summary = {
         "machine": {**machine(), "load_average": [load_start, os.getloadavg()]},
         "step": step,
@@ -377,7 +377,7 @@ def to_markdown(summary: dict) -> str:
         f"(fixed Python + numpy work, best of 3): {m['reference_ms']:.1f} ms. "
         + _load_text(m)
         + "\n",
-        step_markdown(summary["step"]),
+        step_markdown(summary["step"]) if "step" in summary else "",
         "## Env speed (IRL corridor, follower driving)\n\nEach speed also as a ratio to the "
         "camera-off case of this run and as simulated seconds per reference workload, both from "
         "the process's CPU time (x real time, CPU: simulated s per CPU s; the wall-time figure "
