@@ -29,6 +29,7 @@ TIMING = {
     "steps_per_second",
     "figures",
     "figure",
+    "machine",  # the reference workload and load average, read at each run's start
 }
 SWEEP = {
     "base": {
