@@ -19,33 +19,22 @@ import argparse
 import json
 from pathlib import Path
 
-from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
-from stsf_gym.experiments.benchmark.trained import training_groups
+from stsf_gym.experiments.benchmark.trained import aggregate_runs
 
 
 def aggregate(results: dict) -> list[dict]:
-    """One entry per training folder and pose source (see the module's docstring)."""
-    rows = {(r["agent"], r["estimator"]): r for r in results["rows"]}
-    out = []
-    for (group, estimator), runs in training_groups(rows).items():
-        follower = rows.get(("follower", estimator))
-        entry = {"agent": group, "estimator": estimator, "runs": len(runs)}
-        for key in ("success_rate", "spl"):
-            interval = seed_iqm([rows[run, estimator][key]["values"] for run in runs])
-            entry[key] = {k: interval[k] for k in ("estimate", "low", "high", "per_run")}
-        if follower is not None:
-            rate = follower["success_rate"]["mean"]
-            entry["follower_success_rate"] = rate
-            entry["ratio_to_follower"] = entry["success_rate"]["estimate"] / rate if rate else None
-            entry["paired_vs_follower"] = [
-                newcombe_paired(
-                    rows[run, estimator]["success_rate"]["values"],
-                    follower["success_rate"]["values"],
-                )
-                for run in runs
-            ]
-        out.append(entry)
-    return out
+    """The benchmark's own aggregation (:func:`aggregate_runs`) over the per-episode values of
+    ``results``' rows: one entry per training folder and pose source."""
+    scores = {
+        (r["agent"], r["estimator"]): {
+            seed: {"success": success, "spl": spl}
+            for seed, success, spl in zip(
+                r["seeds"], r["success_rate"]["values"], r["spl"]["values"], strict=True
+            )
+        }
+        for r in results["rows"]
+    }
+    return aggregate_runs(scores)
 
 
 def main() -> None:
@@ -58,11 +47,11 @@ def main() -> None:
         print(json.dumps(entries, indent=1))
         return
     for e in entries:
-        s = e["success_rate"]
+        low, high = e["success_iqm_ci95"]
         print(
             f"{e['agent']} on {e['estimator']}: success IQM over {e['runs']} seeds "
-            f"{s['estimate']:.3f} [{s['low']:.3f}, {s['high']:.3f}], per seed "
-            f"{', '.join(f'{v:.2f}' for v in s['per_run'])}; SPL IQM {e['spl']['estimate']:.3f}"
+            f"{e['success_iqm']:.3f} [{low:.3f}, {high:.3f}], per seed "
+            f"{', '.join(f'{v:.2f}' for v in e['success_per_run'])}; SPL IQM {e['spl_iqm']:.3f}"
         )
         if "ratio_to_follower" in e:
             print(

@@ -110,6 +110,9 @@ def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_
     )
     rows = {(r["agent"], r["estimator"]) for r in deployed["rows"]}
     assert rows == {("follower", "stsf")} | {(m, "stsf") for m in models}
+    (against,) = deployed["trained"]  # each run paired with the follower on the same world
+    assert [p["pairs"] for p in against["paired_vs_follower"]] == [1, 1]
+    assert against["follower_success_rate"] in (0.0, 1.0)
     # protocol (b): no pose source named, each learnt agent drives on its own
     result = benchmark(tmp_path / "bench", str(short_suite), [str(out)], None, 2, workers=1)
     agents = {(r["agent"], r["estimator"]) for r in result["rows"]}
@@ -123,3 +126,26 @@ def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_
         "Trained agents over their training seeds"
         in (tmp_path / "bench" / "leaderboard.md").read_text()
     )
+
+
+def test_seed_aggregate_recomputes_a_committed_benchmark():
+    """``benchmarks/seed_aggregate.py`` on the learner's committed results: the benchmark's own
+    IQM, and each seed paired with the follower on all 100 worlds."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    results = root / "benchmarks/results/learner-corridor/benchmark-truth-results.json"
+    done = subprocess.run(
+        [sys.executable, str(root / "benchmarks/seed_aggregate.py"), str(results), "--json"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    (entry,) = json.loads(done.stdout)
+    (saved,) = json.loads(results.read_text())["trained"]
+    assert entry["success_iqm"] == pytest.approx(saved["success_iqm"])
+    assert entry["success_per_run"] == pytest.approx(saved["success_per_run"])
+    assert [p["pairs"] for p in entry["paired_vs_follower"]] == [100, 100, 100]
+    assert entry["follower_success_rate"] == 1.0

@@ -17,10 +17,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from stsf_gym.agents import pretrained
-from stsf_gym.agents.registry import trained_on
+from stsf_gym.agents.registry import FOLLOWER, trained_on
 from stsf_gym.envs.config import ConfigError
-from stsf_gym.experiments.benchmark.intervals import seed_iqm
+from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
 
 SEED_FOLDERS = "seed-*"
 
@@ -87,7 +89,10 @@ def training_groups(rows) -> dict[tuple[str, str], list[str]]:
 
 def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
     """Per training folder and pose source: IQM of success and SPL over its models' episodes
-    on the test worlds every model finished, with two-level bootstrap intervals."""
+    on the test worlds every model finished, with two-level bootstrap intervals; where the
+    follower drove the same pose source, each model's success paired with the follower's on
+    the worlds both finished (Newcombe's interval) and the IQM's ratio to the follower's
+    rate."""
     aggregates = []
     for (group, estimator), runs in training_groups(scores).items():
         worlds = sorted(set.intersection(*(set(scores[run, estimator]) for run in runs)))
@@ -100,5 +105,27 @@ def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]
             row[f"{key}_iqm"] = interval["estimate"]
             row[f"{key}_iqm_ci95"] = [interval["low"], interval["high"]]
             row[f"{key}_per_run"] = interval["per_run"]
+        follower = scores.get((FOLLOWER, estimator))
+        if follower:
+            row |= _against_follower(follower, [scores[run, estimator] for run in runs], row)
         aggregates.append(row)
     return aggregates
+
+
+def _against_follower(follower: dict[int, dict], runs: list[dict[int, dict]], row: dict) -> dict:
+    """Each run's success paired with the follower's, and the IQM's ratio to its rate."""
+    paired = []
+    for run in runs:
+        worlds = sorted(set(run) & set(follower))
+        paired.append(
+            newcombe_paired(
+                [bool(run[w]["success"]) for w in worlds],
+                [bool(follower[w]["success"]) for w in worlds],
+            )
+        )
+    rate = float(np.mean([bool(v["success"]) for v in follower.values()]))
+    return {
+        "follower_success_rate": rate,
+        "ratio_to_follower": row["success_iqm"] / rate if rate else None,
+        "paired_vs_follower": paired,
+    }
