@@ -372,7 +372,7 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.curve.run import accuracy_curve
 
     _check_counts(args)
-    agents = _names(args.agent)
+    agents = _expanded(_names(args.agent))
     estimators = _pose_sources(args.estimators)
     _check_agents(agents)
     try:
@@ -528,8 +528,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument(
         "--agent",
         default="follower",
-        help="follower, or a model saved by train (DIR/model.zip); several, comma-separated, "
-        "give one comparison table; {estimator} in a path is replaced by each pose source",
+        help="follower, a model saved by train (DIR/model.zip), a train --seeds folder or a "
+        "shipped agent (pretrained:SUITE/ALGO-SOURCE); several, comma-separated, give one "
+        "comparison table; {estimator} in a path is replaced by each pose source",
     )
     evaluate.add_argument(
         "--estimators",
@@ -592,7 +593,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _common(curve, "out/accuracy_curve")
     curve.add_argument(
-        "--agent", default="follower", help="follower and/or saved models, comma-separated"
+        "--agent",
+        default="follower",
+        help="follower, saved models, train --seeds folders and/or shipped agents "
+        "(pretrained:SUITE/ALGO-SOURCE: one curve per training seed), comma-separated",
     )
     curve.add_argument("--world", default="irl_corridor", help="world name or YAML path")
     curve.add_argument(

@@ -89,6 +89,11 @@ def test_the_wheel_holds_one_namespace_with_every_module_and_config(built):
         for path in (ROOT / "configs").rglob("*")
         if path.suffix in (".yaml", ".py")
     }
+    expected |= {  # the shipped agents: models, their train.json, agent.json
+        f"stsf_gym/agents/{path.relative_to(ROOT / 'agents').as_posix()}"
+        for path in (ROOT / "agents" / "pretrained" / "trained-models").rglob("*")
+        if path.is_file()
+    }
     missing = expected - set(names)
     assert not missing, f"not in the wheel: {sorted(missing)[:10]}"
     assert "stsf_gym/configs/default.yaml" in names

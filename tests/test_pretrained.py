@@ -65,9 +65,7 @@ def test_none_is_stale_and_a_change_of_what_they_see_is_flagged(monkeypatch):
     monkeypatch.setattr(
         PolicyObservation, "observation", lambda self, obs: seen(self, obs) + np.float32(1e-3)
     )
-    assert pretrained.stale() == [
-        f"{n} (seed {s})" for n in SHIPPED for s in pretrained.summary(n)["seeds"]
-    ]
+    assert pretrained.moved("pretrained:corridor/ppo-truth", 0)
 
 
 def test_a_shipped_name_expands_to_its_seeds_and_groups_under_its_name():
@@ -76,3 +74,14 @@ def test_a_shipped_name_expands_to_its_seeds_and_groups_under_its_name():
     assert {training_group(m) for m in models} == {"pretrained:corridor/ppo-truth"}
     with pytest.raises(ConfigError, match="no shipped agent 'pretrained:corridor/ppo-nothing'"):
         expand_agents(["pretrained:corridor/ppo-nothing"])
+
+
+def test_the_accuracy_curve_takes_a_shipped_agent(tmp_path):
+    """``accuracy-curve --agent pretrained:...``: one curve per training seed."""
+    from stsf_gym.cli import main
+
+    argv = "accuracy-curve --agent pretrained:corridor/ppo-truth --suite corridor --seeds 1"
+    argv += " --levels 1 --workers 1 --set sim.max_episode_seconds=3"
+    assert main([*argv.split(), "--estimators", "", "--out", str(tmp_path)]) == 0
+    curves = json.loads((tmp_path / "curve.json").read_text())["curves"]
+    assert len(curves) == len(pretrained.summary("pretrained:corridor/ppo-truth")["seeds"])

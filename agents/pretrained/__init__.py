@@ -1,8 +1,8 @@
 """Agents shipped trained, with their settings and provenance (as rl-baselines3-zoo ships
 its agents): named ``pretrained:<suite>/<algo>-<pose source>`` wherever an agent is named.
 
-Each lives in ``models/<suite>/<algo>-<pose source>/``: ``seed-S.zip`` per training seed (the
-model, its settings inside it), ``seed-S.json`` (its ``train.json``: code digest, config,
+Each lives in ``trained-models/<suite>/<algo>-<pose source>/``: ``seed-S.zip`` per training
+seed (the model, its settings inside it), ``seed-S.json`` (its ``train.json``: code digest, config,
 machine, validation rounds) and ``agent.json`` (the summary ``stsf-gym agents`` lists, and
 what the agent saw when it was shipped: the policy's inputs over the first
 :data:`SEEN_STEPS` decisions of a fixed test world, by seed). A change of the code that moves
@@ -22,7 +22,7 @@ from stsf_gym.envs.config import ConfigError
 from stsf_gym.io import write_json
 
 PREFIX = "pretrained:"
-MODELS = Path(__file__).parent / "models"
+MODELS = Path(__file__).parent / "trained-models"  # not a package name: data, not code
 SEEN_STEPS = 40  # decisions of the fixed episode whose inputs are kept (20 s at 0.5 s)
 SEEN_WORLD_SEED = 0  # the test world of that episode
 SEEN_TOLERANCE = 1e-5  # inputs within this of the shipped ones are the same
@@ -94,17 +94,23 @@ def seen_inputs(model: Path, suite: str, pose_source: str) -> np.ndarray:
 
 
 def stale() -> list[str]:
-    """The shipped agents whose inputs on their fixed episode differ from those recorded when
-    they were shipped: the code now shows them something else."""
-    found = []
-    for name in names():
-        record = summary(name)
-        for seed, model in zip(record["seeds"], models(name), strict=True):
-            now = seen_inputs(model, record["suite"], record["pose_source"])
-            then = np.array(record["seen"][str(seed)], dtype=np.float32)
-            if now.shape != then.shape or not np.allclose(now, then, atol=SEEN_TOLERANCE):
-                found.append(f"{name} (seed {seed})")
-    return found
+    """The shipped agents (and seeds) that the code now shows something else (:func:`moved`)."""
+    return [
+        f"{name} (seed {seed})"
+        for name in names()
+        for seed in summary(name)["seeds"]
+        if moved(name, seed)
+    ]
+
+
+def moved(name: str, seed: int) -> bool:
+    """Whether seed ``seed`` of shipped agent ``name`` now sees other inputs on its fixed
+    episode than those recorded when it was shipped."""
+    record = summary(name)
+    model = folder(name) / f"seed-{seed}.zip"
+    now = seen_inputs(model, record["suite"], record["pose_source"])
+    then = np.array(record["seen"][str(seed)], dtype=np.float32)
+    return now.shape != then.shape or not np.allclose(now, then, atol=SEEN_TOLERANCE)
 
 
 def ship(training: Path, suite: str) -> str:
