@@ -24,11 +24,6 @@ class VelocityController:
         self.max_acceleration = (cfg.max_acceleration, cfg.max_yaw_acceleration)
         self._command = (0.0, 0.0)
 
-    @property
-    def command(self) -> np.ndarray:
-        """The (v, w) last sent to the wheels."""
-        return np.array(self._command)
-
     def reset(self) -> None:
         """At rest."""
         self._command = (0.0, 0.0)

@@ -11,9 +11,7 @@ import pytest
 from stsf_gym.agents import pretrained
 from stsf_gym.agents.registry import make_agent
 from stsf_gym.envs.config import ConfigError
-from stsf_gym.episode_env import make_episode_env
 from stsf_gym.experiments.benchmark.trained import expand_agents, training_group
-from stsf_gym.yaml_layers import deep_merge
 
 SHIPPED = pretrained.names()
 
@@ -24,15 +22,12 @@ def test_agents_are_shipped():
 
 @pytest.mark.parametrize("name", SHIPPED)
 def test_each_seed_loads_and_drives_an_episode(name):
-    from stsf_gym.envs.suite import load_suite
-
     record = pretrained.summary(name)
     for model in pretrained.models(name):
         agent = make_agent(str(model))
         assert agent.trained_on()["estimator"] == record["pose_source"]
-        settings = deep_merge(load_suite(record["suite"]).episode_env, agent.env_overrides())
-        settings = deep_merge(settings, {"sim": {"max_episode_seconds": 10.0}})
-        env = agent.wrap(make_episode_env("generated:test", record["pose_source"], settings))
+        short = {"sim": {"max_episode_seconds": 10.0}}
+        env = pretrained.suite_test_env(agent, record["suite"], record["pose_source"], short)
         obs, _ = env.reset(seed=1)
         agent.begin(env)
         done, steps = False, 0

@@ -69,17 +69,25 @@ def shipped_name(model: str | Path) -> str | None:
     return PREFIX + f"{path.parent.parent.name}/{path.parent.name}"
 
 
-def seen_inputs(model: Path, suite: str, pose_source: str) -> np.ndarray:
-    """The policy's inputs over the first :data:`SEEN_STEPS` decisions of ``model`` driving
-    test world :data:`SEEN_WORLD_SEED` of ``suite`` on ``pose_source``."""
-    from stsf_gym.agents.registry import SB3Agent
+def suite_test_env(agent, suite: str, pose_source: str, env: dict | None = None):
+    """``agent``'s policy stack over ``suite``'s test worlds on ``pose_source``, with the env
+    settings the agent needs (its STOP entry) and ``env`` over the suite's."""
     from stsf_gym.envs.suite import load_suite
     from stsf_gym.episode_env import make_episode_env
     from stsf_gym.yaml_layers import deep_merge
 
-    agent = SB3Agent(str(model))
     settings = deep_merge(load_suite(suite).episode_env, agent.env_overrides())
-    env = agent.wrap(make_episode_env("generated:test", pose_source, settings))
+    settings = deep_merge(settings, env or {})
+    return agent.wrap(make_episode_env("generated:test", pose_source, settings))
+
+
+def seen_inputs(model: Path, suite: str, pose_source: str) -> np.ndarray:
+    """The policy's inputs over the first :data:`SEEN_STEPS` decisions of ``model`` driving
+    test world :data:`SEEN_WORLD_SEED` of ``suite`` on ``pose_source``."""
+    from stsf_gym.agents.registry import SB3Agent
+
+    agent = SB3Agent(str(model))
+    env = suite_test_env(agent, suite, pose_source)
     try:
         obs, _ = env.reset(seed=SEEN_WORLD_SEED)
         inputs = []
