@@ -157,7 +157,7 @@ class PathFollower:
                 self._declared = True
                 return np.zeros(2, np.float32)
             ahead = min(ahead, goal)
-            speed = float(np.clip(arrival.approach_gain * left, arrival.min_speed, speed))
+            speed = min(max(arrival.approach_gain * left, arrival.min_speed), speed)  # np.clip
         target = self.path.point_at(ahead)
         dx, dy = target - (x, y)
         c, s = math.cos(yaw), math.sin(yaw)
@@ -168,7 +168,7 @@ class PathFollower:
         else:
             curvature = 2 * y_r / max(x_r * x_r + y_r * y_r, 1e-9)
             v = speed
-            w = float(np.clip(v * curvature, -self.cfg.max_yaw_rate, self.cfg.max_yaw_rate))
+            w = min(max(v * curvature, -self.cfg.max_yaw_rate), self.cfg.max_yaw_rate)
         if sonar is not None and self.avoidance is not None:
             v, w = self.avoidance.adjust(sonar, bearing, v, w, self.cfg.max_yaw_rate)
         return np.clip(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)

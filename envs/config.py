@@ -294,7 +294,7 @@ class SonarConfig:
     firing_order: tuple[int, ...]  # transducers in firing order; empty: all fire at each step end
     firing_interval_s: NonNegative  # s between consecutive firings of the order
     beam: SonarBeamConfig
-    cast: Literal["bullet", "plane"] = "bullet"  # rays through PyBullet, or in the ring's plane
+    cast: Literal["bullet", "plane"] = "plane"  # rays in the ring's plane, or through PyBullet
 
     def __post_init__(self) -> None:
         require(

@@ -18,6 +18,7 @@ from stsf_gym.envs.corridor_env import CorridorEnv
 from stsf_gym.envs.random_streams import RandomStreams
 from stsf_gym.envs.worlds.generator import generate_world, world_tree
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
+from stsf_gym.yaml_layers import merge_settings
 
 GENERATED = "generated"  # the world name of generated worlds; ``generated:<split>`` labels
 
@@ -52,6 +53,13 @@ def make_world_env(world, **kwargs: Any) -> CorridorEnv:
     if split is not None:
         return GeneratedCorridorEnv(split=split, **kwargs)
     return CorridorEnv(world=world, **kwargs)
+
+
+def make_suite_env(env: dict, **overrides: Any) -> GeneratedCorridorEnv:
+    """A suite's world env (``stsf_gym/Suite-<Name>-v0``): the suite's settings ``env`` (its
+    ``generator`` and env sections) with ``overrides`` over them section by section
+    (:func:`~stsf_gym.yaml_layers.merge_settings`)."""
+    return GeneratedCorridorEnv(**merge_settings(env, overrides))
 
 
 def episode_world(world, seed: int, env: dict | None = None) -> WorldConfig:

@@ -3,6 +3,7 @@ and the two success protocols (``task.protocol``: ``reach``, the paper's, or ``d
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,18 +23,35 @@ class Polyline:
         if np.any(self.lengths <= 0):
             raise ValueError(f"path has repeated points: {points!r}")
         self.offsets = np.concatenate([[0.0], np.cumsum(self.lengths)])
+        self._segments = [  # start, vector, length, its square, arc length at the start
+            (tuple(start), tuple(vector), length, length * length, offset)
+            for start, vector, length, offset in zip(
+                self.points[:-1].tolist(),
+                self.segments.tolist(),
+                self.lengths.tolist(),
+                self.offsets[:-1].tolist(),
+                strict=True,
+            )
+        ]
 
     @property
     def length(self) -> float:
         return float(self.offsets[-1])
 
     def project(self, xy: np.ndarray) -> float:
-        """Arc length (m) of the path point nearest ``xy``."""
-        rel = np.asarray(xy, dtype=float)[:2] - self.points[:-1]
-        t = np.clip(np.einsum("ij,ij->i", rel, self.segments) / self.lengths**2, 0.0, 1.0)
-        distances = np.linalg.norm(rel - t[:, None] * self.segments, axis=1)
-        i = int(np.argmin(distances))
-        return float(self.offsets[i] + t[i] * self.lengths[i])
+        """Arc length (m) of the path point nearest ``xy``. Plain floats: a path has a few
+        segments, fewer than numpy's call overhead pays for (the same arithmetic, the same
+        result to the last bit)."""
+        x, y = float(xy[0]), float(xy[1])
+        best, arc = math.inf, 0.0
+        for (px, py), (sx, sy), length, squared, offset in self._segments:
+            rx, ry = x - px, y - py
+            t = min(max((rx * sx + ry * sy) / squared, 0.0), 1.0)
+            dx, dy = rx - t * sx, ry - t * sy
+            distance = math.sqrt(dx * dx + dy * dy)
+            if not distance >= best:  # the first nearest, as argmin; NaN in, NaN out
+                best, arc = distance, offset + t * length
+        return arc
 
     def point_at(self, s: float) -> np.ndarray:
         """Path point at arc length ``s`` (clamped to the ends)."""

@@ -75,8 +75,8 @@ def _register_suites() -> None:
         if env_id not in registry:
             register(
                 id=env_id,
-                entry_point="stsf_gym.envs.generated_env:GeneratedCorridorEnv",
-                kwargs={"generator": generator, **env},
+                entry_point="stsf_gym.envs.generated_env:make_suite_env",
+                kwargs={"env": {"generator": generator, **env}},
             )
         _register_estimating(env_id, "generated", {**env, "generator": generator})
 

@@ -49,7 +49,10 @@ def undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
         radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
         dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
         dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
-        x[...], y[...] = (x_d - dx) / radial, (y_d - dy) / radial
+        x_new, y_new = (x_d - dx) / radial, (y_d - dy) / radial
+        if x_new.tobytes() == x.tobytes() and y_new.tobytes() == y.tobytes():
+            break  # a fixed point to the bit: every further iteration returns it unchanged
+        x[...], y[...] = x_new, y_new
     return xy
 
 

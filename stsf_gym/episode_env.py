@@ -11,6 +11,7 @@ import gymnasium as gym
 
 from stsf_gym.estimators import estimator_class, estimator_settings
 from stsf_gym.wrappers import TRUTH, PoseEstimateWrapper, check_sensors
+from stsf_gym.yaml_layers import merge_settings
 
 #: Keyword arguments of an env that are not config values.
 NOT_CONFIG = ("render_mode", "split", "generator")
@@ -31,7 +32,8 @@ def make_episode_env(
     the pose source ``estimator`` with ``estimator_options`` over its YAML settings."""
     from stsf_gym.envs.generated_env import make_world_env
 
-    corridor = make_world_env(world, **{"camera__control": "pan", **(env or {}), **overrides})
+    settings = merge_settings({"camera__control": "pan", **(env or {})}, overrides)
+    corridor = make_world_env(world, **settings)
     try:
         return PoseEstimateWrapper(corridor, estimator, **(estimator_options or {}))
     except Exception:

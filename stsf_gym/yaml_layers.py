@@ -81,6 +81,13 @@ def overrides_to_tree(overrides: Mapping[str, Any]) -> dict:
     return tree
 
 
+def merge_settings(base: Mapping[str, Any] | None, overrides: Mapping[str, Any]) -> dict:
+    """Env keyword arguments ``overrides`` over ``base`` (each flat ``camera__width`` keys or
+    whole sections), section by section: ``sonar={"cast": "bullet"}`` given to a suite that
+    sets ``sonar.beam`` keeps the suite's beam (a plain ``{**base, **overrides}`` drops it)."""
+    return deep_merge(overrides_to_tree(dict(base or {})), overrides_to_tree(dict(overrides)))
+
+
 def world_files(world: str | Path) -> list[tuple[Path, dict]]:
     """A world by name (``configs/worlds/<name>.yaml``) or YAML path, as (file, keys) layers."""
     return extended_files(world, CONFIG_DIR / "worlds", "world")

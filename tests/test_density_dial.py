@@ -82,3 +82,16 @@ def _segment_distance(point, wall) -> float:
     a, b = np.asarray(wall[:2]), np.asarray(wall[2:])
     t = np.clip(np.dot(point - a, b - a) / np.dot(b - a, b - a), 0, 1)
     return float(np.linalg.norm(point - a - t * (b - a)))
+
+
+@pytest.mark.parametrize("env_id", ["stsf_gym/Suite-Corridor-v0", "stsf_gym/Suite-Corridor-Odometry-v0"])
+def test_a_section_given_to_a_suite_id_keeps_the_suites_other_keys(env_id):
+    """``sonar={"cast": ...}`` changes the cast and keeps the suite's beam model and camera."""
+    env = gym.make(env_id, sonar={"cast": "bullet"}, camera__width=160)
+    try:
+        config = env.unwrapped.config
+        assert config.sonar.cast == "bullet" and config.sonar.beam.enabled
+        assert config.camera.width == 160 and config.camera.mode == "fast"
+        assert config.task.protocol == "declare"
+    finally:
+        env.close()

@@ -18,7 +18,6 @@ from stsf_gym.estimators.base import MapLandmark
 
 MIN_SIDEWAYS = 0.2  # sine of the smallest pan counted when scoring a landmark
 SWITCH_FACTOR = 1.5  # how much better another landmark must score to take over
-RANGE_MARGIN = 1e-6  # m: the range pre-filter keeps this much more than the exact test
 
 
 class LandmarkPointer:
@@ -34,7 +33,7 @@ class LandmarkPointer:
         max_range: float = 8.0,
         max_view_deg: float = 65.0,
     ) -> None:
-        self.landmarks, self.walls = landmarks, np.asarray(walls, dtype=float).reshape(-1, 4)
+        self.landmarks, self.walls = landmarks, walls
         self.camera_forward, self.pan_limit = camera_forward, pan_limit
         self.min_range, self.max_range = min_range, max_range
         self.max_view = math.radians(max_view_deg)
@@ -48,65 +47,74 @@ class LandmarkPointer:
     @landmarks.setter
     def landmarks(self, landmarks: dict[int, MapLandmark]) -> None:
         self._landmarks = landmarks
+        self._ids = np.array(list(landmarks), dtype=np.int64)
         self._centres = np.array([lm.centre[:2] for lm in landmarks.values()]).reshape(-1, 2)
+        self._normals = np.array([lm.normal[:2] for lm in landmarks.values()]).reshape(-1, 2)
+
+    @property
+    def walls(self) -> np.ndarray:
+        """The map's wall segments, one ``[x1, y1, x2, y2]`` a row."""
+        return self._walls
+
+    @walls.setter
+    def walls(self, walls: np.ndarray) -> None:
+        self._walls = np.asarray(walls, dtype=float).reshape(-1, 4)
 
     def reset(self) -> None:
         """Forget the landmark the camera was kept on."""
         self.target = None
 
-    def _in_range(self, pose: np.ndarray) -> list[MapLandmark]:
-        """The landmarks near enough to qualify, in map order: a cheap pre-filter on all of them
-        at once, wider by :data:`RANGE_MARGIN` than :meth:`_pan_to`'s exact test, which then
-        decides as before (the same choice to the last bit, in a fraction of the time)."""
-        offsets = self._centres - self._camera_xy(pose)
-        squared = offsets[:, 0] ** 2 + offsets[:, 1] ** 2
-        low = max(self.min_range - RANGE_MARGIN, 0.0) ** 2
-        high = (self.max_range + RANGE_MARGIN) ** 2
-        near = (squared >= low) & (squared <= high)
-        return [lm for lm, keep in zip(self._landmarks.values(), near, strict=True) if keep]
-
     def _camera_xy(self, pose: np.ndarray) -> np.ndarray:
         return pose[:2] + self.camera_forward * np.array([math.cos(pose[2]), math.sin(pose[2])])
 
-    def _pan_to(self, landmark: MapLandmark, pose: np.ndarray) -> float | None:
-        """The pan towards ``landmark``, or ``None`` if it does not qualify from ``pose``."""
-        to_board = landmark.centre[:2] - self._camera_xy(pose)
-        distance = float(np.hypot(*to_board))
-        if not self.min_range <= distance <= self.max_range:
-            return None
-        facing = -float(landmark.normal[:2] @ to_board) / distance  # cos of the viewing angle
-        if facing < math.cos(self.max_view):
-            return None
-        pan = math.remainder(math.atan2(to_board[1], to_board[0]) - pose[2], math.tau)
-        if abs(pan) > self.pan_limit or self._blocked(self._camera_xy(pose), landmark):
-            return None
-        return pan
-
-    def _blocked(self, eye: np.ndarray, landmark: MapLandmark) -> bool:
-        """Whether a wall of the map crosses the line of sight (stopping short of the board)."""
-        target = landmark.centre[:2] + 0.2 * landmark.normal[:2]  # clear of its own wall
-        p, r = eye, target - eye
-        q, s = self.walls[:, :2], self.walls[:, 2:] - self.walls[:, :2]
-        denom = r[0] * s[:, 1] - r[1] * s[:, 0]
+    def _candidates(self, pose: np.ndarray) -> list[tuple[int, float]]:
+        """(index, pan) of every landmark that qualifies from ``pose``, in map order: range,
+        viewing angle and pan limit for all landmarks at once, then the line of sight for the
+        few left, all at once too (each number computed as the one-landmark tests did)."""
+        eye = self._camera_xy(pose)
+        to_board = self._centres - eye
+        distance = np.hypot(to_board[:, 0], to_board[:, 1])
+        facing = -(self._normals[:, 0] * to_board[:, 0] + self._normals[:, 1] * to_board[:, 1])
+        near = (distance >= self.min_range) & (distance <= self.max_range)
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = ((q[:, 0] - p[0]) * s[:, 1] - (q[:, 1] - p[1]) * s[:, 0]) / denom
-            u = ((q[:, 0] - p[0]) * r[1] - (q[:, 1] - p[1]) * r[0]) / denom
-        return bool(np.any((np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)))
+            near &= facing / distance >= math.cos(self.max_view)
+        candidates = []
+        for index in np.flatnonzero(near):
+            pan = math.remainder(
+                math.atan2(to_board[index, 1], to_board[index, 0]) - pose[2], math.tau
+            )
+            if abs(pan) <= self.pan_limit:
+                candidates.append((int(index), pan))
+        if not candidates:
+            return candidates
+        blocked = self._blocked(eye, np.array([index for index, _ in candidates]))
+        return [pair for pair, hidden in zip(candidates, blocked, strict=True) if not hidden]
+
+    def _blocked(self, eye: np.ndarray, indices: np.ndarray) -> np.ndarray:
+        """Whether a wall of the map crosses the line of sight from ``eye`` to each landmark of
+        ``indices`` (stopping short of the board): a segment intersection per (landmark,
+        wall)."""
+        target = self._centres[indices] + 0.2 * self._normals[indices]  # clear of its own wall
+        r = (target - eye)[:, None, :]
+        q, s = self._walls[None, :, :2], self._walls[None, :, 2:] - self._walls[None, :, :2]
+        denom = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = ((q[..., 0] - eye[0]) * s[..., 1] - (q[..., 1] - eye[1]) * s[..., 0]) / denom
+            u = ((q[..., 0] - eye[0]) * r[..., 1] - (q[..., 1] - eye[1]) * r[..., 0]) / denom
+        crossing = (np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
+        return np.any(crossing, axis=1)
 
     def pan(self, pose: np.ndarray) -> float:
         """Pan towards the best-scoring landmark (0 if none qualifies). The current target
         keeps an advantage of ``SWITCH_FACTOR`` so the choice does not flicker."""
         best = None
-        for landmark in self._in_range(pose):
-            pan = self._pan_to(landmark, pose)
-            if pan is None:
-                continue
+        for index, pan in self._candidates(pose):
             # motion stereo needs parallax: favour landmarks off the direction of travel
-            distance = float(np.hypot(*(landmark.centre[:2] - pose[:2])))
+            distance = float(np.hypot(*(self._centres[index] - pose[:2])))
             score = distance / max(abs(math.sin(pan)), MIN_SIDEWAYS)
-            if landmark.id == self.target:
+            if self._ids[index] == self.target:
                 score /= SWITCH_FACTOR
             if best is None or score < best[0]:
-                best = (score, landmark.id, pan)
+                best = (score, int(self._ids[index]), pan)
         self.target = None if best is None else best[1]
         return 0.0 if best is None else best[2]
