@@ -84,7 +84,9 @@ def _segment_distance(point, wall) -> float:
     return float(np.linalg.norm(point - a - t * (b - a)))
 
 
-@pytest.mark.parametrize("env_id", ["stsf_gym/Suite-Corridor-v0", "stsf_gym/Suite-Corridor-Odometry-v0"])
+@pytest.mark.parametrize(
+    "env_id", ["stsf_gym/Suite-Corridor-v0", "stsf_gym/Suite-Corridor-Odometry-v0"]
+)
 def test_a_section_given_to_a_suite_id_keeps_the_suites_other_keys(env_id):
     """``sonar={"cast": ...}`` changes the cast and keeps the suite's beam model and camera."""
     env = gym.make(env_id, sonar={"cast": "bullet"}, camera__width=160)
