@@ -28,7 +28,6 @@ with quiet_c_output():  # PyBullet's banners: envs/quiet.py
     from pybullet_utils.bullet_client import BulletClient
 
 
-
 class BoundClient(BulletClient):
     """A ``BulletClient`` that binds each PyBullet function to its server once: the parent's
     ``__getattr__`` builds a new ``functools.partial`` on every access (after an ``inspect``
