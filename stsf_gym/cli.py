@@ -295,8 +295,6 @@ def _reproduce(args: argparse.Namespace) -> dict:
 
 
 def _train(args: argparse.Namespace) -> dict:
-    from tqdm import tqdm
-
     from stsf_gym.agents.training.train import train
 
     if args.suite is not None and (args.world is not None or args.split is not None):
@@ -304,26 +302,26 @@ def _train(args: argparse.Namespace) -> dict:
     args.world = _world(args)
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
-    campaign = args.estimators is not None  # the cross product: OUT/<pose source>/seed-<s>/
-    estimators = _pose_sources(args.estimators) if campaign else [args.estimator]
-    units = [(e, s) for e in estimators for s in range(args.seed, args.seed + args.seeds)]
+    shared = {
+        "algo": args.algo,
+        "timesteps": args.timesteps,
+        "world": args.world,
+        "config": args.config,
+        "overrides": parse_overrides(args.overrides),
+        "n_envs": args.n_envs,
+        "suite": args.suite,
+    }
+    seeds = range(args.seed, args.seed + args.seeds)
+    if args.estimators is not None:  # the cross product: OUT/<pose source>/seed-<s>/
+        return _campaign(args, shared, seeds)
+    if args.backend != "local" or args.address is not None:
+        raise ConfigError("--backend and --address are for a campaign (--estimators)")
     runs = []
-    for estimator, seed in tqdm(units, desc="campaign", unit="run", disable=not campaign):
-        out = args.out / estimator if campaign else args.out
-        out = out / f"seed-{seed}" if campaign or args.seeds > 1 else out
+    for seed in seeds:
+        out = args.out / f"seed-{seed}" if args.seeds > 1 else args.out
         try:
             summary = train(
-                args.algo,
-                estimator,
-                out,
-                args.timesteps,
-                seed,
-                args.world,
-                args.config,
-                parse_overrides(args.overrides),
-                args.n_envs,
-                progress_bar=not (args.json or campaign),
-                suite=args.suite,
+                **shared, estimator=args.estimator, out=out, seed=seed, progress_bar=not args.json
             )
         except KeyboardInterrupt:
             print(
@@ -333,12 +331,44 @@ def _train(args: argparse.Namespace) -> dict:
             raise SystemExit(130) from None
         runs.append(summary)
         if not args.json:
-            print(
-                f"{estimator} seed {seed}: {summary['timesteps']} RL timesteps, "
-                f"{summary['wall_time_s']:.0f} s of training; {_evaluation_line(summary)}. "
-                f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
-            )
+            print(_run_line(args.estimator, seed, summary, out))
     return runs[0] if len(runs) == 1 else {"runs": runs}
+
+
+def _campaign(args: argparse.Namespace, shared: dict, seeds: range) -> dict:
+    """``train --estimators``: every (pose source, seed) run, skipped when finished, on the
+    backend asked for (:mod:`stsf_gym.experiments.campaign`)."""
+    from tqdm import tqdm
+
+    from stsf_gym.experiments.campaign import campaign_jobs, run_campaign
+
+    if args.workers < 1:
+        raise ConfigError(f"--workers must be at least 1, got {args.workers}")
+    jobs = campaign_jobs(shared, args.out, _pose_sources(args.estimators), seeds)
+    bar = tqdm(total=len(jobs), desc="campaign", unit="run")
+
+    def done(job: dict, summary: dict) -> None:
+        bar.update()
+        if not args.json:
+            bar.write(_run_line(job["estimator"], job["seed"], summary, job["out"]))
+
+    try:
+        runs = run_campaign(jobs, args.backend, args.workers, args.address, done)
+    except KeyboardInterrupt:
+        print(f"interrupted: rerun the same command to resume ({args.out})", file=sys.stderr)
+        raise SystemExit(130) from None
+    finally:
+        bar.close()
+    return {"runs": runs}
+
+
+def _run_line(estimator: str, seed: int, summary: dict, out: Path) -> str:
+    """A finished training run in one line."""
+    return (
+        f"{estimator} seed {seed}: {summary['timesteps']} RL timesteps, "
+        f"{summary['wall_time_s']:.0f} s of training; {_evaluation_line(summary)}. "
+        f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
+    )
 
 
 def _evaluation_line(summary: dict) -> str:
@@ -477,7 +507,9 @@ def _bench(args: argparse.Namespace) -> dict:
     return summary
 
 
-def _backend_args(parser: argparse.ArgumentParser) -> None:
+def _backend_args(
+    parser: argparse.ArgumentParser, workers_help: str = "processes or local Ray CPUs (2)"
+) -> None:
     """Where cells run: ``--backend``, ``--address``, ``--workers``."""
     parser.add_argument(
         "--backend",
@@ -486,7 +518,7 @@ def _backend_args(parser: argparse.ArgumentParser) -> None:
         help="where cells run: local processes or Ray tasks (local)",
     )
     parser.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
-    parser.add_argument("--workers", type=int, default=2, help="processes or local Ray CPUs (2)")
+    parser.add_argument("--workers", type=int, default=2, help=workers_help)
 
 
 def _world_args(parser: argparse.ArgumentParser) -> None:
@@ -577,6 +609,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--seeds", type=int, default=1, help="training seeds SEED.. (1); each in OUT/seed-<s>/"
     )
     _world_args(train)
+    _backend_args(train, "a campaign's runs at once on a local Ray (2; locally one at a time)")
     train.add_argument(
         "--suite",
         choices=suite_names(),

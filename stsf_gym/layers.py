@@ -77,6 +77,7 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
         "stsf_gym.estimators",
         "stsf_gym.envs",
         *ENV_FOLDERS,
+        "stsf_gym.yaml_layers",
     ),
     "stsf_gym.wrappers": ESTIMATION,
     "stsf_gym": ("stsf_gym.yaml_layers",),  # the __init__: registration (reads suite files)

@@ -104,6 +104,8 @@ def run_cli(monkeypatch, capsys):
         (["train", "--suite", "sparse", "--world", "straight_10m"], "drop --world/--split"),
         (["train", "--suite", "sparse", "--world", "irl_corridor"], "drop --world/--split"),
         (["train", "--world", "generated", "--split", "dev"], "split must be one of"),
+        (["train", "--backend", "ray"], "--backend and --address are for a campaign"),
+        (["train", "--estimators", "truth", "--workers", "0"], "--workers must be at least 1"),
         (["benchmark", "--suite", "sparse", "--agents", "no/such/folder"], "no/such/folder"),
         (
             ["train", "--suite", "corridor", "--set", "env.task.start_lateral=5"],

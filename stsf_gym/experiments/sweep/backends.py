@@ -16,8 +16,11 @@ from stsf_gym.experiments.sweep.cells import failure
 BACKENDS = ("local", "ray")
 
 
-def make_runner(backend: str, workers: int = 2, address: str | None = None) -> Runner:
-    """The runner of ``backend``: ``local`` processes or ``ray`` (``address`` or a local Ray)."""
+def make_runner(
+    backend: str, workers: int = 2, address: str | None = None, cpus_per_job: int = 1
+) -> Runner:
+    """The runner of ``backend``: ``local`` processes or ``ray`` (``address`` or a local Ray;
+    each job reserves ``cpus_per_job`` of its CPUs)."""
     if workers < 1:
         raise ConfigError(f"workers must be at least 1, got {workers}")
     if backend == "local":
@@ -25,16 +28,18 @@ def make_runner(backend: str, workers: int = 2, address: str | None = None) -> R
             raise ConfigError("--address is only for --backend ray")
         return process_runner(workers)
     if backend == "ray":
-        return ray_runner(address, workers)
+        return ray_runner(address, workers, cpus_per_job)
     raise ConfigError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
 
 
-def ray_runner(address: str | None = None, workers: int = 2) -> Runner:
-    """Cells as Ray tasks (one CPU each), gathered with ``ray.wait`` as they finish.
+def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int = 1) -> Runner:
+    """Cells as Ray tasks (``cpus_per_job`` CPUs each), gathered with ``ray.wait`` as they
+    finish.
 
     Uses the Ray instance already initialised in this process, else connects to ``address``
     (a running cluster, e.g. ``ray://head:10001`` or ``auto``) or, without one, starts a local
-    instance of ``workers`` CPUs; an instance it started is shut down when the cells are done.
+    instance of ``workers * cpus_per_job`` CPUs (``workers`` jobs at once); an instance it
+    started is shut down when the cells are done.
     Nodes of a cluster need stsf-gym installed.
     """
     try:
@@ -49,9 +54,9 @@ def ray_runner(address: str | None = None, workers: int = 2) -> Runner:
             return
         started = not ray.is_initialized()
         if started:
-            local = {} if address else {"num_cpus": workers}
+            local = {} if address else {"num_cpus": workers * cpus_per_job}
             ray.init(address=address, include_dashboard=False, log_to_driver=False, **local)
-        task = ray.remote(num_cpus=1, max_retries=0)(fn)
+        task = ray.remote(num_cpus=cpus_per_job, max_retries=0)(fn)
         pending = {task.remote(job): job for job in jobs}
         try:
             while pending:
