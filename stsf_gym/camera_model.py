@@ -16,6 +16,7 @@ recorded log (:mod:`stsf_gym.recording`) stores of it.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -63,8 +64,9 @@ class CameraCalibration:
     K: np.ndarray
     dist: np.ndarray
 
-    @property
+    @functools.cached_property
     def distorted(self) -> bool:
+        """Whether the lens distorts (any coefficient non-zero); computed once."""
         return bool(np.any(self.dist != 0))
 
     def to_pixels(self, xy: np.ndarray) -> np.ndarray:
