@@ -89,7 +89,7 @@ def run_cli(monkeypatch, capsys):
     [
         (["evaluate", "--estimators", "odometry,magic"], "unknown estimator 'magic'"),
         (["evaluate", "--agent", "path/that/does/not/exist.zip"], "path/that/does/not/exist.zip"),
-        (["evaluate", "--set", "robot.wheel_radius=-1"], "robot.wheel_radius must be > 0"),
+        (["evaluate", "--set", "robot.wheel_radius=-1"], "robot.wheel_radius must be in (0, 10]"),
         (["evaluate", "--set", "world.start=[0,0,0]"], "use --world"),
         (["demo", "--set", "camera.width=0"], "camera.width must be in [1, 8192], got 0"),
         (["reproduce", "fig10", "--seeds", "0"], "--seeds must be at least 1"),
