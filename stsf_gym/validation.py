@@ -132,8 +132,11 @@ def build(cls: type, data: Any, path: str) -> Any:
 def _coerce(hint: Any, value: Any, path: str) -> Any:
     origin, args = typing.get_origin(hint), typing.get_args(hint)
     if origin is Annotated:
+        ranges = [m for m in hint.__metadata__ if isinstance(m, Range)]
+        if args[0] in (int, float):
+            return check_number(value, path, *ranges, integer=args[0] is int)
         value = _coerce(args[0], value, path)
-        for allowed in (m for m in hint.__metadata__ if isinstance(m, Range)):
+        for allowed in ranges:
             _check_range(value, allowed, path)
         return value
     if dataclasses.is_dataclass(hint):
@@ -151,7 +154,7 @@ def _coerce(hint: Any, value: Any, path: str) -> Any:
             raise ConfigError(f"{path} must be true or false, got {value!r}", path)
         return value
     if hint in (int, float):
-        return _coerce_number(hint, value, path)
+        return check_number(value, path, integer=hint is int)
     if hint is str and not isinstance(value, str):
         raise ConfigError(f"{path} must be a string, got {value!r}", path)
     return value
@@ -182,33 +185,27 @@ def _coerce_tuple(args: tuple, value: Any, path: str) -> tuple:
     )
 
 
-def check_number(
-    value: Any, path: str, allowed: Range | None = None, integer: bool = False
-) -> float | int:
-    """``value`` as a number (``int`` with ``integer``) within ``allowed`` and
+def check_number(value: Any, path: str, *allowed: Range, integer: bool = False) -> float | int:
+    """``value`` as a finite number (``int`` with ``integer``) within each ``allowed`` range and
     :data:`MAGNITUDE_LIMIT`, or a :class:`ConfigError` naming ``path``: the check every number
-    of a config passes, for numbers that enter elsewhere (hyper-parameters, logs)."""
-    number = _coerce_number(int if integer else float, value, path)
-    if allowed is not None:
-        _check_range(number, allowed, path)
+    of a config passes, and numbers that enter elsewhere (hyper-parameters, options)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(f"{path} must be a number, got {value!r}", path)
+    if not math.isfinite(value):
+        raise ConfigError(f"{path} must be a finite number, got {value!r}", path)
+    if integer and value != int(value):
+        raise ConfigError(f"{path} must be an integer, got {value!r}", path)
+    number = int(value) if integer else float(value)
+    for each in allowed:
+        _check_range(number, each, path)
+    if abs(number) > MAGNITUDE_LIMIT:
+        raise ConfigError(f"{path} must be within ±{MAGNITUDE_LIMIT:g}, got {number!r}", path)
     return number
 
 
 def _check_range(value: float, allowed: Range, path: str) -> None:
     if value not in allowed:
         raise ConfigError(f"{path} must be {allowed}, got {value!r}", path)
-
-
-def _coerce_number(hint: type, value: Any, path: str) -> float | int:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ConfigError(f"{path} must be a number, got {value!r}", path)
-    if not math.isfinite(value):
-        raise ConfigError(f"{path} must be a finite number, got {value!r}", path)
-    if abs(value) > MAGNITUDE_LIMIT:
-        raise ConfigError(f"{path} must be within ±{MAGNITUDE_LIMIT:g}, got {value!r}", path)
-    if hint is int and value != int(value):
-        raise ConfigError(f"{path} must be an integer, got {value!r}", path)
-    return hint(value)
 
 
 def _join(path: str, key: Any) -> str:

@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import stsf_gym.cli as cli
 from stsf_gym.experiments.cache import JobsFailed, run_cached
 from stsf_gym.validation import ConfigError, Positive, build
 
@@ -70,18 +69,6 @@ def test_out_of_range_actions_are_clipped(make_env):
 
 
 # --- command line -------------------------------------------------------------------------
-
-
-@pytest.fixture
-def run_cli(monkeypatch, capsys):
-    """``stsf_gym.cli.main(argv)`` -> (exit code, stderr), C stdout left alone."""
-    monkeypatch.setattr(cli, "_silence_c_stdout", lambda: None)
-
-    def run(*argv: str) -> tuple[int, str]:
-        code = cli.main(list(argv))
-        return code, capsys.readouterr().err
-
-    return run
 
 
 @pytest.mark.parametrize(

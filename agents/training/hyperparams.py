@@ -203,7 +203,7 @@ def _check_algo_kwargs(cls: type, kwargs: dict) -> None:
             raise ConfigError(f"{key} must be like {default!r}, got {value!r}", key)
         if isinstance(value, int | float) and not isinstance(value, bool):
             integer = isinstance(default, int) and not isinstance(default, bool)
-            kwargs[key] = check_number(value, key, ALGO_RANGES.get(key), integer)
+            kwargs[key] = check_number(value, key, ALGO_RANGES.get(key, Range()), integer=integer)
 
 
 def _check_policy_kwargs(policy_kwargs: dict) -> None:

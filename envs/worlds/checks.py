@@ -114,7 +114,7 @@ def _check_boards_apart(world: WorldConfig) -> None:
             same_face = abs(math.remainder(first.facing_deg - second.facing_deg, 360.0)) < 90
             gap = math.dist(first.at, second.at)
             require(
-                not (same_face and gap < size),
+                not (same_face and gap < size - ON_WALL_TOLERANCE),
                 f"landmarks[{j}].at",
                 f"overlaps landmarks[{i}] on its wall: centres {gap:.3f} m apart, a "
                 f"{size:g} m board needs {size:g} m, got {list(second.at)}",
