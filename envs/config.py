@@ -6,8 +6,8 @@ a user config (YAML path or dict), then keyword overrides, and builds an :class:
 Every number has an allowed range (``Annotated[..., Range(...)]``, :mod:`stsf_gym.validation`) and
 the world's geometry is checked (:mod:`stsf_gym.envs.worlds.checks`). A misspelt or unknown key, a
 value of the wrong type or out of range raises :class:`ConfigError` naming the YAML file that set
-it, the full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius must be > 0, got
--0.1``.
+it, the full key path and what is allowed: ``configs/x.yaml: robot.wheel_radius must be in
+(0, 10], got -0.1``.
 """
 
 from __future__ import annotations
@@ -23,7 +23,10 @@ import numpy as np
 from stsf_gym.envs.fault_spec import FaultSpec
 from stsf_gym.envs.worlds.checks import check_clearance, check_route, check_world
 from stsf_gym.validation import (
+    ROBOT_EXTENT_M,
+    WORLD_EXTENT_M,
     ConfigError,
+    Coordinate,
     Count,
     Degrees,
     KeySources,
@@ -32,6 +35,8 @@ from stsf_gym.validation import (
     Positive,
     Probability,
     Range,
+    RobotLength,
+    WorldLength,
     build,
     require,
 )
@@ -62,7 +67,7 @@ class LandmarkSpec:
     """One landmark board of a world: its id, where it hangs on a wall and which way it faces."""
 
     id: Annotated[int, Range(ge=0)]
-    at: tuple[float, float]  # a point on the wall centre line the landmark hangs on (m)
+    at: tuple[Coordinate, Coordinate]  # a point on the wall centre line it hangs on (m)
     facing_deg: Degrees  # world yaw of the landmark's outward normal
 
 
@@ -71,8 +76,8 @@ class ObstacleSpec:
     """One clutter obstacle: a box or a cylinder standing on the floor."""
 
     shape: Literal["box", "cylinder"]
-    position: tuple[float, float]
-    size: tuple[Positive, ...]  # box: (length, width, height) / cylinder: (radius, height)
+    position: tuple[Coordinate, Coordinate]
+    size: tuple[WorldLength, ...]  # box: (length, width, height) / cylinder: (radius, height)
     yaw_deg: Degrees = 0.0
 
 
@@ -83,18 +88,18 @@ class WorldConfig:
     """
 
     name: str
-    walls: tuple[tuple[float, float, float, float], ...]  # centre-line segments x1, y1, x2, y2
-    wall_height: Positive
-    wall_thickness: Positive
-    path: tuple[tuple[float, float], ...]
-    start: tuple[float, float, float]
-    goal_radius: Positive
-    landmark_height: NonNegative
+    walls: tuple[tuple[Coordinate, Coordinate, Coordinate, Coordinate], ...]  # x1, y1, x2, y2
+    wall_height: WorldLength
+    wall_thickness: WorldLength
+    path: tuple[tuple[Coordinate, Coordinate], ...]
+    start: tuple[Coordinate, Coordinate, float]
+    goal_radius: WorldLength
+    landmark_height: Annotated[float, Range(ge=0, le=WORLD_EXTENT_M)]
     landmark_pattern: LandmarkPattern
     landmarks: tuple[LandmarkSpec, ...]
     obstacles: tuple[ObstacleSpec, ...] = ()
     #: goals visited in order, each on the path (the last one its end); empty: the path's end
-    route: tuple[tuple[float, float], ...] = ()
+    route: tuple[tuple[Coordinate, Coordinate], ...] = ()
 
     def __post_init__(self) -> None:
         require(len(self.walls) > 0, "walls", "must list at least one wall segment")
@@ -139,10 +144,10 @@ class SimConfig:
 class RobotConfig:
     """The robot's body, wheels, drive limits and camera mount (``robot:``)."""
 
-    wheel_radius: Positive
-    wheelbase: Positive
-    body_radius: Positive
-    body_height: Positive
+    wheel_radius: RobotLength
+    wheelbase: RobotLength
+    body_radius: RobotLength
+    body_height: RobotLength
     mass: Positive
     wheel_friction: Positive
     wheel_max_torque: Positive
@@ -151,8 +156,8 @@ class RobotConfig:
     max_acceleration: Positive  # m/s^2, the wheel velocity controller's linear limit
     max_yaw_acceleration: Positive  # rad/s^2, its angular limit
     nominal_speed: Positive
-    camera_height: Positive
-    camera_forward: float
+    camera_height: RobotLength
+    camera_forward: Annotated[float, Range(ge=-ROBOT_EXTENT_M, le=ROBOT_EXTENT_M)]
     pan_limit_deg: Annotated[float, Range(ge=0, le=180)]
     tilt_limit_deg: Annotated[float, Range(ge=0, le=90)]
 
@@ -460,7 +465,7 @@ def load_config(
             sources.forget("world")
             for file, data in world_files(layer_world):
                 tree["world"] = deep_merge(tree["world"], data)
-                sources.record(data, shown(file), "world")
+                sources.record({"world": data}, shown(file))  # an empty file is named too
         elif isinstance(layer_world, Mapping):
             tree["world"] = deep_merge(tree.get("world", {}), layer_world)
             sources.record(layer_world, source, "world")

@@ -18,6 +18,7 @@ from stsf_gym.envs.corridor_env import CorridorEnv
 from stsf_gym.envs.random_streams import RandomStreams
 from stsf_gym.envs.worlds.generator import generate_world, world_tree
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
+from stsf_gym.validation import ConfigError
 from stsf_gym.yaml_layers import merge_settings
 
 GENERATED = "generated"  # the world name of generated worlds; ``generated:<split>`` labels
@@ -52,7 +53,18 @@ def make_world_env(world, **kwargs: Any) -> CorridorEnv:
     split = parse_world(world)
     if split is not None:
         return GeneratedCorridorEnv(split=split, **kwargs)
+    if "generator" in kwargs:  # a suite's id: its generator draws the worlds
+        raise world_argument_error(world)
     return CorridorEnv(world=world, **kwargs)
+
+
+def world_argument_error(world: object) -> ConfigError:
+    """The error for a ``world`` argument given to an env that draws its worlds."""
+    return ConfigError(
+        f"world {world!r} given to an env that draws its worlds (generated ones, a suite's by "
+        "its generator); drop the world argument, or give it to stsf_gym/Corridor-v0",
+        "world",
+    )
 
 
 def make_suite_env(env: dict, **overrides: Any) -> GeneratedCorridorEnv:
@@ -90,6 +102,18 @@ def world_seed_for(world_seeds: range, seed: int) -> int:
     return world_seeds[seed % len(world_seeds)]
 
 
+def check_distinct_worlds(world_seeds: range, seeds: range, what: str) -> None:
+    """Refuse episode ``seeds`` (given by ``what``) that run past the split ``world_seeds``:
+    :func:`world_seed_for` would wrap around and drive its first worlds again, counted as
+    independent episodes."""
+    if seeds.stop > len(world_seeds):
+        raise ConfigError(
+            f"{what}: episode seeds {seeds.start}..{seeds.stop - 1} run past the split's "
+            f"{len(world_seeds)} worlds; seeds from {len(world_seeds)} on would drive its first "
+            "worlds again, counted as new ones"
+        )
+
+
 class GeneratedCorridorEnv(CorridorEnv):
     """:class:`~stsf_gym.envs.corridor_env.CorridorEnv` whose world is drawn at each reset.
 
@@ -115,7 +139,7 @@ class GeneratedCorridorEnv(CorridorEnv):
         **overrides: Any,
     ) -> None:
         if "world" in overrides:
-            raise ValueError("Generated-v0 draws its worlds; use Corridor-v0 to give a world")
+            raise world_argument_error(overrides["world"])
         self.generator: GeneratorConfig = load_generator_config(generator)
         self.split = split
         self.world_seeds = self.generator.split_range(split)

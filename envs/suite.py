@@ -19,6 +19,7 @@ from stsf_gym.validation import ConfigError
 from stsf_gym.yaml_layers import SUITE_DIR, read_yaml, shown
 
 SUITE_KEYS = ("generator", "env")
+PROTOCOL = "declare"  # every suite's task: success judged at the declared stops
 
 
 def suite_names() -> list[str]:
@@ -60,12 +61,19 @@ def load_suite(name: str | Path, check: bool = True) -> Suite:
     if unknown:
         message = f"unknown key(s) {unknown}; a suite has {list(SUITE_KEYS)}"
         raise ConfigError(message, None, shown(path))
-    suite = Suite(path.stem, dict(data.get("generator") or {}), dict(data.get("env") or {}))
+    missing = [key for key in SUITE_KEYS if not data.get(key)]
+    if missing:  # without them it would run as plain generated worlds, not as this suite
+        message = f"a suite sets {list(SUITE_KEYS)}; missing or empty: {missing}"
+        raise ConfigError(message, missing[0], shown(path))
+    suite = Suite(path.stem, dict(data["generator"]), dict(data["env"]))
     if not check:
         return suite
     try:
         suite.generator_config()
-        load_config(suite.env)
+        protocol = load_config(suite.env).task.protocol
     except ConfigError as err:
         raise ConfigError(err.message, err.key, shown(path)) from err
+    if protocol != PROTOCOL:
+        message = f"env.task.protocol must be {PROTOCOL!r} (a suite is judged at declared stops)"
+        raise ConfigError(f"{message}, got {protocol!r}", "env.task.protocol", shown(path))
     return suite

@@ -19,8 +19,11 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
+
+from stsf_gym.validation import ROBOT_EXTENT_M, Range, RobotLength
 
 UNDISTORT_ITERATIONS = 20
 #: Rotation from the camera link (x forward, y left, z up) to OpenCV camera axes.
@@ -95,6 +98,10 @@ class CameraCalibration:
         return uv
 
 
+#: A position on the robot along its x or y axis (m).
+RobotOffset = Annotated[float, Range(ge=-ROBOT_EXTENT_M, le=ROBOT_EXTENT_M)]
+
+
 def pose_matrix(x: float, y: float, z: float, rotation: np.ndarray) -> np.ndarray:
     """The 4x4 pose of ``rotation`` (3x3) at ``(x, y, z)``."""
     pose = np.eye(4)
@@ -122,9 +129,9 @@ class PanTiltMount:
     (OpenCV axes) for the mount angles (rad; pan about z, positive left; tilt positive up).
     A fixed camera looking ahead is the mount at ``pan = tilt = 0``."""
 
-    x: float
-    y: float
-    z: float
+    x: RobotOffset
+    y: RobotOffset
+    z: RobotLength  # above the floor
 
     def __call__(self, pan: float, tilt: float) -> np.ndarray:
         rotation = rot_z(pan) @ rot_y(-tilt) @ LINK_FROM_OPTICAL

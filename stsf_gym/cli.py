@@ -11,9 +11,9 @@ import sys
 from pathlib import Path
 
 from stsf_gym.config import ConfigError, parse_overrides
-from stsf_gym.io import remove_partial_writes
+from stsf_gym.io import check_file, check_folder, remove_partial_writes
 from stsf_gym.results.provenance import set_command
-from stsf_gym.validation import FieldError
+from stsf_gym.validation import FieldError, Range, check_number
 
 DEFAULT_WORLD = "irl_corridor"  # --world when none is given
 
@@ -90,8 +90,7 @@ def _record_args(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--record-frames",
         choices=["raw", "png", "jpeg"],
-        default="raw",
-        help="camera frames in an MCAP recording: raw or png (lossless: a replay gives the "
+        help="with --record mcap: camera frames as raw or png (lossless: a replay gives the "
         "live estimates bit for bit; png is a little smaller and slow to encode) or jpeg "
         "(about 8x smaller; its replay is approximate). Default raw",
     )
@@ -99,15 +98,16 @@ def _record_args(parser: argparse.ArgumentParser) -> None:
 
 def _recording(args: argparse.Namespace, out: Path | None = None) -> dict | None:
     """The ``record`` setting of the episode runners, from ``--record``/``--record-frames``:
-    files in ``<out or --out>/recordings/``. Without the ``record`` extra: bad input, before
-    any episode runs."""
+    files in ``<out or --out>/recordings/``. Without the ``record`` extra, or with a
+    recordings path that cannot be a folder: bad input, before any episode runs."""
     if args.record is None:
         return None
     from stsf_gym.recording import require_recording
 
     require_recording(f"--record {args.record}")
-    folder = str(((out or args.out) / "recordings").absolute())
-    return {"format": args.record, "frames": args.record_frames, "folder": folder}
+    folder = ((out or args.out) / "recordings").absolute()
+    check_folder(folder, "--record")
+    return {"format": args.record, "frames": args.record_frames or "raw", "folder": str(folder)}
 
 
 def _replay(args: argparse.Namespace) -> dict:
@@ -119,8 +119,6 @@ def _replay(args: argparse.Namespace) -> dict:
     if args.config or args.overrides:
         raise ConfigError("replay runs the logs as recorded: it takes no --config or --set")
     estimators = _pose_sources(args.estimators)
-    if not estimators:
-        raise ConfigError("--estimators names no pose source")
     summary = replay_logs(args.files, estimators, args.out)
     _print_markdown(args, args.out / "results.md")
     return summary
@@ -240,7 +238,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
     _check_counts(args)
     estimators = _pose_sources(args.estimators)
     args.world = _world(args)
-    agents = _expanded(_names(args.agent))
+    agents = _expanded(_names(args.agent, "--agent"))
     _check_agents(sorted({a.replace("{estimator}", e) for a in agents for e in estimators}))
     if len(agents) > 1 or "{estimator}" in args.agent:
         from stsf_gym.experiments.compare import compare
@@ -297,8 +295,6 @@ def _reproduce(args: argparse.Namespace) -> dict:
 def _train(args: argparse.Namespace) -> dict:
     from stsf_gym.agents.training.train import train
 
-    if args.suite is not None and (args.world is not None or args.split is not None):
-        raise ConfigError("--suite picks the worlds (its train split): drop --world/--split")
     args.world = _world(args)
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
@@ -402,22 +398,30 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.curve.run import accuracy_curve
 
     _check_counts(args)
-    agents = _expanded(_names(args.agent))
-    estimators = _pose_sources(args.estimators)
+    agents = _expanded(_names(args.agent, "--agent"))
+    estimators = _pose_sources(args.estimators, empty_ok=True)  # points on the curve: optional
     _check_agents(agents)
     try:
-        levels = [float(level) for level in _names(args.levels)]
+        levels = [float(level) for level in _names(args.levels, "--levels")]
     except ValueError as err:
         raise ConfigError(f"--levels must be comma-separated numbers, got {args.levels!r}") from err
+    for level in levels:  # scales of the dial's errors
+        check_number(level, "--levels", Range(ge=0))
     dial = parse_overrides(args.dial)
     make_estimator("degraded-truth", **dial)  # a bad dial option fails before any work
-    world, env = args.world, _env_overrides(args, None if args.suite else args.world)
+    world = args.world or DEFAULT_WORLD
+    env = _env_overrides(args, None if args.suite else world)
     if args.suite:
         from stsf_gym.envs.config import deep_merge
+        from stsf_gym.envs.generated_env import check_distinct_worlds
         from stsf_gym.envs.suite import load_suite
         from stsf_gym.experiments.benchmark.run import WORLD
 
-        world, env = WORLD, deep_merge(load_suite(args.suite).episode_env, env)
+        suite = load_suite(args.suite)
+        seeds = range(args.seed, args.seed + args.seeds)
+        test_worlds = suite.generator_config().split_range("test")
+        check_distinct_worlds(test_worlds, seeds, f"--seed {args.seed} --seeds {args.seeds}")
+        world, env = WORLD, deep_merge(suite.episode_env, env)
     summary = accuracy_curve(
         args.out,
         agents,
@@ -450,7 +454,7 @@ def _benchmark(args: argparse.Namespace) -> dict:
     from stsf_gym.experiments.benchmark.trained import expand_agents
 
     estimators = None if args.estimators is None else _pose_sources(args.estimators)
-    agents = expand_agents(_names(args.agents))
+    agents = expand_agents(_names(args.agents, "--agents"))
     _check_agents(agents)
     summary = benchmark(
         args.out / args.suite,
@@ -470,22 +474,25 @@ def _benchmark(args: argparse.Namespace) -> dict:
     return summary
 
 
-def _names(text: str) -> list[str]:
-    """The comma-separated names of ``text``; one named twice is an error (its episodes would
-    be run and counted twice)."""
+def _names(text: str, flag: str, empty_ok: bool = False) -> list[str]:
+    """The comma-separated names of ``text`` (given to option ``flag``); none (unless
+    ``empty_ok``) is an error, and so is one named twice (its episodes would be run and counted
+    twice)."""
     names = [name.strip() for name in text.split(",") if name.strip()]
+    if not names and not empty_ok:
+        raise ConfigError(f"{flag} names nothing, got {text!r}")
     twice = sorted({name for name in names if names.count(name) > 1})
     if twice:
         raise ConfigError(f"{twice[0]!r} is named twice in {text!r}")
     return names
 
 
-def _pose_sources(text: str) -> list[str]:
-    """The comma-separated pose sources of ``text``, each checked: a registered name or a
-    ``package.module:Class`` estimator."""
+def _pose_sources(text: str, empty_ok: bool = False) -> list[str]:
+    """The comma-separated pose sources of ``--estimators``, each checked: a registered name
+    or a ``package.module:Class`` estimator."""
     from stsf_gym.wrappers import check_pose_source
 
-    names = _names(text)
+    names = _names(text, "--estimators", empty_ok)
     for name in names:
         check_pose_source(name)
     return names
@@ -631,7 +638,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="follower, saved models, train --seeds folders and/or shipped agents "
         "(pretrained:SUITE/ALGO-SOURCE: one curve per training seed), comma-separated",
     )
-    curve.add_argument("--world", default="irl_corridor", help="world name or YAML path")
+    curve.add_argument(
+        "--world", help=f"world name or YAML path (default {DEFAULT_WORLD}; not with --suite)"
+    )
     curve.add_argument(
         "--suite",
         choices=suite_names(),
@@ -733,15 +742,46 @@ def _silence_c_stdout() -> None:
     sys.stdout = os.fdopen(real, "w", buffering=1)
 
 
-def _check_writable(out: Path) -> None:
-    """Fail before any work when the folder ``out`` cannot be made or written (makes nothing)."""
-    existing = out
-    while not existing.exists():
-        existing = existing.parent
-    if not existing.is_dir():
-        raise ConfigError(f"--out {out}: {existing} is not a folder")
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise ConfigError(f"--out {out}: {existing} is not writable")
+#: Options that mean nothing without another (refused rather than ignored): option, needed
+#: option (argparse destinations), and why.
+NEEDS = (
+    (
+        "record_frames",
+        "record",
+        "--record-frames sets how --record stores camera frames; without --record nothing is "
+        "recorded: add --record mcap",
+    ),
+)
+#: Options that would silently override one another: option, other option, and why.
+EXCLUDES = (
+    ("suite", "world", "--suite picks the worlds (the suite's splits): drop --world/--split"),
+    ("suite", "split", "--suite picks the worlds (the suite's splits): drop --world/--split"),
+)
+
+
+def _preflight(args: argparse.Namespace) -> None:
+    """Every command's checks before any work: the seed, the option combinations of
+    :data:`NEEDS` and :data:`EXCLUDES`, and ``--out`` (a folder, or the file a command writes);
+    then temporary files a killed run left in ``--out`` are removed."""
+
+    def given(option: str) -> bool:
+        return getattr(args, option, None) is not None
+
+    if getattr(args, "seed", 0) < 0:  # seeds seed a numpy SeedSequence: non-negative
+        raise ConfigError(f"--seed must be at least 0, got {args.seed}")
+    for option, needed, reason in NEEDS:
+        if given(option) and not given(needed):
+            raise ConfigError(reason)
+    for option, other, reason in EXCLUDES:
+        if given(option) and given(other):
+            raise ConfigError(reason)
+    if not hasattr(args, "out"):
+        return
+    if getattr(args, "out_is_file", False):
+        check_file(args.out, "--out")
+    else:
+        check_folder(args.out, "--out")
+        remove_partial_writes(args.out)  # left by a run killed mid-write: nothing to resume
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -755,12 +795,7 @@ def main(argv: list[str] | None = None) -> int:
     set_command(["stsf-gym", *(sys.argv[1:] if argv is None else argv)])
     error = f"stsf-gym {args.command}: error:"
     try:
-        if getattr(args, "seed", 0) < 0:  # seeds seed a numpy SeedSequence: non-negative
-            raise ConfigError(f"--seed must be at least 0, got {args.seed}")
-        if hasattr(args, "out"):  # a folder, or the file's folder for commands writing one
-            folder = args.out.parent if getattr(args, "out_is_file", False) else args.out
-            _check_writable(folder.absolute())
-            remove_partial_writes(args.out)  # left by a run killed mid-write: nothing to resume
+        _preflight(args)
         if args.verbose:
             from stsf_gym.envs.quiet import VERBOSE_ENV
 
@@ -768,7 +803,14 @@ def main(argv: list[str] | None = None) -> int:
         else:
             _silence_c_stdout()
         result = args.run(args)
-    except (ConfigError, FieldError, FileNotFoundError, NotADirectoryError, PermissionError) as err:
+    except (
+        ConfigError,
+        FieldError,
+        FileNotFoundError,
+        NotADirectoryError,
+        IsADirectoryError,
+        PermissionError,
+    ) as err:
         print(f"{error} {err}", file=sys.stderr)
         return 2
     except JobsFailed as err:

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from stsf_gym.validation import Count, RobotLength
+
 Array = NDArray[np.float64]
 
 
@@ -118,10 +120,10 @@ def compose_gaussian(a: ArrayLike, cov_a: ArrayLike, b: ArrayLike, cov_b: ArrayL
 class OdometryCalibration:
     """The robot's believed odometry parameters (not the truth when calibration errors are on)."""
 
-    ticks_per_rev: int
-    wheel_radius_left: float
-    wheel_radius_right: float
-    wheelbase: float
+    ticks_per_rev: Count
+    wheel_radius_left: RobotLength
+    wheel_radius_right: RobotLength
+    wheelbase: RobotLength
 
     def wheel_travel(self, ticks: np.ndarray) -> np.ndarray:
         """Distance (m) each wheel rolled for tick counts [left, right]."""

@@ -1,4 +1,5 @@
-"""Result files written atomically, so an interrupted run never leaves a half-written file."""
+"""Result files written atomically, so an interrupted run never leaves a half-written file; and
+the checks that a command's output paths can be written, made before any work."""
 
 from __future__ import annotations
 
@@ -22,6 +23,29 @@ def write_atomic(path: str | Path, data: str | bytes) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def check_folder(folder: str | Path, flag: str) -> None:
+    """Fail before any work when ``folder`` cannot be made or written (makes nothing):
+    :class:`NotADirectoryError` or :class:`PermissionError` naming ``flag``, the option that
+    chose it."""
+    folder = Path(folder).absolute()
+    existing = folder
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise NotADirectoryError(f"{flag} {folder}: {existing} is not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise PermissionError(f"{flag} {folder}: {existing} is not writable")
+
+
+def check_file(file: str | Path, flag: str) -> None:
+    """Fail before any work when ``file`` cannot be written: :class:`IsADirectoryError` for a
+    folder of that name, else as :func:`check_folder` for its folder."""
+    file = Path(file)
+    if file.is_dir():
+        raise IsADirectoryError(f"{flag} {file} is a folder; name the file to write")
+    check_folder(file.absolute().parent, flag)
 
 
 def remove_partial_writes(folder: str | Path) -> list[Path]:
@@ -50,7 +74,10 @@ def save_figure(fig, path: str | Path, dpi: int = 120) -> Path:
 
 
 def markdown_table(rows: list[dict], columns: list[str] | None = None) -> str:
-    """A GitHub-flavoured Markdown table of ``rows`` (dicts sharing keys)."""
+    """A GitHub-flavoured Markdown table of ``rows`` (dicts sharing keys); with no rows (a
+    run whose every cell failed) and no ``columns``, a line saying so."""
+    if not rows and not columns:
+        return "No rows: nothing finished.\n"
     columns = columns or list(rows[0])
     lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
     lines += ["| " + " | ".join(_cell(row.get(c, "")) for c in columns) + " |" for row in rows]

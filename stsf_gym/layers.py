@@ -77,7 +77,7 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
         "stsf_gym.estimators",
         "stsf_gym.envs",
         *ENV_FOLDERS,
-        "stsf_gym.yaml_layers",
+        "stsf_gym.yaml_layers",  # env settings merged section by section
     ),
     "stsf_gym.wrappers": ESTIMATION,
     "stsf_gym": ("stsf_gym.yaml_layers",),  # the __init__: registration (reads suite files)
@@ -99,10 +99,10 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.vision": ("stsf_gym.vision.landmarks", "stsf_gym.geometry"),
     "stsf_gym.vision.landmarks": (),
     "stsf_gym.yaml_layers": ("stsf_gym.validation",),
-    "stsf_gym.geometry": (),
+    "stsf_gym.geometry": ("stsf_gym.validation",),  # ranges of the odometry calibration
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
-    "stsf_gym.camera_model": (),
+    "stsf_gym.camera_model": ("stsf_gym.validation",),  # ranges of the camera mount
     "stsf_gym.video": (),
     "stsf_gym.terminal_table": (),
     "stsf_gym.layers": (),

@@ -4,7 +4,7 @@ A field's type is its schema. ``Annotated[float, Range(gt=0)]`` adds an allowed 
 dataclass may check relations between its fields in ``__post_init__`` with :func:`require`.
 :func:`build` constructs a dataclass from a mapping and raises :class:`ConfigError` naming the
 full key path, the allowed values and the value given, e.g.
-``robot.wheel_radius must be > 0, got -0.1``.
+``robot.wheel_radius must be in (0, 10], got -0.1``.
 """
 
 from __future__ import annotations
@@ -79,12 +79,27 @@ def _first(*values: float | None) -> float | None:
     return next((v for v in values if v is not None), None)
 
 
+#: No setting of this project comes near this magnitude (world seeds stop at 2e6); a number beyond
+#: it is refused wherever it enters, before its square or product overflows float32 (PyBullet).
+MAGNITUDE_LIMIT = 1e9
+#: m: how far from the origin a world reaches. PyBullet stores positions as float32, whose
+#: resolution at 10 km is about a millimetre: farther, contacts and rays lose their geometry.
+WORLD_EXTENT_M = 1e4
+#: m: the largest part of a mobile robot (wheel radius, wheelbase, body, camera mount).
+ROBOT_EXTENT_M = 10.0
+
 Positive = Annotated[float, Range(gt=0)]
 NonNegative = Annotated[float, Range(ge=0)]
 Probability = Annotated[float, Range(ge=0, le=1)]
 Count = Annotated[int, Range(ge=1)]
 Pixels = Annotated[int, Range(ge=1, le=8192)]
 Degrees = Annotated[float, Range(ge=-360, le=360)]
+#: A world coordinate (m).
+Coordinate = Annotated[float, Range(ge=-WORLD_EXTENT_M, le=WORLD_EXTENT_M)]
+#: A length in a world: a wall's height or thickness, an obstacle's size, a radius (m).
+WorldLength = Annotated[float, Range(gt=0, le=WORLD_EXTENT_M)]
+#: A length of the robot: a wheel radius, the wheelbase, the body, the camera mount (m).
+RobotLength = Annotated[float, Range(gt=0, le=ROBOT_EXTENT_M)]
 
 
 def build(cls: type, data: Any, path: str) -> Any:
@@ -117,10 +132,12 @@ def build(cls: type, data: Any, path: str) -> Any:
 def _coerce(hint: Any, value: Any, path: str) -> Any:
     origin, args = typing.get_origin(hint), typing.get_args(hint)
     if origin is Annotated:
+        ranges = [m for m in hint.__metadata__ if isinstance(m, Range)]
+        if args[0] in (int, float):
+            return check_number(value, path, *ranges, integer=args[0] is int)
         value = _coerce(args[0], value, path)
-        for allowed in (m for m in hint.__metadata__ if isinstance(m, Range)):
-            if value not in allowed:
-                raise ConfigError(f"{path} must be {allowed}, got {value!r}", path)
+        for allowed in ranges:
+            _check_range(value, allowed, path)
         return value
     if dataclasses.is_dataclass(hint):
         return build(hint, value, path)
@@ -137,7 +154,7 @@ def _coerce(hint: Any, value: Any, path: str) -> Any:
             raise ConfigError(f"{path} must be true or false, got {value!r}", path)
         return value
     if hint in (int, float):
-        return _coerce_number(hint, value, path)
+        return check_number(value, path, integer=hint is int)
     if hint is str and not isinstance(value, str):
         raise ConfigError(f"{path} must be a string, got {value!r}", path)
     return value
@@ -168,14 +185,27 @@ def _coerce_tuple(args: tuple, value: Any, path: str) -> tuple:
     )
 
 
-def _coerce_number(hint: type, value: Any, path: str) -> float | int:
+def check_number(value: Any, path: str, *allowed: Range, integer: bool = False) -> float | int:
+    """``value`` as a finite number (``int`` with ``integer``) within each ``allowed`` range and
+    :data:`MAGNITUDE_LIMIT`, or a :class:`ConfigError` naming ``path``: the check every number
+    of a config passes, and numbers that enter elsewhere (hyper-parameters, options)."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ConfigError(f"{path} must be a number, got {value!r}", path)
     if not math.isfinite(value):
         raise ConfigError(f"{path} must be a finite number, got {value!r}", path)
-    if hint is int and value != int(value):
+    if integer and value != int(value):
         raise ConfigError(f"{path} must be an integer, got {value!r}", path)
-    return hint(value)
+    number = int(value) if integer else float(value)
+    for each in allowed:
+        _check_range(number, each, path)
+    if abs(number) > MAGNITUDE_LIMIT:
+        raise ConfigError(f"{path} must be within ±{MAGNITUDE_LIMIT:g}, got {number!r}", path)
+    return number
+
+
+def _check_range(value: float, allowed: Range, path: str) -> None:
+    if value not in allowed:
+        raise ConfigError(f"{path} must be {allowed}, got {value!r}", path)
 
 
 def _join(path: str, key: Any) -> str:

@@ -108,6 +108,38 @@ def sensor_model(env: gym.Env, belief: OdometrySettings | None = None) -> Sensor
     )
 
 
+class EstimateError(ValueError):
+    """A pose source returned what no pose estimate can be: a pose that is not three finite
+    numbers, or a covariance that is not a symmetric positive definite 3x3 matrix."""
+
+
+#: How far a covariance may be from symmetric, relative to its largest entry (rounding).
+SYMMETRY_TOLERANCE = 1e-6
+
+
+def check_estimate(name: str, mean: Any, cov: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``mean`` and ``cov`` as float arrays if they are a pose estimate, else an
+    :class:`EstimateError` naming pose source ``name`` (checked at every step it returns)."""
+    mean, cov = np.asarray(mean, dtype=float), np.asarray(cov, dtype=float)
+    where = f"pose source {name!r} returned"
+    if mean.shape != (3,) or not np.isfinite(mean).all():
+        raise EstimateError(f"{where} the pose {mean.tolist()}: not three finite numbers x, y, yaw")
+    if cov.shape != (3, 3) or not np.isfinite(cov).all():
+        raise EstimateError(f"{where} the covariance {cov.tolist()}: not a finite 3x3 matrix")
+    scale = float(np.abs(cov).max())
+    if np.abs(cov - cov.T).max() > SYMMETRY_TOLERANCE * scale:
+        raise EstimateError(f"{where} the covariance {cov.tolist()}: not symmetric")
+    try:
+        np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError:
+        eigenvalues = np.linalg.eigvalsh(cov).tolist()
+        raise EstimateError(
+            f"{where} the covariance {cov.tolist()}: not positive definite (eigenvalues "
+            f"{eigenvalues}); NEES and the agent's uncertainty need a positive definite one"
+        ) from None
+    return mean, cov
+
+
 def check_sensors(name: str, sensors: tuple[str, ...], camera_enabled: bool) -> None:
     """Refuse pose source ``name`` (reading ``sensors``) on an env whose camera is off."""
     if "camera" in sensors and not camera_enabled:
@@ -186,6 +218,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if estimator == TRUTH and options:
             raise ConfigError(f"the truth pose source takes no options, got {sorted(options)}")
         self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
+        self.pose_source = estimator  # the name errors give it
         check_sensors(estimator, self.estimator.sensors, env.unwrapped.config.camera.enabled)
         robot = env.unwrapped.config.robot
         self.pointer = None
@@ -285,6 +318,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 
     def _with_pose(self, obs: dict, mean: np.ndarray, cov: np.ndarray) -> dict:
+        mean, cov = check_estimate(self.pose_source, mean, cov)
         view = self.env.unwrapped.view  # the env's map (render_mode set) draws the estimate
         if view is not None:
             target = None if self.pointer is None else self.pointer.target

@@ -1,4 +1,5 @@
-"""Shared fixtures: small, fast envs (the camera off unless a test needs it)."""
+"""Shared fixtures: small, fast envs (the camera off unless a test needs it), and the command
+line run in the test's process."""
 
 from __future__ import annotations
 
@@ -40,3 +41,17 @@ def drive(env, actions, seed: int = 0, options: dict | None = None):
         if terminated or truncated:
             break
     return history
+
+
+@pytest.fixture
+def run_cli(monkeypatch, capsys):
+    """``stsf_gym.cli.main(argv)`` -> (exit code, stderr), C stdout left alone."""
+    import stsf_gym.cli as cli
+
+    monkeypatch.setattr(cli, "_silence_c_stdout", lambda: None)
+
+    def run(*argv: str) -> tuple[int, str]:
+        code = cli.main(list(argv))
+        return code, capsys.readouterr().err
+
+    return run

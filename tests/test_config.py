@@ -74,7 +74,7 @@ IRL_LANDMARK_1 = {"id": 1, "at": [3.0, 0.8], "facing_deg": -90}
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        ({"robot__wheel_radius": -0.1}, "robot.wheel_radius must be > 0, got -0.1"),
+        ({"robot__wheel_radius": -0.1}, "robot.wheel_radius must be in (0, 10], got -0.1"),
         ({"encoders__ticks_per_rev": 0}, "encoders.ticks_per_rev must be >= 1, got 0"),
         ({"camera__width": 0}, "camera.width must be in [1, 8192], got 0"),
         ({"render__height": 10_000}, "render.height must be in [1, 8192], got 10000"),
@@ -121,7 +121,7 @@ def test_impossible_values_name_key_range_and_value(overrides, message):
         ({"path": [[0.0, 0.0], [3.0, 0.7]]}, "world.path[1] must be at least robot.body_radius"),
         ({"path": [[0.0, 0.0]]}, "world.path must have at least 2 points, got 1"),
         ({"walls": [[0, 0, 0, 0]]}, "world.walls[0] must join two different points"),
-        ({"wall_thickness": 0}, "world.wall_thickness must be > 0, got 0"),
+        ({"wall_thickness": 0}, "world.wall_thickness must be in (0, 10000], got 0"),
         (
             {"obstacles": [{"shape": "cylinder", "position": [0.3, 0.0], "size": [0.2, 1.0]}]},
             "world.start must be at least robot.body_radius (0.25 m) from every obstacle",
@@ -147,7 +147,7 @@ def test_errors_name_the_file_that_set_the_key(tmp_path):
     config.write_text("robot:\n  wheel_radius: -0.1\n")
     with pytest.raises(ConfigError) as err:
         load_config(config)
-    assert str(err.value) == f"{config}: robot.wheel_radius must be > 0, got -0.1"
+    assert str(err.value) == f"{config}: robot.wheel_radius must be in (0, 10], got -0.1"
     assert err.value.key == "robot.wheel_radius" and err.value.source == str(config)
 
     world = tmp_path / "world.yaml"  # extends a shipped world, breaks one of its landmarks

@@ -74,7 +74,7 @@ def test_the_sensor_model_survives_json_exactly(make_env):
     for pan, tilt in [(0.0, 0.0), (0.4, -0.1), (-1.2, 0.3)]:
         live = env.unwrapped.robot_from_camera(pan, tilt)
         assert np.array_equal(back.robot_from_camera(pan, tilt), live)
-    with pytest.raises(ValueError, match="missing key 'walls'"):
+    with pytest.raises(ValueError, match="missing config key 'walls'"):
         sensor_model_from_dict({k: v for k, v in sensor_model_dict(model).items() if k != "walls"})
 
 

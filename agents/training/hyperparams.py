@@ -3,9 +3,10 @@
 ``configs/agents/<algo>.yaml`` holds a ``default`` section and optional sections named by
 registered env id (``stsf_gym/Corridor-Truth-v0``, ...), merged over it. A section mixes
 training keys (:class:`TrainingConfig`) with the algorithm's own keyword arguments
-(``learning_rate``, ``n_steps``, ``gamma``, ...), checked against its signature. Unknown
-sections, unknown keys and values of the wrong type raise :class:`ConfigError` naming the
-file and the key.
+(``learning_rate``, ``n_steps``, ``gamma``, ...), checked against its signature and, for
+numbers, against their mathematical range (:data:`ALGO_RANGES`). Unknown sections, unknown keys
+and values of the wrong type or out of range raise :class:`ConfigError` naming the key and
+where it was set: the file and section, or ``--set``.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import importlib
 import inspect
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import gymnasium as gym
 
@@ -29,6 +30,8 @@ from stsf_gym.envs.config import (
     overrides_to_tree,
     read_yaml,
 )
+from stsf_gym.validation import Count, KeySources, Range, check_number, require
+from stsf_gym.yaml_layers import shown
 
 #: Supported algorithms: name -> "module:class".
 ALGORITHMS: dict[str, str] = {"ppo": "stable_baselines3:PPO", "sac": "stable_baselines3:SAC"}
@@ -39,34 +42,51 @@ RESERVED = {
 }  # fmt: skip
 SUITES = "suites"  # the section for training on a benchmark suite (declared arrival)
 ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leaky_relu": "LeakyReLU"}
+#: Where ``load_hyperparams``'s ``overrides`` come from, as errors name it.
+OVERRIDES = "--set"
+#: The allowed values of the algorithms' numeric arguments: out of them SB3 trains on NaNs or
+#: fails only after the run's files are written.
+ALGO_RANGES: dict[str, Range] = {
+    "learning_rate": Range(gt=0),
+    "gamma": Range(ge=0, le=1),  # a discount
+    "gae_lambda": Range(ge=0, le=1),
+    "clip_range": Range(gt=0),
+    "ent_coef": Range(ge=0),
+    "vf_coef": Range(ge=0),
+    "max_grad_norm": Range(gt=0),
+    "n_steps": Range(ge=2),  # SB3 normalises advantages over a rollout: more than one step
+    "batch_size": Range(ge=2),  # ... and over a minibatch
+    "n_epochs": Range(ge=1),
+    "tau": Range(gt=0, le=1),  # a soft update's share
+    "buffer_size": Range(ge=1),
+    "learning_starts": Range(ge=0),
+    "train_freq": Range(ge=1),
+    "gradient_steps": Range(ge=-1),  # -1: as many as the env steps collected
+    "target_update_interval": Range(ge=1),
+}
 
 
 @dataclass(frozen=True)
 class TrainingConfig:
     """The training keys of a section (everything else goes to the algorithm)."""
 
-    n_envs: int
-    n_timesteps: int
+    n_envs: Count
+    n_timesteps: Annotated[int, Range(ge=0)]
     policy: str
-    eval_freq: int  # env steps (summed over the envs) between evaluations
-    n_eval_episodes: int
-    checkpoint_freq: int  # env steps (summed over the envs) between checkpoints
+    eval_freq: Count  # env steps (summed over the envs) between evaluations
+    n_eval_episodes: Count
+    checkpoint_freq: Count  # env steps (summed over the envs) between checkpoints
     policy_kwargs: dict = field(default_factory=dict)
     env: dict = field(default_factory=dict)  # env overrides, as gym.make keyword sections
     observation: dict = field(default_factory=dict)  # stsf_gym.agents.observation.ObservationConfig
-    decision_steps: int = 1  # control steps per decision (agents/decision_interval.py)
+    decision_steps: Count = 1  # control steps per decision (agents/decision_interval.py)
     train_env: dict = field(default_factory=dict)  # over env, for the training envs only (legs)
     demonstrations: dict = field(default_factory=dict)  # agents/demonstrations/dagger.py
 
     def __post_init__(self) -> None:
-        for name in ("n_envs", "eval_freq", "n_eval_episodes", "checkpoint_freq", "decision_steps"):
-            if getattr(self, name) < 1:
-                raise ConfigError(f"{name} must be at least 1, got {getattr(self, name)}")
-        if self.n_timesteps < 0:
-            raise ConfigError(f"n_timesteps must be at least 0, got {self.n_timesteps}")
         for name in ("policy_kwargs", "env", "observation", "train_env", "demonstrations"):
-            if not isinstance(getattr(self, name), dict):
-                raise ConfigError(f"{name} must be a mapping, got {getattr(self, name)!r}")
+            value = getattr(self, name)
+            require(isinstance(value, dict), name, f"must be a mapping, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -137,9 +157,14 @@ def load_hyperparams(
         if not isinstance(body, dict):
             raise ConfigError(f"{path}: section {section!r} must be a mapping, got {body!r}")
     chosen = env_id if env_id in data else "default"
-    merged = deep_merge(data.get("default", {}), data.get(SUITES, {}) if suite else {})
-    merged = deep_merge(merged, data.get(env_id, {}) if env_id else {})
-    merged = deep_merge(merged, overrides_to_tree(overrides or {}))
+    sections = ["default", *([SUITES] if suite else []), *([env_id] if env_id else [])]
+    layers = [(f"{shown(path)} [{name}]", data.get(name, {})) for name in sections]
+    layers.append((OVERRIDES, overrides_to_tree(overrides or {})))
+    merged: dict = {}
+    sources = KeySources()
+    for source, layer in layers:
+        merged = deep_merge(merged, layer)
+        sources.record(layer, source)
     training_keys = {f.name for f in dataclasses.fields(TrainingConfig)}
     try:
         training = build(
@@ -148,20 +173,22 @@ def load_hyperparams(
         algo_kwargs = {k: v for k, v in merged.items() if k not in training_keys}
         _check_algo_kwargs(cls, algo_kwargs)
         _check_policy_kwargs(training.policy_kwargs)
-    except ConfigError as err:
-        raise ConfigError(f"{path} [{chosen}]: {err}") from None
+    except ConfigError as err:  # named by the layer that set the key (the file if none did)
+        where = sources.file_of(err.key) or f"{shown(path)} [{chosen}]"
+        raise ConfigError(err.message, err.key, where) from None
     return Hyperparams(algo, chosen, training, algo_kwargs)
 
 
 def _check_algo_kwargs(cls: type, kwargs: dict) -> None:
-    """Names from ``cls.__init__``; types from its defaults (a ``None`` default takes any)."""
+    """Names from ``cls.__init__``; types from its defaults (a ``None`` default takes any);
+    every number finite and within :data:`ALGO_RANGES`."""
     parameters = inspect.signature(cls.__init__).parameters
     allowed = [name for name in parameters if name not in RESERVED]
     for key, value in kwargs.items():
         if key not in allowed:
             close = difflib.get_close_matches(key, [*allowed, "n_envs", "n_timesteps"], n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ConfigError(f"unknown hyper-parameter {key!r} for {cls.__name__}{hint}")
+            raise ConfigError(f"unknown hyper-parameter {key!r} for {cls.__name__}{hint}", key)
         default = parameters[key].default
         if default is None:
             continue
@@ -173,16 +200,18 @@ def _check_algo_kwargs(cls: type, kwargs: dict) -> None:
         else:  # a string default such as ent_coef: "auto" also takes a number
             ok = isinstance(value, str | int | float) and not isinstance(value, bool)
         if not ok:
-            raise ConfigError(f"{key} must be like {default!r}, got {value!r}")
-        if isinstance(default, int) and not isinstance(default, bool):
-            kwargs[key] = int(value)
+            raise ConfigError(f"{key} must be like {default!r}, got {value!r}", key)
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            integer = isinstance(default, int) and not isinstance(default, bool)
+            kwargs[key] = check_number(value, key, ALGO_RANGES.get(key, Range()), integer=integer)
 
 
 def _check_policy_kwargs(policy_kwargs: dict) -> None:
     activation = policy_kwargs.get("activation_fn")
     if activation is not None and activation not in ACTIVATIONS:
         raise ConfigError(
-            f"policy_kwargs.activation_fn must be one of {list(ACTIVATIONS)}, got {activation!r}"
+            f"policy_kwargs.activation_fn must be one of {list(ACTIVATIONS)}, got {activation!r}",
+            "policy_kwargs.activation_fn",
         )
 
 

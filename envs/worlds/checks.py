@@ -63,6 +63,7 @@ def check_world(world: WorldConfig) -> None:
             f"must be unique, got {landmark.id} again (ids: {ids})",
         )
         _check_on_wall(world, i)
+    _check_boards_apart(world)
     half = pattern.size / 2
     require(
         half <= world.landmark_height <= world.wall_height - half,
@@ -101,6 +102,23 @@ def _check_on_wall(world: WorldConfig, index: int) -> None:
         f"must face straight out of its wall ({' or '.join(f'{s:g}' for s in squares)}), "
         f"got {landmark.facing_deg:g}",
     )
+
+
+def _check_boards_apart(world: WorldConfig) -> None:
+    """Two boards on one face of a wall (facing the same way) hang a board's width apart at
+    least: closer, they overlap and neither pattern can be read."""
+    size = world.landmark_pattern.size
+    landmarks = world.landmarks
+    for j, second in enumerate(landmarks):
+        for i, first in enumerate(landmarks[:j]):
+            same_face = abs(math.remainder(first.facing_deg - second.facing_deg, 360.0)) < 90
+            gap = math.dist(first.at, second.at)
+            require(
+                not (same_face and gap < size - ON_WALL_TOLERANCE),
+                f"landmarks[{j}].at",
+                f"overlaps landmarks[{i}] on its wall: centres {gap:.3f} m apart, a "
+                f"{size:g} m board needs {size:g} m, got {list(second.at)}",
+            )
 
 
 def path_arc_length(path, point) -> tuple[float, float]:

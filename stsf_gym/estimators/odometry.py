@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from stsf_gym.validation import NonNegative
+
 
 @dataclass(frozen=True)
 class OdometryNoise:
@@ -20,9 +22,9 @@ class OdometryNoise:
     (``calibration_cov``, with the Jacobian of :func:`odometry_step`).
     """
 
-    slip_var_per_m: float
-    radius_var: float = 0.0
-    wheelbase_var: float = 0.0
+    slip_var_per_m: NonNegative
+    radius_var: NonNegative = 0.0
+    wheelbase_var: NonNegative = 0.0
 
     @classmethod
     def from_encoders(

@@ -24,7 +24,7 @@ from stsf_gym.experiments.statistics import summarise
 from stsf_gym.io import markdown_table
 from stsf_gym.metrics import distance_to_path
 from stsf_gym.recording.log_reader import RecordedLog, read_log
-from stsf_gym.recording.replay import ReplayedRun, replay
+from stsf_gym.recording.replay import ReplayedRun, check_replayable, pose_source, replay
 from stsf_gym.results import SCHEMA_VERSION, rendered, stat
 from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import COV_LIMIT
@@ -36,6 +36,9 @@ def replay_logs(logs: list[str | Path], estimators: list[str], out: str | Path) 
     """Run ``estimators`` over every log; write the report to ``out``; return the summary."""
     out = Path(out)
     read = [read_log(path) for path in logs]  # a bad log fails before any work
+    for log in read:  # ... and so does a log that lacks what a pose source reads
+        for name in estimators:
+            check_replayable(log, name, pose_source(name))
     episodes: dict[str, list[EpisodeResult]] = {name: [] for name in estimators}
     differences: dict[str, list[float]] = {name: [] for name in estimators}
     walls: dict[str, list[float]] = {name: [] for name in estimators}

@@ -15,8 +15,9 @@ import bisect
 import json
 from collections import defaultdict
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
+from typing import Annotated
 
 import cv2
 import numpy as np
@@ -26,10 +27,25 @@ from stsf_gym.estimators import SensorModel
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording import topics
 from stsf_gym.recording.sensor_model_json import sensor_model_from_dict
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, Coordinate, Positive, Range, build
 
 #: Topics a replay does not need (for looking at only), left unread.
 NOT_READ = frozenset({topics.TF, topics.TF_STATIC, topics.CMD_VEL, topics.CAMERA_INFO})
+#: The first bytes of a PNG file: the one compressed frame format that is lossless.
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+@dataclass(frozen=True)
+class EpisodeDocument:
+    """The keys of ``/robot/episode`` a replay reads, checked as a config's; others are kept
+    as they are (``frames`` and ``lossless`` are claims: the frames themselves decide)."""
+
+    control_dt: Positive  # s between two steps
+    seed: Annotated[int, Range(ge=0)] | None = None
+    path: tuple[tuple[Coordinate, Coordinate], ...] = ()  # for the path error
+
+
+EPISODE_KEYS = frozenset(f.name for f in fields(EpisodeDocument))
 
 
 @dataclass
@@ -48,6 +64,7 @@ class RecordedLog:
     sonar: list[tuple[int, np.ndarray]]
     aided: dict[int, object]  # stamp -> the fast mode's track-aided slots of that frame
     truth: np.ndarray | None  # (N, 3) true poses at the steps, when recorded
+    topics: frozenset[str] = frozenset()  # the topics that hold messages
     estimates: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     end: dict = field(default_factory=dict)  # the episode's ending ("outcome"), if recorded
 
@@ -62,7 +79,13 @@ class RecordedLog:
 
     @property
     def lossless(self) -> bool:
-        return bool(self.episode.get("lossless", True))
+        """Whether every camera frame is stored lossless: raw images, detections or PNG, as
+        the compressed frames' own bytes say (whatever the episode file claims)."""
+        return all(
+            bytes(message.data[: len(PNG_SIGNATURE)]) == PNG_SIGNATURE
+            for _, message in self.frames
+            if hasattr(message, "format")  # CompressedImage
+        )
 
     def observations(self) -> Iterator[dict]:
         """The observation of each step, the start's first."""
@@ -130,10 +153,15 @@ def read_log(path: str | Path) -> RecordedLog:
     missing = [t for t in topics.REQUIRED if not by_topic.get(t)]
     if missing:
         raise ConfigError(f"{path}: missing topic(s) {missing} (see docs/log_format.md)")
-    model = sensor_model_from_dict(json.loads(by_topic[topics.SENSOR_MODEL][0].data), str(path))
-    episode = json.loads(by_topic[topics.EPISODE][0].data)
-    if "control_dt" not in episode:
-        raise ConfigError(f"{path}: {topics.EPISODE} lacks 'control_dt'")
+    model = sensor_model_from_dict(
+        _json(by_topic, topics.SENSOR_MODEL, path), f"{path} {topics.SENSOR_MODEL}"
+    )
+    episode = _json(by_topic, topics.EPISODE, path)
+    checked = {key: value for key, value in episode.items() if key in EPISODE_KEYS}
+    try:
+        build(EpisodeDocument, checked, "")
+    except ConfigError as err:
+        raise ConfigError(err.message, err.key, f"{path} {topics.EPISODE}") from None
     initial_pose, initial_cov = ros.planar_pose(by_topic[topics.INITIAL_POSE][0])
     wheels = sorted(by_topic[topics.WHEEL_TICKS], key=ros.stamp_ns)
     stamps = np.array([ros.stamp_ns(m) for m in wheels], np.int64)
@@ -156,6 +184,7 @@ def read_log(path: str | Path) -> RecordedLog:
         sonar=_sonar(by_topic.get(topics.SONAR, [])),
         aided={ros.stamp_ns(m): m for m in by_topic.get(topics.AIDED, [])},
         truth=_poses_at(by_topic.get(topics.TRUTH, []), stamps),
+        topics=frozenset(topic for topic, messages in by_topic.items() if messages),
         end=json.loads(by_topic[topics.EPISODE_END][0].data)
         if by_topic[topics.EPISODE_END]
         else {},
@@ -165,6 +194,17 @@ def read_log(path: str | Path) -> RecordedLog:
             if topic.startswith("/estimate/")
         },
     )
+
+
+def _json(by_topic: dict[str, list], topic: str, path: Path) -> dict:
+    """The JSON mapping of ``topic``'s first message, or a :class:`ConfigError` naming it."""
+    try:
+        data = json.loads(by_topic[topic][0].data)
+    except json.JSONDecodeError as err:
+        raise ConfigError(f"{path} {topic}: not JSON ({err})") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path} {topic}: must be a JSON object, got {data!r}")
+    return data
 
 
 def _sonar(messages: list) -> list[tuple[int, np.ndarray]]:

@@ -16,9 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from stsf_gym.estimators import PoseEstimator, make_estimator
+from stsf_gym.recording import topics
 from stsf_gym.recording.log_reader import RecordedLog
 from stsf_gym.validation import ConfigError
-from stsf_gym.wrappers import TRUTH, TruePose
+from stsf_gym.wrappers import TRUTH, TruePose, check_estimate
 
 
 @dataclass
@@ -40,13 +41,27 @@ def pose_source(name: str, **options) -> PoseEstimator:
     return TruePose() if name == TRUTH else make_estimator(name, **options)
 
 
+def check_replayable(log: RecordedLog, name: str, estimator: PoseEstimator) -> None:
+    """Refuse (:class:`ConfigError`) to run pose source ``name`` on ``log`` unless the log
+    holds every topic it needs: its sensors' (:data:`topics.SENSOR_TOPICS`), and the true
+    poses for a privileged source."""
+    if hasattr(estimator, "see") and log.truth is None:
+        raise ConfigError(f"{log.path}: {name} needs the true poses, and the log has none")
+    for sensor in estimator.sensors:
+        for group in topics.SENSOR_TOPICS.get(sensor, ()):
+            if not log.topics & set(group):
+                raise ConfigError(
+                    f"{log.path}: pose source {name!r} reads the {sensor}, and the log has no "
+                    f"{' or '.join(group)} topic (see docs/log_format.md)"
+                )
+
+
 def replay(log: RecordedLog, name: str, observations: list[dict] | None = None, **options):
     """Run pose source ``name`` (``options`` over its YAML settings) over ``log``; pass
     ``observations`` (``list(log.observations())``) to decode the frames once for many."""
     estimator = pose_source(name, **options)
+    check_replayable(log, name, estimator)
     privileged = hasattr(estimator, "see")
-    if privileged and log.truth is None:
-        raise ConfigError(f"{log.path}: {name} needs the true poses, and the log has none")
     started = time.perf_counter()
     steps = iter(observations if observations is not None else log.observations())
     next(steps)  # the start: the estimator is reset, not updated
@@ -59,9 +74,9 @@ def replay(log: RecordedLog, name: str, observations: list[dict] | None = None, 
     for k, obs in enumerate(steps, start=1):
         if privileged:
             estimator.see(log.truth[k])
-        mean, cov = estimator.update(obs, log.control_dt)
-        means.append(np.array(mean, dtype=float))
-        covs.append(np.array(cov, dtype=float))
+        mean, cov = check_estimate(name, *estimator.update(obs, log.control_dt))
+        means.append(mean.copy())
+        covs.append(cov.copy())
     return ReplayedRun(
         name=name,
         means=np.array(means),

@@ -22,8 +22,8 @@ calibration error), never the simulator's true camera.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
-from typing import Any
+from dataclasses import asdict, dataclass
+from typing import Annotated, Any
 
 import numpy as np
 
@@ -31,7 +31,15 @@ from stsf_gym.camera_model import CameraCalibration, PanTiltMount
 from stsf_gym.estimators import MapLandmark, SensorModel
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.geometry import OdometryCalibration
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import (
+    ConfigError,
+    Coordinate,
+    NonNegative,
+    Pixels,
+    Range,
+    build,
+    require,
+)
 from stsf_gym.vision.landmarks import LandmarkPattern
 
 FORMAT, VERSION = "stsf-gym sensor model", 1
@@ -75,42 +83,90 @@ def sensor_model_json(model: SensorModel) -> str:
     return json.dumps(sensor_model_dict(model), default=lambda v: v.item())  # numpy scalars
 
 
+Vector3 = tuple[float, float, float]
+Point3 = tuple[Coordinate, Coordinate, Coordinate]
+
+
+@dataclass(frozen=True)
+class CameraDocument:
+    """``camera``: the believed intrinsics, distortion, image size and calibration doubt."""
+
+    K: tuple[Vector3, Vector3, Vector3]
+    dist: tuple[float, float, float, float, float]
+    image_size: tuple[Pixels, Pixels]
+    calibration_std: tuple[NonNegative, NonNegative]
+
+    def __post_init__(self) -> None:
+        (fx, _, _), (zero, fy, _), bottom = self.K
+        require(fx > 0 and fy > 0, "K", f"must have focal lengths > 0, got {fx}, {fy}")
+        require(zero == 0 and bottom == (0, 0, 1), "K", f"must be a pinhole matrix, got {self.K}")
+
+
+@dataclass(frozen=True)
+class LandmarkDocument:
+    """One board of the map: its id, centre, unit outward normal and square centres."""
+
+    id: Annotated[int, Range(ge=0)]
+    centre: Point3
+    normal: Vector3
+    square_centres: tuple[Point3, ...]
+
+    def __post_init__(self) -> None:
+        length = float(np.linalg.norm(self.normal))
+        require(abs(length - 1) <= 1e-6, "normal", f"must be a unit vector, got {self.normal}")
+
+
+@dataclass(frozen=True)
+class SensorModelDocument:
+    """The sensor model's JSON, each number typed and ranged as a config's
+    (:mod:`stsf_gym.validation`): a log is input."""
+
+    format: str
+    version: int
+    odometry: OdometryCalibration
+    odometry_noise: OdometryNoise
+    camera: CameraDocument
+    mount: PanTiltMount
+    pattern: LandmarkPattern
+    landmarks: tuple[LandmarkDocument, ...]
+    walls: tuple[tuple[Coordinate, Coordinate, Coordinate, Coordinate], ...]
+
+    def __post_init__(self) -> None:
+        ids = [lm.id for lm in self.landmarks]
+        require(len(set(ids)) == len(ids), "landmarks", f"must have distinct ids, got {ids}")
+
+
 def sensor_model_from_dict(data: dict[str, Any], where: str = "sensor model") -> SensorModel:
-    """The :class:`SensorModel` of a :func:`sensor_model_dict`; a missing or malformed key is
-    a :class:`ConfigError` naming it and ``where`` (the log file)."""
-    if data.get("format") != FORMAT or data.get("version") != VERSION:
+    """The :class:`SensorModel` of a :func:`sensor_model_dict`; a missing, malformed or
+    out-of-range key is a :class:`ConfigError` naming it and ``where`` (the log file)."""
+    if not isinstance(data, dict) or (data.get("format"), data.get("version")) != (FORMAT, VERSION):
+        found = (data.get("format"), data.get("version")) if isinstance(data, dict) else data
         raise ConfigError(
-            f"{where}: not a {FORMAT!r} version {VERSION} document "
-            f"(format {data.get('format')!r}, version {data.get('version')!r})"
+            f"{where}: not a {FORMAT!r} version {VERSION} document (format, version: {found})"
         )
     try:
-        camera = data["camera"]
-        K = np.array(camera["K"], dtype=float).reshape(3, 3)
-        calibration = CameraCalibration(K, np.array(camera["dist"], dtype=float).reshape(5))
-        landmarks = {
-            int(lm["id"]): MapLandmark(
-                int(lm["id"]),
-                np.array(lm["centre"], dtype=float).reshape(3),
-                np.array(lm["normal"], dtype=float).reshape(3),
-                np.array(lm["square_centres"], dtype=float).reshape(-1, 3),
+        doc = build(SensorModelDocument, data, "")
+    except ConfigError as err:
+        raise ConfigError(err.message, err.key, where) from None
+    camera = doc.camera
+    K = np.array(camera.K, dtype=float)
+    return SensorModel(
+        calibration=doc.odometry,
+        odometry_noise=doc.odometry_noise,
+        camera_calibration=CameraCalibration(K, np.array(camera.dist, dtype=float)),
+        camera_calibration_std=camera.calibration_std,
+        camera_matrix=K,
+        image_size=camera.image_size,
+        robot_from_camera=doc.mount,
+        landmarks={
+            lm.id: MapLandmark(
+                lm.id,
+                np.array(lm.centre, dtype=float),
+                np.array(lm.normal, dtype=float),
+                np.array(lm.square_centres, dtype=float).reshape(-1, 3),
             )
-            for lm in data["landmarks"]
-        }
-        width, height = (int(v) for v in camera["image_size"])
-        heading_std, focal_std = (float(v) for v in camera["calibration_std"])
-        return SensorModel(
-            calibration=OdometryCalibration(**data["odometry"]),
-            odometry_noise=OdometryNoise(**data["odometry_noise"]),
-            camera_calibration=calibration,
-            camera_calibration_std=(heading_std, focal_std),
-            camera_matrix=K,
-            image_size=(width, height),
-            robot_from_camera=PanTiltMount(**data["mount"]),
-            landmarks=landmarks,
-            pattern=LandmarkPattern(**data["pattern"]),
-            walls=np.array(data["walls"], dtype=float).reshape(-1, 4),
-        )
-    except KeyError as err:
-        raise ConfigError(f"{where}: missing key {err.args[0]!r}") from None
-    except (TypeError, ValueError) as err:
-        raise ConfigError(f"{where}: {err}") from None
+            for lm in doc.landmarks
+        },
+        pattern=doc.pattern,
+        walls=np.array(doc.walls, dtype=float).reshape(-1, 4),
+    )

@@ -1,7 +1,8 @@
 """The log format: topics and their standard ROS 2 message types (see docs/log_format.md).
 
-A replay needs :data:`REQUIRED` and camera data (one of :data:`CAMERA`); everything else is
-for looking at or for scoring. Time is the header stamp (ns, simulated time from 0 for our
+A replay needs :data:`REQUIRED`, and for a pose source reading the camera camera data (one of
+:data:`CAMERA`) and :data:`PAN_TILT` (:data:`SENSOR_TOPICS`); everything else is for looking at
+or for scoring. Time is the header stamp (ns, simulated time from 0 for our
 recordings); one :data:`WHEEL_TICKS` message is one control step of the estimators.
 """
 
@@ -50,6 +51,12 @@ TYPES: dict[str, str] = {
 ESTIMATE_TYPE = "geometry_msgs/msg/PoseWithCovarianceStamped"
 REQUIRED = (SENSOR_MODEL, EPISODE, INITIAL_POSE, WHEEL_TICKS)
 CAMERA = (IMAGE_COMPRESSED, IMAGE_RAW, DETECTIONS)
+#: What a pose source reading each sensor (its ``sensors``) needs of a log: one topic with
+#: messages out of every group.
+SENSOR_TOPICS: dict[str, tuple[tuple[str, ...], ...]] = {
+    "encoders": ((WHEEL_TICKS,),),
+    "camera": (CAMERA, (PAN_TILT,)),  # frames, and the mount angles they were taken at
+}
 #: Joint names of the wheel ticks and the mount angles.
 WHEELS, MOUNT_JOINTS = ("left_wheel", "right_wheel"), ("camera_pan", "camera_tilt")
 #: The frame of the sonar ring: on the robot's axis at the transducers' height.

@@ -107,6 +107,7 @@ class MonteCarloLocalization(PoseEstimator):
     """
 
     name = "mcl"
+    sensors = ("encoders", "camera")  # map boards in the camera frames
     settings_type: ClassVar[type] = MCLSettings
 
     def __init__(self, settings: MCLSettings) -> None:

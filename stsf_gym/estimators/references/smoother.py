@@ -92,6 +92,7 @@ class FixedLagSmoother(OdometryEstimator):
     """
 
     name = "smoother"
+    sensors = ("encoders", "camera")  # map boards in the camera frames
     settings_type: ClassVar[type] = SmootherSettings
 
     def __init__(self, settings: SmootherSettings) -> None:

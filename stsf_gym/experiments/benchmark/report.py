@@ -164,9 +164,9 @@ def plot_leaderboard(summary: dict, path: str | Path) -> Path:
         title="paired success difference (95 % CI)",
     )
     ax.grid(alpha=0.3)
-    worlds = summary["worlds"]
+    worlds, episodes = summary["worlds"], rows[0]["episodes"] if rows else 0
     fig.suptitle(
-        f"Suite {summary['suite']}: declared arrival, {rows[0]['episodes']} test worlds "
+        f"Suite {summary['suite']}: declared arrival, {episodes} test worlds "
         f"{worlds['world_seeds'][0]}-{worlds['world_seeds'][1]}"
     )
     fig.tight_layout()

@@ -20,7 +20,7 @@ import itertools
 from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, load_config
-from stsf_gym.envs.generated_env import world_seed_for
+from stsf_gym.envs.generated_env import check_distinct_worlds, world_seed_for
 from stsf_gym.envs.suite import Suite, load_suite
 from stsf_gym.envs.task import Polyline
 from stsf_gym.envs.worlds.coverage import landmark_coverage
@@ -91,6 +91,10 @@ def benchmark(
     out, loaded = Path(out), load_suite(suite)
     if worlds < 1:
         raise ConfigError(f"--worlds must be at least 1, got {worlds}")
+    test_worlds = loaded.generator_config().split_range("test")
+    check_distinct_worlds(
+        test_worlds, range(seed, seed + worlds), f"--seed {seed} --worlds {worlds}"
+    )
     seeds = list(range(seed, seed + worlds))
     cells = benchmark_cells(loaded, list(agents), estimators, seeds)
     if record:
