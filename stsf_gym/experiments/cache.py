@@ -48,10 +48,11 @@ class Crash:
 class JobsFailed(RuntimeError):
     """Jobs that failed on every attempt; the finished ones are saved."""
 
-    def __init__(self, failures: dict[str, str], folder: Path) -> None:
+    def __init__(self, failures: dict[str, str], folder: Path, attempts: int = ATTEMPTS) -> None:
         listed = "; ".join(f"{name}: {error}" for name, error in failures.items())
+        times = "once" if attempts == 1 else f"{attempts} times"
         super().__init__(
-            f"{len(failures)} job(s) failed {ATTEMPTS} times ({listed}); finished results are "
+            f"{len(failures)} job(s) failed {times} ({listed}); finished results are "
             f"kept in {folder} and a rerun with the same output folder retries the rest"
         )
         self.failures = failures

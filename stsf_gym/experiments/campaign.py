@@ -16,22 +16,10 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from stsf_gym.experiments.cache import Crash
+from stsf_gym.experiments.cache import Crash, JobsFailed
 
 #: The arguments of :func:`~stsf_gym.agents.training.train.train` a campaign's runs share.
 Job = dict[str, Any]
-
-
-class CampaignFailed(RuntimeError):
-    """Runs of a campaign that raised; the others finished and are saved."""
-
-    def __init__(self, failures: dict[str, str], out: Path) -> None:
-        listed = "; ".join(f"{run}: {error}" for run, error in failures.items())
-        super().__init__(
-            f"{len(failures)} training run(s) failed ({listed}); the finished runs are saved "
-            f"in {out}: rerun the same command to retry the others"
-        )
-        self.failures = failures
 
 
 def campaign_jobs(shared: Job, out: Path, estimators: list[str], seeds: Iterable[int]) -> list[Job]:
@@ -60,7 +48,8 @@ def run_campaign(
     """Every job's summary, in job order. ``on_done(job, summary)`` is called as each finishes
     (a progress bar, a line of output). A job that raises ends a local campaign at once (its
     checkpoint kept); on Ray the other jobs go on and the failures are raised together as
-    :class:`CampaignFailed` once every job has finished."""
+    :class:`~stsf_gym.experiments.cache.JobsFailed` once every job has finished (the command
+    exits 1; a rerun retries them)."""
     done: dict[int, dict] = {}
     if backend == "local":
         for index, job in enumerate(jobs):
@@ -84,7 +73,7 @@ def run_campaign(
         if on_done is not None:
             on_done(job, result)
     if failures:
-        raise CampaignFailed(failures, Path(jobs[0]["out"]).parent.parent)
+        raise JobsFailed(failures, Path(jobs[0]["out"]).parent.parent, attempts=1)
     return [done[index] for index in range(len(jobs))]
 
 
