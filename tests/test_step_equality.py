@@ -15,8 +15,9 @@ import pytest
 
 GOLDEN = Path(__file__).parent / "data" / "step_golden.npz"
 #: (env id, overrides, steps): the true pose with the camera off, and STSF on the fast camera;
-#: the sonar cast through PyBullet, as the recording was (the plane cast, a change of method,
-#: is compared with it in ``test_plane_cast.py``)
+#: each with the sonar cast through PyBullet, as the first recording was (the plane cast, a
+#: change of method, is compared with it in ``test_plane_cast.py``), and with the plane cast,
+#: the default since (recorded when it became the default)
 BULLET_SONAR = {"sonar": {"cast": "bullet"}}
 CASES = {
     "truth": (
@@ -25,6 +26,8 @@ CASES = {
         300,
     ),
     "stsf": ("stsf_gym/Suite-Corridor-STSF-v0", BULLET_SONAR, 300),
+    "truth, plane cast": ("stsf_gym/Suite-Corridor-Truth-v0", {"camera": {"enabled": False}}, 300),
+    "stsf, plane cast": ("stsf_gym/Suite-Corridor-STSF-v0", {}, 300),
 }
 
 
