@@ -11,6 +11,7 @@ import numpy as np
 from stsf_gym.agents.sonar_avoidance import AvoidanceConfig, SonarAvoidance
 from stsf_gym.envs.config import CONFIG_DIR, build, deep_merge, overrides_to_tree, read_yaml
 from stsf_gym.envs.task import Polyline
+from stsf_gym.geometry import bounded
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,7 @@ class PathFollower:
         v, w = self.cfg.speed, 0.0
         if sonar is not None and self.avoidance is not None:
             v, w = self.avoidance.adjust(sonar, 0.0, v, w, self.cfg.max_yaw_rate)
-        return np.clip(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)
+        return bounded(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)
 
     def act(self, pose: np.ndarray, sonar: np.ndarray | None = None) -> np.ndarray:
         """Action [v, w] in [-1, 1] for the robot at ``pose`` = [x, y, yaw], and a last entry
@@ -171,4 +172,4 @@ class PathFollower:
             w = min(max(v * curvature, -self.cfg.max_yaw_rate), self.cfg.max_yaw_rate)
         if sonar is not None and self.avoidance is not None:
             v, w = self.avoidance.adjust(sonar, bearing, v, w, self.cfg.max_yaw_rate)
-        return np.clip(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)
+        return bounded(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)

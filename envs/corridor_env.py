@@ -31,7 +31,7 @@ from stsf_gym.envs.start_pose import draw_leg, draw_start_pose, legs
 from stsf_gym.envs.task import PathTask
 from stsf_gym.envs.worlds.checks import check_start_pose
 from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
-from stsf_gym.geometry import OdometryCalibration
+from stsf_gym.geometry import OdometryCalibration, bounded
 
 RENDER_VFOV_DEG = 60.0
 CHASE_DISTANCE, CHASE_MIN_DISTANCE, CHASE_WALL_GAP, CHASE_HEIGHT = 1.8, 0.3, 0.15, 1.6  # m
@@ -392,7 +392,7 @@ class CorridorEnv(gym.Env):
             raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
         if not np.all(np.isfinite(a)):
             raise ValueError(f"action contains NaN or infinite values: {a.tolist()}")
-        a = np.clip(a, -1.0, 1.0)
+        a = bounded(a, -1.0, 1.0)
         robot, layout = self.config.robot, self.action_layout
         v, w = a[layout.index("v")] * robot.max_speed, a[layout.index("w")] * robot.max_yaw_rate
         target = np.array([v, w])
@@ -460,7 +460,7 @@ class CorridorEnv(gym.Env):
             "camera_pan_tilt": self._frame_pan_tilt.copy(),
             "sonar": self._sonar.copy(),
             "sonar_time": self._sonar_time.copy(),
-            "encoders": np.clip(ticks, -self._max_ticks, self._max_ticks).astype(np.int64),
+            "encoders": bounded(ticks, -self._max_ticks, self._max_ticks).astype(np.int64),
             "encoders_time": np.array([self._time]),
         }
 

@@ -19,6 +19,7 @@ import numpy as np
 from stsf_gym.camera_model import LINK_FROM_OPTICAL, PanTiltMount, pose_matrix, rot_z
 from stsf_gym.envs.config import RobotConfig
 from stsf_gym.envs.simulator import Simulator, cache_file
+from stsf_gym.geometry import bounded
 
 CASTER_FRACTION = 0.45  # caster sphere radius as a fraction of the wheel radius
 BODY_CLEARANCE = 0.05  # floor to body bottom (m)
@@ -228,7 +229,7 @@ class DiffDriveRobot:
 
     def point_camera(self, pan: float, tilt: float) -> None:
         """Servo the mount to (pan, tilt) radians, clipped to its limits."""
-        targets = np.clip([pan, tilt], -self.pan_tilt_limits, self.pan_tilt_limits)
+        targets = bounded([pan, tilt], -self.pan_tilt_limits, self.pan_tilt_limits)
         self.sim.client.setJointMotorControlArray(
             self.body,
             self.pan_tilt,

@@ -27,6 +27,7 @@ from stsf_gym.estimators.base import SonarRingModel
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.settings import OdometrySettings
+from stsf_gym.geometry import bounded
 from stsf_gym.state_history import StateHistory
 from stsf_gym.validation import ConfigError
 
@@ -119,25 +120,40 @@ SYMMETRY_TOLERANCE = 1e-6
 
 def check_estimate(name: str, mean: Any, cov: Any) -> tuple[np.ndarray, np.ndarray]:
     """``mean`` and ``cov`` as float arrays if they are a pose estimate, else an
-    :class:`EstimateError` naming pose source ``name`` (checked at every step it returns)."""
+    :class:`EstimateError` naming pose source ``name`` (checked at every step it returns, on
+    plain floats: a 3x3 check costs more in numpy's call overhead than in arithmetic)."""
     mean, cov = np.asarray(mean, dtype=float), np.asarray(cov, dtype=float)
     where = f"pose source {name!r} returned"
-    if mean.shape != (3,) or not np.isfinite(mean).all():
+    if mean.shape != (3,) or not all(map(math.isfinite, mean.tolist())):
         raise EstimateError(f"{where} the pose {mean.tolist()}: not three finite numbers x, y, yaw")
-    if cov.shape != (3, 3) or not np.isfinite(cov).all():
+    entries = cov.ravel().tolist()
+    if cov.shape != (3, 3) or not all(map(math.isfinite, entries)):
         raise EstimateError(f"{where} the covariance {cov.tolist()}: not a finite 3x3 matrix")
-    scale = float(np.abs(cov).max())
-    if np.abs(cov - cov.T).max() > SYMMETRY_TOLERANCE * scale:
+    scale = max(map(abs, entries))
+    asymmetry = max(abs(entries[i] - entries[j]) for i, j in ((1, 3), (2, 6), (5, 7)))
+    if asymmetry > SYMMETRY_TOLERANCE * scale:
         raise EstimateError(f"{where} the covariance {cov.tolist()}: not symmetric")
-    try:
-        np.linalg.cholesky(cov)
-    except np.linalg.LinAlgError:
+    if not _cholesky_succeeds(entries):
         eigenvalues = np.linalg.eigvalsh(cov).tolist()
         raise EstimateError(
             f"{where} the covariance {cov.tolist()}: not positive definite (eigenvalues "
             f"{eigenvalues}); NEES and the agent's uncertainty need a positive definite one"
-        ) from None
+        )
     return mean, cov
+
+
+def _cholesky_succeeds(c: list[float]) -> bool:
+    """Whether the Cholesky factorization ``L L^T`` of the symmetric 3x3 matrix ``c`` (row
+    major; its lower triangle read, as ``np.linalg.cholesky`` does) exists: every pivot > 0."""
+    if not c[0] > 0:
+        return False
+    l00 = math.sqrt(c[0])
+    l10, l20 = c[3] / l00, c[6] / l00
+    pivot = c[4] - l10 * l10
+    if not pivot > 0:
+        return False
+    l21 = (c[7] - l20 * l10) / math.sqrt(pivot)
+    return c[8] - l20 * l20 - l21 * l21 > 0
 
 
 def check_sensors(name: str, sensors: tuple[str, ...], camera_enabled: bool) -> None:
@@ -327,6 +343,6 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         low, high = self.observation_space["pose"].low, self.observation_space["pose"].high
         return {
             **obs,
-            "pose": np.clip(pose, low, high).astype(np.float32),
-            "pose_cov": np.clip(cov, -COV_LIMIT, COV_LIMIT).astype(np.float32).ravel(),
+            "pose": bounded(pose, low, high).astype(np.float32),
+            "pose_cov": bounded(cov, -COV_LIMIT, COV_LIMIT).astype(np.float32).ravel(),
         }

@@ -148,6 +148,24 @@ def test_a_valid_estimate_passes_with_rounding_asymmetry():
     assert mean.tolist() == [1.0, 2.0, 7.0] and np.array_equal(checked, cov)
 
 
+def test_the_positive_definiteness_check_agrees_with_numpys_cholesky():
+    rng = np.random.default_rng(0)
+    for _ in range(2000):
+        root = rng.normal(size=(3, 3))
+        cov = root @ root.T - rng.uniform(0, 2) * np.eye(3)  # about half are not definite
+        try:
+            np.linalg.cholesky(cov)
+            definite = True
+        except np.linalg.LinAlgError:
+            definite = False
+        try:
+            check_estimate("mine", [0.0, 0.0, 0.0], cov)
+            passed = True
+        except EstimateError:
+            passed = False
+        assert passed == definite, cov
+
+
 @dataclass(frozen=True)
 class NoSettings:
     """A user's estimator without options."""

@@ -16,6 +16,8 @@ hit; its fraction ``t / L``, its normal the edge's ``n`` or ``(o + t d - c) / r`
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from stsf_gym.envs.rendering.scene import Box, Cylinder, Scene
@@ -23,6 +25,9 @@ from stsf_gym.envs.rendering.scene import Box, Cylinder, Scene
 #: outward normals of a box's four faces in its own frame, and the corner each face starts at
 FACE_NORMALS = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
 FACE_STARTS = np.array([[1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0]])
+#: How far (m) the ring may move before the edges in its reach are selected again: they are
+#: selected for ``reach + REACH_MARGIN``, a superset of the edges any ray can enter until then
+REACH_MARGIN = 0.5
 
 
 class PlaneCaster:
@@ -32,6 +37,7 @@ class PlaneCaster:
     def __init__(self, height: float) -> None:
         self.height = height
         self._built: tuple[int, int] | None = None  # (id of the scene, its version)
+        self._selection: tuple[np.ndarray, float, np.ndarray] | None = None  # centre, reach, edges
 
     def cast(
         self,
@@ -57,6 +63,21 @@ class PlaneCaster:
         return fractions, np.where(hit[:, None], normals, 0.0)
 
     def _reachable(self, centre: np.ndarray, reach: float) -> np.ndarray:
+        """Edges, in their order, among which are all a ray from within ``reach`` of
+        ``centre`` can enter: :meth:`_select`'s for a wider reach about a nearby centre, kept
+        while ``centre`` is within the difference (an edge's distance and the side of it a
+        point is on change no faster than the point moves). Edges out of reach meet no ray
+        before its end, so a superset gives the same nearest hits."""
+        if self._selection is not None:
+            selected_at, selected_reach, edges = self._selection
+            moved = math.hypot(centre[0] - selected_at[0], centre[1] - selected_at[1])
+            if moved <= selected_reach - reach:
+                return edges
+        edges = self._select(centre, reach + REACH_MARGIN)
+        self._selection = (centre.copy(), reach + REACH_MARGIN, edges)
+        return edges
+
+    def _select(self, centre: np.ndarray, reach: float) -> np.ndarray:
         """The edges a ray from within ``reach`` of ``centre`` can enter: those nearer than
         ``reach`` whose outside faces ``centre`` or passes within ``reach`` of it (a wall's
         far face is out of every ray's reach from the corridor: half the edges)."""
@@ -116,6 +137,7 @@ class PlaneCaster:
             elif isinstance(shape, Cylinder) and 0.0 <= self.height <= shape.height:
                 circles.append([*shape.xy, shape.radius])
         self._edges = np.concatenate(edges)
+        self._selection = None
         self._circles = np.array(circles, dtype=float).reshape(-1, 3)
         self._built = (id(scene), scene.version)
 

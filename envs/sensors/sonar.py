@@ -10,6 +10,7 @@ from stsf_gym.envs.config import ConfigError, SonarConfig
 from stsf_gym.envs.sensors.plane_cast import PlaneCaster
 from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
+from stsf_gym.geometry import bounded
 
 
 class SonarRing:
@@ -67,7 +68,7 @@ class SonarRing:
         else:
             ends = starts + self.cfg.max_range * self._directions[rays] @ rotation.T
             fractions, normals = _bullet_cast(sim, starts, ends, self.cfg.height)
-        incidence = np.arccos(np.clip(-np.sum(normals * directions, axis=1), -1.0, 1.0))
+        incidence = np.arccos(bounded(-np.sum(normals * directions, axis=1), -1.0, 1.0))
         shape = (-1, self.cfg.rays_per_beam)
         return fractions.reshape(shape), incidence.reshape(shape)
 
@@ -101,7 +102,7 @@ class SonarRing:
         noisy = ranges + rng.normal(size=count) * (cfg.noise_std + cfg.noise_std_per_m * ranges)
         noisy = np.where(hit, noisy, cfg.max_range)
         noisy[rng.random(count) < cfg.dropout_prob] = cfg.max_range
-        return np.clip(noisy, cfg.min_range, cfg.max_range).astype(np.float32)
+        return bounded(noisy, cfg.min_range, cfg.max_range).astype(np.float32)
 
 
 def _bullet_cast(
