@@ -4,12 +4,18 @@ A measured block lies between ``<!-- measured: NAME (begin) -->`` and
 ``<!-- measured: NAME (end) -->``. A block is **tied** when its begin marker names the results
 files it quotes, ``<!-- measured: NAME (begin) results: PATH, PATH -->`` (repository paths), each
 with its ``provenance`` (``command``, ``stsf_gym.source_digest``, ``stsf_gym.commit``), and its
-text shows each file's command and code digest. A tied block is **current** when every file's
-digest is the digest of the measured code now
-(:func:`stsf_gym.results.provenance.source_digest`: every module and config of stsf_gym/,
-envs/, agents/ and configs/), else **stale**: its results were made by code that has changed
-since. A block that names no results is **not tied**; it must be listed in
-``benchmarks/measured_not_tied.yaml`` with the reason, so the list stays visible.
+text shows each file's command and code digest. A tied block is **current** when the code each
+of its files was made with is unchanged, else **stale**: its results were made by code that has
+changed since. A file that lists the code its run loaded (``stsf_gym.loaded_code``: each module
+imported by the run or its workers, and every config, with its digest,
+:func:`stsf_gym.results.provenance.loaded_code`) is unchanged when every listed file's bytes
+now have the same digest (a file deleted since counts as changed), so an edit to code the run
+never loaded leaves it current; a stale block's note names the changed files. A file without
+that list (made before it was recorded) is unchanged only when its ``source_digest`` is the
+digest of all the code now (:func:`stsf_gym.results.provenance.source_digest`: every module and
+config of stsf_gym/, envs/, agents/ and configs/). A block that names no results is **not
+tied**; it must be listed in ``benchmarks/measured_not_tied.yaml`` with the reason, so the list
+stays visible.
 
 Rules (``tests/test_measured_blocks.py`` runs them in ``make test``): markers pair up and names
 are unique; a tied block's files exist, carry provenance and are shown in its text; an untied
@@ -28,12 +34,14 @@ import json
 import re
 import subprocess
 import sys
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import yaml
 
-from stsf_gym.results.provenance import source_digest
+from stsf_gym.results.provenance import file_digest, source_digest
 
 ROOT = Path(__file__).resolve().parent.parent
 NOT_TIED = Path("benchmarks/measured_not_tied.yaml")  # relative to the repository
@@ -41,6 +49,7 @@ NOT_TIED = Path("benchmarks/measured_not_tied.yaml")  # relative to the reposito
 PAGES = ("README.md", "docs")
 #: The folders whose code the digest covers (pyproject's package-dir).
 CODE = ("stsf_gym", "envs", "agents", "configs")
+NAMED = 3  # changed files a note names before "and N more"
 MARKER = re.compile(
     r"<!-- measured: (?P<name>.+?) \((?P<edge>begin|end)\)(?: results: (?P<results>[^>]*?))? -->"
 )
@@ -106,14 +115,47 @@ def _git(*args: str, root: Path) -> str | None:
     return done.stdout.strip() if done.returncode == 0 else None
 
 
-def changes_since(commit: str | None, root: Path = ROOT) -> str:
-    """How the measured code has changed since ``commit``, in words."""
+def changes_since(commit: str | None, root: Path = ROOT, files: Sequence[str] = ()) -> str:
+    """How ``files`` (default: all the measured code) have changed since ``commit``, in words."""
     if not commit:
         return "the run recorded no commit (its code was no git checkout)"
-    count = _git("rev-list", "--count", f"{commit}..HEAD", "--", *CODE, root=root)
+    count = _git("rev-list", "--count", f"{commit}..HEAD", "--", *(files or CODE), root=root)
     if count is None:
         return f"commit {commit[:10]} is not in this repository's history"
-    return f"made at commit {commit[:10]}; {count} later commits changed the code"
+    what = "them" if files else "the code"
+    return f"made at commit {commit[:10]}; {count} later commits changed {what}"
+
+
+def changed_files(loaded: Mapping[str, str], root: Path = ROOT) -> list[str]:
+    """The files of ``loaded`` (``{repository path: digest}``) whose bytes under ``root`` have
+    another digest now, or that are gone."""
+    return [
+        path
+        for path, digest in sorted(loaded.items())
+        if not (root / path).is_file() or file_digest(root / path) != digest
+    ]
+
+
+def _named(files: list[str]) -> str:
+    more = f" and {len(files) - NAMED} more" if len(files) > NAMED else ""
+    return ", ".join(files[:NAMED]) + more
+
+
+def staleness(code: Mapping[str, Any], digest: str, root: Path = ROOT) -> str | None:
+    """Why the code a results file was made with (its provenance's ``stsf_gym``) has changed,
+    or None when it has not: by the files its run loaded, else (an older file) by the digest."""
+    loaded, commit = code.get("loaded_code"), code.get("commit")
+    if loaded is not None:
+        changed = changed_files(loaded, root)
+        if not changed:
+            return None
+        return (
+            f"{len(changed)} of the {len(loaded)} files its run loaded changed "
+            f"({_named(changed)}), {changes_since(commit, root, changed)}"
+        )
+    if code["source_digest"] == digest:
+        return None
+    return f"digest {code['source_digest']}, {changes_since(commit, root)}"
 
 
 def judge(block: Block, digest: str, root: Path = ROOT) -> list[str]:
@@ -134,19 +176,19 @@ def judge(block: Block, digest: str, root: Path = ROOT) -> list[str]:
         for shown in (made_by["command"], code["source_digest"]):
             if shown not in block.text:
                 problems.append(f"{where}: the block does not show {name}'s {shown!r}")
-        if code["source_digest"] != digest:
+        why = staleness(code, digest, root)
+        if why is not None:
             stale = True
-            block.notes.append(
-                f"{name}: digest {code['source_digest']}, {changes_since(code.get('commit'), root)}"
-            )
+            block.notes.append(f"{name}: {why}")
     if block.results:
         block.state = "stale" if stale else "current"
     return problems
 
 
 def check(root: Path = ROOT, digest: str | None = None) -> tuple[list[Block], list[str]]:
-    """Every block judged against the code's ``digest`` (default: the package's now), and the
-    problems: broken rules (see the module's docstring)."""
+    """Every block judged against the code under ``root`` (files without a list of the code
+    they loaded: against ``digest``, default the package's now), and the problems: broken rules
+    (see the module's docstring)."""
     digest = digest or source_digest()
     blocks, problems = find_blocks(root)
     not_tied = yaml.safe_load((root / NOT_TIED).read_text()) or {}

@@ -1,17 +1,21 @@
 """Figures that cannot go stale unseen: every measured block of README.md and docs/ is tied to
 the results it quotes (command and code digest shown) or listed with the reason it is not; the
-stale and untied ones are listed (a warning) on every run, and the README quotes none
+stale and untied ones are listed (a warning) on every run, and the README quotes none; a block
+goes stale when code its results' run loaded changes, not any code
 (``benchmarks/measured_blocks.py``)."""
 
 from __future__ import annotations
 
 import importlib.util
 import json
+import subprocess
 import sys
 import warnings
 from pathlib import Path
 
 import pytest
+
+from stsf_gym.results.provenance import file_digest
 
 ROOT = Path(__file__).resolve().parent.parent
 SPEC = importlib.util.spec_from_file_location(
@@ -85,3 +89,92 @@ def test_an_untied_page_block_is_listed_with_its_reason(tmp_path):
     blocks, problems = measured.check(root, "0123abcd")
     assert not problems
     assert "its results were not kept" in measured.listing(blocks)
+
+
+def _write_run(root: Path, loaded: dict[str, str], commit: str | None = None) -> None:
+    """run.json, its provenance listing the code its run ``loaded`` (``{path: digest}``)."""
+    code = {**PROVENANCE["stsf_gym"], "loaded_code": loaded, "commit": commit}
+    (root / "run.json").write_text(json.dumps({"provenance": {**PROVENANCE, "stsf_gym": code}}))
+
+
+LOADED = ("envs/m0.py", "envs/m1.py")  # of the small repository's three modules
+
+
+def _loaded_repository(tmp_path: Path) -> Path:
+    """A repository of three modules whose run.json lists the first two as loaded by its run."""
+    root = _repository(tmp_path, _block("a", SHOWN, "run.json"))
+    (root / "envs").mkdir()
+    for n in range(3):
+        (root / "envs" / f"m{n}.py").write_text(f"X = {n}\n")
+    _write_run(root, {path: file_digest(root / path) for path in LOADED})
+    return root
+
+
+def test_a_block_whose_loaded_code_is_unchanged_is_current_whatever_else_changed(tmp_path):
+    root = _loaded_repository(tmp_path)
+    (root / "envs" / "m2.py").write_text("X = 'edited, never loaded by the run'\n")
+    blocks, problems = measured.check(root, "ffff0000")  # the whole digest differs
+    assert not problems and [b.state for b in blocks] == ["current"]
+
+
+@pytest.mark.parametrize("change", ["edit", "delete"])
+def test_a_change_to_loaded_code_makes_the_block_stale_and_names_the_file(tmp_path, change):
+    root = _loaded_repository(tmp_path)
+    module = root / "envs" / "m1.py"
+    if change == "edit":
+        module.write_text("X = 'edited'\n")
+    else:
+        module.unlink()
+    blocks, problems = measured.check(root, "0123abcd")  # the whole digest is the same
+    assert problems == ["README.md quotes 'a', which is stale"]
+    assert blocks[0].notes == [
+        "run.json: 1 of the 2 files its run loaded changed (envs/m1.py), "
+        "the run recorded no commit (its code was no git checkout)"
+    ]
+
+
+def test_a_note_counts_the_commits_that_changed_the_loaded_files(tmp_path):
+    root = _loaded_repository(tmp_path)
+
+    def commit(message: str) -> str:
+        git = ["git", "-c", "user.name=t", "-c", "user.email=t@t"]
+        subprocess.run([*git, "add", "-A"], cwd=root, check=True)
+        subprocess.run([*git, "commit", "-qm", message], cwd=root, check=True)
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True)
+        return head.stdout.decode().strip()
+
+    subprocess.run(["git", "init", "-q"], cwd=root, check=True)
+    made_at = commit("the run's code")
+    _write_run(root, {path: file_digest(root / path) for path in LOADED}, made_at)
+    for n in (1, 2):  # m1, loaded by the run, and m2, never loaded, each edited and committed
+        (root / "envs" / f"m{n}.py").write_text("X = 'edited'\n")
+        commit(f"m{n} edited")
+    (block,), _ = measured.check(root, "0123abcd")
+    assert block.notes == [
+        f"run.json: 1 of the 2 files its run loaded changed (envs/m1.py), made at commit "
+        f"{made_at[:10]}; 1 later commits changed them"
+    ]
+
+
+def test_a_note_names_a_few_changed_files_and_counts_the_rest(tmp_path):
+    root = _repository(tmp_path, _block("a", SHOWN, "run.json"))
+    _write_run(root, {f"envs/m{n}.py": "0000" for n in range(5)})  # none of them there now
+    (block,), _ = measured.check(root, "0123abcd")
+    assert block.state == "stale"
+    assert "5 of the 5 files" in block.notes[0]
+    assert "(envs/m0.py, envs/m1.py, envs/m2.py and 2 more)" in block.notes[0]
+
+
+OLD_NOTE = "run.json: digest 0123abcd, the run recorded no commit (its code was no git checkout)"
+
+
+@pytest.mark.parametrize(
+    ("digest", "state", "notes"), [("0123abcd", "current", []), ("ffff0000", "stale", [OLD_NOTE])]
+)
+def test_a_results_file_without_loaded_code_is_judged_by_the_whole_digest(
+    tmp_path, digest, state, notes
+):
+    root = _repository(tmp_path, "# no figures\n")
+    (root / "docs" / "page.md").write_text(_block("a", SHOWN, "run.json"))
+    (block,), problems = measured.check(root, digest)
+    assert not problems and (block.state, block.notes) == (state, notes)

@@ -1,20 +1,27 @@
-"""Results say what made them, and cached work is reused only when the code and the fully
-resolved configuration that made it are unchanged (:mod:`stsf_gym.results.provenance`)."""
+"""Results say what made them (with the code their run loaded, in its workers too), and cached
+work is reused only when the code and the fully resolved configuration that made it are
+unchanged (:mod:`stsf_gym.results.provenance`)."""
 
 from __future__ import annotations
 
 import json
 import shutil
+import sys
+from pathlib import Path
 
 import pytest
 import yaml
+from worker_jobs import import_module
 
 import stsf_gym.envs.config as env_config
 import stsf_gym.results.provenance as provenance
 from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.training.train import latest_checkpoint, train
 from stsf_gym.experiments.evaluate import evaluate
+from stsf_gym.experiments.sweep.backends import make_runner
 from stsf_gym.yaml_layers import CONFIG_DIR
+
+ROOT = Path(__file__).resolve().parent.parent
 
 FAST = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 3.0}}
 TINY_PPO = {
@@ -44,6 +51,22 @@ def test_a_results_file_names_code_packages_config_seeds_and_command(tmp_path):
     assert config["env"]["sim"]["max_episode_seconds"] == 3.0  # and the override
     assert config["estimator"]["name"] == "odometry" and config["estimator"]["settings"]
     assert config["agent"]["follower"]["speed"] > 0
+
+
+def test_the_code_a_run_loaded_includes_what_only_its_workers_imported(monkeypatch):
+    module, path = "stsf_gym.recording.qos", "stsf_gym/recording/qos.py"
+    monkeypatch.setattr(provenance, "_worker_modules", set())  # no earlier test's workers
+    monkeypatch.delitem(sys.modules, module, raising=False)  # this process never imports it
+    assert path not in provenance.provenance()["stsf_gym"]["loaded_code"]
+    jobs = [{"module": module, "n": n} for n in range(2)]
+    done = make_runner("local", workers=2)(import_module, jobs)
+    assert sorted(result for _, result in done) == [0, 1]  # the results as the jobs returned
+    assert module not in sys.modules
+    code = provenance.provenance()["stsf_gym"]["loaded_code"]
+    assert code[path] == provenance.file_digest(ROOT / path)
+    assert code["stsf_gym/results/provenance.py"]  # a module this process imported
+    assert "configs/default.yaml" in code and "configs/faults/soak.yaml" in code  # every config
+    assert list(code) == sorted(code)
 
 
 def _episode_stamps(folder):

@@ -62,7 +62,14 @@ from stsf_gym.envs.generated_env import generated_label, parse_world
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.io import write_atomic, write_json
-from stsf_gym.results.provenance import fingerprint, provenance, reference_ms
+from stsf_gym.results.provenance import (
+    code_version,
+    fingerprint,
+    loaded_modules,
+    note_worker_modules,
+    provenance,
+    reference_ms,
+)
 from stsf_gym.wrappers import check_pose_source
 from stsf_gym.yaml_layers import deep_merge, overrides_to_tree
 
@@ -110,7 +117,17 @@ def make_training_env(
     if expert:  # the expert labels every control step in the policy's features
         labelled.features = policy_env.get_wrapper_attr("observation")
     fresh = not Path(f"{monitor_file}.{Monitor.EXT}").is_file()
-    return Monitor(policy_env, monitor_file, info_keywords=("is_success",), override_existing=fresh)
+    monitored = Monitor(
+        policy_env, monitor_file, info_keywords=("is_success",), override_existing=fresh
+    )
+    monitored.loaded_modules = loaded_modules  # what note_workers_code asks the env's process
+    return monitored
+
+
+def note_workers_code(venv: VecEnv) -> None:
+    """Count the package modules the env processes of ``venv`` loaded as this run's code."""
+    for modules in venv.env_method("loaded_modules"):
+        note_worker_modules(modules)
 
 
 def make_vec_env(n_envs: int, out: Path, tag: str, **spec) -> VecEnv:
@@ -278,7 +295,9 @@ def _demonstrate(model, cfg, n_envs: int, out: Path, spec: dict, eval_env, train
     )
     try:
         made_by = model.stsf_meta["made_by"]
-        return run_demonstrations(model, venv, cfg, stop, out, evaluate, seed, made_by)
+        stage = run_demonstrations(model, venv, cfg, stop, out, evaluate, seed, made_by)
+        note_workers_code(venv)
+        return stage
     finally:
         venv.close()
 
@@ -438,11 +457,14 @@ def train(
                     save_checkpoint(model, out)
                 raise
         session = time.perf_counter() - started
+        note_workers_code(train_env)
     finally:
         train_env.close()
         eval_env.close()
     if model.num_timesteps > start:
         save_checkpoint(model, out)
+    # the code as the run loaded it by now, here and in the env processes
+    model.stsf_meta["provenance"] = {**model.stsf_meta["provenance"], "stsf_gym": code_version()}
     save_atomic(model.save, out / "model.zip")
     summary = {
         **{k: v for k, v in model.stsf_meta.items() if k != "wall_time_s"},

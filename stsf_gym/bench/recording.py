@@ -11,7 +11,8 @@ The process is warm: the writers' libraries are imported before any episode (the
 once per process by its first recording, is reported as ``import_cpu_s``).
 The replay reads each mode's lossless (raw) MCAP and reruns STSF on it (decoding every frame,
 running the detector) with no simulator; its speed-up is the live episode's CPU time over the
-replay's, reading included.
+replay's, reading included. The process reports the package modules it loaded, for the bench's
+provenance.
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 from pathlib import Path
 
+from stsf_gym.results.provenance import run_reporting_modules, worker_result
+
 #: (format, frames) recorded per sensor mode; the fast mode has no frames to store.
 RECORDINGS = {
     "fast": [("mcap", "raw"), ("rerun", "-")],
@@ -35,7 +38,7 @@ ESTIMATOR, WORLD = "stsf", "irl_corridor"
 def recording_costs(seed: int = 0, cpu: int | None = 0) -> dict:
     """Measure every recording case in a fresh process (pinned to ``cpu`` when given)."""
     with ProcessPoolExecutor(1, mp_context=get_context("spawn")) as pool:
-        return pool.submit(_measure, seed, cpu).result()
+        return worker_result(pool.submit(run_reporting_modules, _measure, seed, cpu).result())
 
 
 def _episode(mode: str, seed: int, record: tuple[str, str] | None, folder: Path) -> dict:

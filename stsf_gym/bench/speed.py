@@ -7,7 +7,8 @@ Each case runs in a fresh ``spawn`` process so that its peak memory (``ru_maxrss
 one env process and no renderer state leaks between cases. The pipeline cases also report the
 per-frame latency of each stage: camera frame (render, lens, sensor), detection, motion stereo
 + STSF update, EKF update, and the references' (smoother per frame, MCL per step, in the
-fast sensor mode). :func:`render_latency` times each renderer alone at two sizes.
+fast sensor mode). :func:`render_latency` times each renderer alone at two sizes. Each process
+reports the package modules it loaded, for the bench's provenance.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
+
+from stsf_gym.results.provenance import run_reporting_modules, worker_result
 
 #: case -> (env overrides, pose source); "truth" drives on info["true_pose"].
 CASES: dict[str, tuple[dict, str]] = {
@@ -53,7 +56,8 @@ def run_case(
     """Measure one case in a fresh process (pinned to ``cpu`` when given); with ``profile``
     the row also holds cProfile's top functions by own time."""
     with ProcessPoolExecutor(1, mp_context=get_context("spawn")) as pool:
-        return pool.submit(_measure, name, sim_seconds, seed, cpu, profile).result()
+        reply = pool.submit(run_reporting_modules, _measure, name, sim_seconds, seed, cpu, profile)
+        return worker_result(reply.result())
 
 
 def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile: bool) -> dict:
@@ -229,7 +233,8 @@ def render_latency(frames: int = 200, cpu: int | None = 0) -> list[dict]:
     rows = []
     for renderer in RENDERERS:
         with ProcessPoolExecutor(1, mp_context=get_context("spawn")) as pool:
-            rows.append(pool.submit(_render_latency, renderer, frames, cpu).result())
+            reply = pool.submit(run_reporting_modules, _render_latency, renderer, frames, cpu)
+            rows.append(worker_result(reply.result()))
     return rows
 
 

@@ -9,7 +9,8 @@ resetting at each episode's end, after ``warmup`` steps that are not timed.
 This file is also a script (``python step.py --json``) that needs nothing but Gymnasium and
 ``stsf_gym``'s public names (its env ids and :func:`~stsf_gym.agents.registry.make_agent`), so
 :func:`side_by_side` runs the same cases on another checkout or installed version, in the same
-run, for ratios that other jobs on the machine disturb alike.
+run, for ratios that other jobs on the machine disturb alike. Run on this code, it also reports
+the package modules it loaded (``--modules``), for the bench's provenance.
 """
 
 from __future__ import annotations
@@ -131,7 +132,7 @@ def step_section(
             sides["baseline"] = _interpreter(Path(baseline), Path(staged))
         for _ in range(rounds):
             for label, command in sides.items():
-                for row in _run_script(command, steps, seed):
+                for row in _run_script(command, steps, seed, label == "this"):
                     best = rows.setdefault(row["case"], {"case": row["case"]})
                     best[label] = max(best.get(label, 0.0), row["steps_per_s"])
     if baseline is not None:
@@ -180,10 +181,12 @@ def _interpreter(baseline: Path, staged: Path) -> list[str]:
     ]
 
 
-def _run_script(command: list[str], steps: int, seed: int) -> list[dict]:
-    """This file run as a script by ``command``: its rows."""
+def _run_script(command: list[str], steps: int, seed: int, this_code: bool) -> list[dict]:
+    """This file run as a script by ``command``: its rows; on ``this_code`` (this package, not a
+    baseline) the package modules it loaded are counted as the run's code."""
+    modules = ["--modules"] if this_code else []
     done = subprocess.run(
-        [*command, __file__, "--steps", str(steps), "--seed", str(seed)],
+        [*command, __file__, "--steps", str(steps), "--seed", str(seed), *modules],
         capture_output=True,
         text=True,
         check=False,
@@ -191,20 +194,32 @@ def _run_script(command: list[str], steps: int, seed: int) -> list[dict]:
     )
     if done.returncode:
         raise RuntimeError(f"{' '.join(command)} {__file__}: {done.stderr.strip()[-2000:]}")
-    return json.loads(done.stdout)
+    output = json.loads(done.stdout)
+    if not this_code:
+        return output
+    from stsf_gym.results.provenance import note_worker_modules
+
+    note_worker_modules(output["modules"])
+    return output["rows"]
 
 
 def main() -> None:
-    """``python step.py [--steps N] [--seed S]``: the rows as JSON on stdout."""
+    """``python step.py [--steps N] [--seed S] [--modules]``: the rows as JSON on stdout (with
+    ``--modules``, ``{"rows", "modules"}``: the package modules loaded, too)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1500)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--profile", choices=list(CASES))
+    parser.add_argument("--modules", action="store_true", help="report the modules loaded, too")
     args = parser.parse_args()
     if args.profile:
         result = profile(args.profile, args.steps, args.seed)
     else:
         result = measure_all(args.steps, args.seed)
+    if args.modules:  # this code's own helper: a baseline's package may lack it
+        from stsf_gym.results.provenance import loaded_modules
+
+        result = {"rows": result, "modules": loaded_modules()}
     print(json.dumps(result, indent=1))
 
 

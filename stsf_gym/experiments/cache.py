@@ -7,7 +7,9 @@ code or settings (an edited default, a changed module) is stale: it is recompute
 says so. Files are written atomically, and a file that cannot be read back counts as not done.
 A job whose worker raises or dies is reported on stderr (name and error) and run once more; a
 job failing twice is reported in :class:`JobsFailed` once every other job has finished and been
-saved.
+saved. A job run in a worker process reports the package modules the worker loaded, so the run's
+provenance lists them (:func:`~stsf_gym.results.provenance.loaded_code`); its result is
+unchanged.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from stsf_gym.io import write_json
-from stsf_gym.results.provenance import fingerprint
+from stsf_gym.results.provenance import fingerprint, run_reporting_modules, worker_result
 
 ATTEMPTS = 2  # runs of a job before it is given up
 
@@ -159,7 +161,7 @@ def process_runner(workers: int) -> Runner:
                 with lock:
                     pools.append(slot.pool)
             try:
-                return slot.pool.submit(fn, job).result()
+                return slot.pool.submit(run_reporting_modules, fn, job).result()
             except BrokenProcessPool:
                 slot.pool = None  # this slot's next job gets a fresh process
                 raise
@@ -169,7 +171,7 @@ def process_runner(workers: int) -> Runner:
             try:
                 for future in as_completed(futures):
                     err = future.exception()
-                    yield futures[future], Crash.of(err) if err else future.result()
+                    yield futures[future], Crash.of(err) if err else worker_result(future.result())
             finally:
                 for future in futures:
                     future.cancel()

@@ -9,7 +9,11 @@ The code is identified three ways: the package version, the git commit with a ``
 (only when the package runs from a git checkout, e.g. an editable install), and
 ``source_digest``, a SHA-256 over every module and package config file of the installed
 package. The digest is what the caches compare: it changes with any edit, committed or not,
-and is the same for a wheel and the checkout it was built from.
+and is the same for a wheel and the checkout it was built from. A results file also lists the
+code its run loaded (:func:`loaded_code`): each package module imported in the run's process or
+in a worker that ran its jobs (workers report theirs through :func:`run_reporting_modules` and
+:func:`worker_result`), and every package config, with each file's digest; so a figure is
+stale only when code it ran has changed (``benchmarks/measured_blocks.py``).
 """
 
 from __future__ import annotations
@@ -19,14 +23,15 @@ import hashlib
 import importlib.metadata
 import importlib.util
 import json
+import os
 import platform
 import shlex
 import subprocess
 import sys
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -46,7 +51,11 @@ RESULT_PACKAGES = (
 CODE_PACKAGES = ("stsf_gym", "stsf_gym.envs", "stsf_gym.agents", "stsf_gym.configs")
 CODE_SUFFIXES = (".py", ".yaml")
 
+T = TypeVar("T")
+
 _command: list[str] | None = None
+#: The package modules (relative paths, see :func:`loaded_modules`) workers of this run loaded.
+_worker_modules: set[str] = set()
 
 
 def set_command(argv: Sequence[str]) -> None:
@@ -64,8 +73,68 @@ def _package_folders() -> list[Path]:
     folders = []
     for name in CODE_PACKAGES:
         spec = importlib.util.find_spec(name)
-        folders += [Path(p) for p in (spec.submodule_search_locations or [])] if spec else []
+        found = (spec.submodule_search_locations or []) if spec else []
+        folders += [Path(os.path.abspath(p)) for p in found]
     return folders
+
+
+def _relative(path: Path, folders: list[Path]) -> str | None:
+    """``path`` (absolute) as ``<folder>/<inside>`` of the innermost of the package ``folders``
+    holding it (the same for a checkout and a wheel), or None outside them."""
+    holders = [folder for folder in folders if path.is_relative_to(folder)]
+    deepest = max(holders, key=lambda folder: len(folder.parts), default=None)
+    return None if deepest is None else path.relative_to(deepest.parent).as_posix()
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 (hex, 16 digits) of the bytes of the file ``path``."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+
+
+def loaded_modules() -> list[str]:
+    """The package's module files imported in this process (``sys.modules``), as relative
+    paths (``stsf_gym/cli.py``, ``envs/simulator.py``), sorted."""
+    folders = _package_folders()
+    files = {getattr(module, "__file__", None) for module in list(sys.modules.values())}
+    found = {_relative(Path(os.path.abspath(f)), folders) for f in files if f and f.endswith(".py")}
+    return sorted(found - {None})
+
+
+def run_reporting_modules(fn: Callable[..., T], *args: Any) -> tuple[T, list[str]]:
+    """``fn(*args)`` in a worker process, and the package modules the worker has loaded: the
+    reply its parent hands to :func:`worker_result`."""
+    return fn(*args), loaded_modules()
+
+
+def note_worker_modules(modules: Iterable[str]) -> None:
+    """Count ``modules`` (relative paths a worker reported) as code this run loaded."""
+    _worker_modules.update(modules)
+
+
+def worker_result(reply: tuple[T, list[str]]) -> T:
+    """The result in a :func:`run_reporting_modules` reply, its modules noted as this run's."""
+    result, modules = reply
+    note_worker_modules(modules)
+    return result
+
+
+def loaded_code() -> dict[str, str]:
+    """``{relative path: file_digest}`` of the code this run loaded: the package modules
+    imported here and in its workers, and every package config (read by name at run time)."""
+    folders = _package_folders()
+    configs = {
+        _relative(path, folders)
+        for folder in folders
+        for path in folder.rglob("*.yaml")
+        if "__pycache__" not in path.parts
+    }
+    parents = {folder.name: folder.parent for folder in folders}
+    code = {}
+    for path in sorted({*loaded_modules(), *_worker_modules, *configs} - {None}):
+        parent = parents.get(path.split("/", 1)[0])
+        if parent is not None and (parent / path).is_file():
+            code[path] = file_digest(parent / path)
+    return code
 
 
 @functools.cache
@@ -117,12 +186,18 @@ def package_versions(names: Iterable[str] = RESULT_PACKAGES) -> dict[str, str]:
 
 
 def code_version() -> dict[str, Any]:
-    """The package version, git commit and dirty flag, and the source digest."""
+    """The package version, git commit and dirty flag, the source digest and the code the run
+    loaded (:func:`loaded_code`)."""
     try:
         version = importlib.metadata.version("stsf-gym")
     except importlib.metadata.PackageNotFoundError:
         version = None
-    return {"version": version, **git_state(), "source_digest": source_digest()}
+    return {
+        "version": version,
+        **git_state(),
+        "source_digest": source_digest(),
+        "loaded_code": loaded_code(),
+    }
 
 
 def _canonical(value: Any) -> Any:

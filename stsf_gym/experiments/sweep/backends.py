@@ -2,7 +2,9 @@
 
 Both are runners for :func:`stsf_gym.experiments.cache.run_cached`: they yield each cell's
 result as it finishes, and ``run_cached`` writes its JSON file and moves the progress bar, so
-the cell files, resume and summary are the same whichever backend ran them.
+the cell files, resume and summary are the same whichever backend ran them. Each job's worker
+reports the package modules it loaded (:func:`~stsf_gym.results.provenance.worker_result`), so
+the run's provenance lists the code that ran on either backend.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from collections.abc import Callable, Iterator
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.cache import Runner, process_runner
 from stsf_gym.experiments.sweep.cells import failure
+from stsf_gym.results.provenance import run_reporting_modules, worker_result
 
 BACKENDS = ("local", "ray")
 
@@ -56,14 +59,15 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
         if started:
             local = {} if address else {"num_cpus": workers * cpus_per_job}
             ray.init(address=address, include_dashboard=False, log_to_driver=False, **local)
-        task = ray.remote(num_cpus=cpus_per_job, max_retries=0)(fn)
-        pending = {task.remote(job): job for job in jobs}
+        task = ray.remote(num_cpus=cpus_per_job, max_retries=0)(run_reporting_modules)
+        task = task.options(name=getattr(fn, "__name__", "job"))  # errors name the job's function
+        pending = {task.remote(fn, job): job for job in jobs}
         try:
             while pending:
                 done, _ = ray.wait(list(pending), num_returns=1)
                 job = pending.pop(done[0])
                 try:
-                    result = ray.get(done[0])
+                    result = worker_result(ray.get(done[0]))
                 except ray.exceptions.RayError as err:  # the worker died or the task was lost
                     result = failure(err)
                 yield job, result
