@@ -502,14 +502,18 @@ def _bench(args: argparse.Namespace) -> dict:
     from stsf_gym.bench import run_bench, run_step_bench
     from stsf_gym.bench.step import check_baseline
 
-    if args.seconds <= 0 or args.vector_steps < 1 or args.steps < 1:
-        raise ConfigError("--seconds must be positive, --vector-steps and --steps at least 1")
+    if args.seconds <= 0 or min(args.vector_steps, args.steps, args.rounds) < 1:
+        raise ConfigError(
+            "--seconds must be positive, --vector-steps, --steps and --rounds at least 1"
+        )
     if args.baseline is not None:
         check_baseline(args.baseline)
     if args.step_only:
-        summary = run_step_bench(args.out, args.steps, args.seed, args.baseline)
+        summary = run_step_bench(args.out, args.steps, args.seed, args.baseline, args.rounds)
     else:
-        summary = run_bench(args.out, args.seconds, args.vector_steps, args.seed, args.baseline)
+        summary = run_bench(
+            args.out, args.seconds, args.vector_steps, args.seed, args.baseline, args.rounds
+        )
     _print_markdown(args, args.out / "bench.md")
     return summary
 
@@ -719,6 +723,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--steps", type=int, default=1500, help="timed env steps per step case (1500)"
+    )
+    bench.add_argument(
+        "--rounds",
+        type=int,
+        default=5,
+        help="fresh processes per step case and side, the best kept (5)",
     )
     bench.add_argument(
         "--baseline",

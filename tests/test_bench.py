@@ -150,6 +150,7 @@ def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
     for row in rows:
         assert row["this"] > 0 and row["baseline"] > 0
         assert row["ratio"] == pytest.approx(row["this"] / row["baseline"])
+        assert row["ratio_cpu"] == pytest.approx(row["this_cpu"] / row["baseline_cpu"])
     assert "Env steps per second" in (tmp_path / "bench.md").read_text()
 
 

@@ -58,7 +58,7 @@ def machine() -> dict:
 
 
 def run_step_bench(
-    out: Path, steps: int = 1500, seed: int = 0, baseline: Path | None = None, rounds: int = 2
+    out: Path, steps: int = 1500, seed: int = 0, baseline: Path | None = None, rounds: int = 5
 ) -> dict:
     """The ``step`` section alone (:mod:`stsf_gym.bench.step`); writes bench.json / bench.md."""
     load_start = os.getloadavg()
@@ -80,10 +80,11 @@ def run_bench(
     vector_steps: int = 1000,
     seed: int = 0,
     baseline: Path | None = None,
+    rounds: int = 5,
 ):
     """Run every measurement; write bench.json / bench.md; return the summary."""
     load_start = os.getloadavg()
-    step = step_section(seed=seed, baseline=baseline)
+    step = step_section(seed=seed, baseline=baseline, rounds=rounds)
     speed = []
     for name in tqdm(CASES, desc="bench cases", unit="case"):
         fast_case = name.startswith(FAST_CASES)
@@ -303,7 +304,8 @@ def step_markdown(step: dict) -> str:
     against = f" against {step['baseline']}, alternating" if step["baseline"] else ""
     return (
         f"## Env steps per second (suite corridor world, {step['steps']} steps a case, best "
-        f"of {step['rounds']} fresh processes{against})\n\nReference workload "
+        f"of {step['rounds']} fresh processes a case{against}; of wall time and, `_cpu`, of "
+        f"the process's CPU time)\n\nReference workload "
         f"{step['reference_ms']:.1f} ms.\n\n" + markdown_table(step["rows"])
     )
 

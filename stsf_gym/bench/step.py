@@ -111,33 +111,34 @@ def profile(case: str, steps: int = 1500, seed: int = 0, count: int = 25) -> lis
     ]
 
 
-def measure_all(steps: int = 1500, seed: int = 0) -> list[dict]:
-    """Every case, in this process."""
-    return [measure(case, steps, seed=seed) for case in CASES]
-
-
 def step_section(
-    steps: int = 1500, seed: int = 0, baseline: Path | None = None, rounds: int = 2
+    steps: int = 1500, seed: int = 0, baseline: Path | None = None, rounds: int = 5
 ) -> dict:
-    """The bench's ``step`` section: each case's steps/s (best of ``rounds`` fresh processes)
-    on this code and, with ``baseline`` (a checkout's folder, or a Python interpreter with
-    another ``stsf_gym`` installed), on that code too, the two alternating so that a change of
-    load hits both alike; their ratio, this code over the baseline."""
+    """The bench's ``step`` section: each case's steps/s, of wall time and of the process's CPU
+    time, each the best of ``rounds`` fresh processes, on this code and, with ``baseline`` (a
+    checkout's folder, or a Python interpreter with another ``stsf_gym`` installed), on that
+    code too; their ratios, this code over the baseline. The two sides alternate case by case,
+    the first of a pair switching every round, so that a change of load (a virtual machine's
+    neighbours) hits both alike."""
     from stsf_gym.results.provenance import reference_ms
 
     sides = {"this": [sys.executable]}
-    rows: dict[str, dict] = {}
+    rows = {case: {"case": case} for case in CASES}
     with tempfile.TemporaryDirectory() as staged:
         if baseline is not None:
             sides["baseline"] = _interpreter(Path(baseline), Path(staged))
-        for _ in range(rounds):
-            for label, command in sides.items():
-                for row in _run_script(command, steps, seed, label == "this"):
-                    best = rows.setdefault(row["case"], {"case": row["case"]})
-                    best[label] = max(best.get(label, 0.0), row["steps_per_s"])
+        for round_ in range(rounds):
+            for case in CASES:
+                for label in sorted(sides, reverse=bool(round_ % 2)):
+                    (run,) = _run_script(sides[label], case, steps, seed, label == "this")
+                    best = rows[case]
+                    best[label] = max(best.get(label, 0.0), run["steps_per_s"])
+                    cpu = f"{label}_cpu"
+                    best[cpu] = max(best.get(cpu, 0.0), run["steps_per_cpu_s"])
     if baseline is not None:
         for row in rows.values():
             row["ratio"] = row["this"] / row["baseline"]
+            row["ratio_cpu"] = row["this_cpu"] / row["baseline_cpu"]
     return {
         "steps": steps,
         "rounds": rounds,
@@ -181,12 +182,14 @@ def _interpreter(baseline: Path, staged: Path) -> list[str]:
     ]
 
 
-def _run_script(command: list[str], steps: int, seed: int, this_code: bool) -> list[dict]:
-    """This file run as a script by ``command``: its rows; on ``this_code`` (this package, not a
-    baseline) the package modules it loaded are counted as the run's code."""
+def _run_script(
+    command: list[str], case: str, steps: int, seed: int, this_code: bool
+) -> list[dict]:
+    """This file run as a script by ``command`` on ``case``: its row; on ``this_code`` (this
+    package, not a baseline) the package modules it loaded are counted as the run's code."""
     modules = ["--modules"] if this_code else []
     done = subprocess.run(
-        [*command, __file__, "--steps", str(steps), "--seed", str(seed), *modules],
+        [*command, __file__, "--case", case, "--steps", str(steps), "--seed", str(seed), *modules],
         capture_output=True,
         text=True,
         check=False,
@@ -204,18 +207,20 @@ def _run_script(command: list[str], steps: int, seed: int, this_code: bool) -> l
 
 
 def main() -> None:
-    """``python step.py [--steps N] [--seed S] [--modules]``: the rows as JSON on stdout (with
-    ``--modules``, ``{"rows", "modules"}``: the package modules loaded, too)."""
+    """``python step.py [--case C ...] [--steps N] [--seed S] [--modules]``: the rows of the
+    cases (default all) as JSON on stdout (with ``--modules``, ``{"rows", "modules"}``: the
+    package modules loaded, too)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1500)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--case", choices=list(CASES), action="append")
     parser.add_argument("--profile", choices=list(CASES))
     parser.add_argument("--modules", action="store_true", help="report the modules loaded, too")
     args = parser.parse_args()
     if args.profile:
         result = profile(args.profile, args.steps, args.seed)
     else:
-        result = measure_all(args.steps, args.seed)
+        result = [measure(case, args.steps, seed=args.seed) for case in args.case or CASES]
     if args.modules:  # this code's own helper: a baseline's package may lack it
         from stsf_gym.results.provenance import loaded_modules
 
