@@ -10,7 +10,7 @@ import pytest
 from gymnasium import spaces
 
 from stsf_gym.agents.demonstrations.cloning import CloningConfig, clone
-from stsf_gym.agents.demonstrations.dagger import demonstration_config
+from stsf_gym.agents.demonstrations.dagger import demonstration_config, kept_round
 from stsf_gym.agents.registry import SB3Agent, make_agent
 from stsf_gym.agents.training.train import train
 from stsf_gym.envs.config import ConfigError
@@ -45,6 +45,14 @@ def test_unknown_demonstration_keys_are_named():
         demonstration_config({"rounds": -1})
     with pytest.raises(ConfigError, match="epoch"):
         demonstration_config({"cloning": {"epoch": 3}})
+    with pytest.raises(ConfigError, match="keep"):
+        demonstration_config({"keep": "first"})
+
+
+def test_the_stage_keeps_the_last_round_or_the_best_on_validation():
+    history = [{"round": r, "val_success": v} for r, v in enumerate([0.0, 1.0, 0.7, 1.0, 0.6])]
+    assert kept_round(history, "last") == 4
+    assert kept_round(history, "best") == 3  # the latest of the equals
 
 
 TINY = {

@@ -110,8 +110,8 @@ def test_layers_command_prints_the_graph():
     )
     assert done.returncode == 0, done.stdout
     assert re.search(
-        r"stsf_gym\.wrappers +-> stsf_gym\.estimators, stsf_gym\.geometry, stsf_gym\.state_history, "
-        r"stsf_gym\.validation\n",
+        r"stsf_gym\.wrappers +-> stsf_gym\.estimators, stsf_gym\.geometry, "
+        r"stsf_gym\.state_history, stsf_gym\.validation\n",
         done.stdout,
     )
     assert done.stdout.rstrip().endswith("violations:\n  none")

@@ -11,7 +11,9 @@ cloned again on all of it. Plain cloning leaves the learner where the expert nev
 a late turn, too near a wall, past a goal) with no idea what to do; DAgger's rounds label
 exactly those states. After each round the learner is evaluated on the validation worlds (the
 same ones each round) and the round is saved (model, data, log), so an interrupted stage
-resumes after its last round.
+resumes after its last round. The stage ends with the last round's policy, or (``keep:
+best``) with the round's that did best on the validation worlds, the latest of equals: later
+rounds add data where the learner strays, yet a round can lose what an earlier one had.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
@@ -46,6 +48,7 @@ class DemonstrationConfig:
     rounds: Episodes = 0
     episodes_per_round: Episodes = 0
     every_control_step: bool = True  # label the held steps between decisions too (else: not)
+    keep: Literal["last", "best"] = "last"  # the policy the stage ends with (see the module)
     cloning: dict = field(default_factory=dict)  # CloningConfig's keys
 
     @property
@@ -109,7 +112,8 @@ def run_demonstrations(
     """The demonstration stage on ``model``'s policy (resumed from ``out/demonstrations`` when
     the same code and settings, ``made_by``, logged it); each round is logged in
     ``out/demonstrations.json`` (its totals and the success of each validation episode);
-    returns the last round's totals."""
+    returns the last round's totals and ``kept_round``, the round whose policy ``model`` ends
+    with (``cfg.keep``)."""
     folder = out / "demonstrations"
     log = out / DEMONSTRATIONS_JSON
     if log.is_file() and json.loads(log.read_text()).get("made_by") != made_by:
@@ -168,7 +172,18 @@ def run_demonstrations(
             file=sys.stderr,
             flush=True,
         )
-    return {k: v for k, v in history[-1].items() if k != "val_episodes"}
+    kept = kept_round(history, cfg.keep)
+    if kept != history[-1]["round"]:
+        _load_round(model, folder / f"round_{kept}.zip")
+    return {**{k: v for k, v in history[-1].items() if k != "val_episodes"}, "kept_round": kept}
+
+
+def kept_round(history: list[dict], keep: str) -> int:
+    """The round the stage ends with: the last, or the best on the validation worlds (the
+    latest of equals)."""
+    if keep == "last":
+        return history[-1]["round"]
+    return max(history, key=lambda r: (r["val_success"], r["round"]))["round"]
 
 
 def read_history(out: Path) -> list[dict]:
@@ -181,9 +196,13 @@ def _resume(model, folder: Path, log: Path) -> list[dict]:
     """The rounds done (their log), with the last round's policy loaded into ``model``."""
     history = read_history(log.parent)
     if history:
-        last = folder / f"round_{history[-1]['round']}.zip"
-        model.policy.load_state_dict(type(model).load(last, device="cpu").policy.state_dict())
+        _load_round(model, folder / f"round_{history[-1]['round']}.zip")
     return history
+
+
+def _load_round(model, path: Path) -> None:
+    """``model``'s policy replaced by the one saved in ``path``."""
+    model.policy.load_state_dict(type(model).load(path, device="cpu").policy.state_dict())
 
 
 def _save_round(model, folder: Path, round_: int, data: tuple, log: Path, record: dict) -> None:
