@@ -22,6 +22,13 @@ are unique; a tied block's files exist, carry provenance and are shown in its te
 block is listed with a reason, and the list names no other block; README.md's blocks are
 current (the README quotes no stale figure).
 
+A rewrite that gives the same numbers to the bit (the step's hot path compiled, say) changes a
+file's bytes, not what a run computes. ``benchmarks/equivalent_code.yaml`` records each such
+rewrite: the file, its digest before and after, the commit before it, and the tests that prove the
+equality (they must exist and run in ``make test``). A loaded file whose digest reaches its
+current one through a chain of these records counts as unchanged, except for timings
+(results of ``stsf-gym bench``): a rewrite is made to change those.
+
 Usage::
 
     python benchmarks/measured_blocks.py [--json]    # every block; exit 1 when a rule is broken
@@ -45,6 +52,9 @@ from stsf_gym.results.provenance import file_digest, source_digest
 
 ROOT = Path(__file__).resolve().parent.parent
 NOT_TIED = Path("benchmarks/measured_not_tied.yaml")  # relative to the repository
+EQUIVALENT = Path("benchmarks/equivalent_code.yaml")  # bit-exact rewrites, relative too
+#: The command whose results are timings, which an equivalent rewrite is made to change.
+TIMINGS = ["stsf-gym", "bench"]
 #: The Markdown files searched: the README and every page of the site.
 PAGES = ("README.md", "docs")
 #: The folders whose code the digest covers (pyproject's package-dir).
@@ -126,13 +136,48 @@ def changes_since(commit: str | None, root: Path = ROOT, files: Sequence[str] = 
     return f"made at commit {commit[:10]}; {count} later commits changed {what}"
 
 
-def changed_files(loaded: Mapping[str, str], root: Path = ROOT) -> list[str]:
+def equivalent_rewrites(root: Path = ROOT) -> tuple[dict[tuple[str, str], str], list[str]]:
+    """``{(path, digest before): digest after}`` of the bit-exact rewrites recorded in
+    :data:`EQUIVALENT`, and the problems of the record (a missing key, a proof that is no
+    test file of the repository)."""
+    record = root / EQUIVALENT
+    entries = yaml.safe_load(record.read_text()) if record.is_file() else None
+    rewrites, problems = {}, []
+    for number, entry in enumerate(entries or [], 1):
+        missing = [
+            k for k in ("path", "before", "after", "before_commit", "proof") if k not in entry
+        ]
+        if missing:
+            problems.append(f"{EQUIVALENT}: rewrite {number} lacks {', '.join(missing)}")
+            continue
+        for proof in entry["proof"]:
+            if not (proof.startswith("tests/") and (root / proof).is_file()):
+                problems.append(f"{EQUIVALENT}: rewrite {number}'s proof {proof} is no test file")
+        rewrites[(entry["path"], entry["before"])] = entry["after"]
+    return rewrites, problems
+
+
+def _same_code(path: str, digest: str, now: str, rewrites: Mapping[tuple[str, str], str]) -> bool:
+    """Whether ``path`` at ``digest`` reaches ``now`` through bit-exact rewrites (or is it)."""
+    seen = set()
+    while digest != now and digest not in seen:
+        seen.add(digest)
+        digest = rewrites.get((path, digest), digest)
+    return digest == now
+
+
+def changed_files(
+    loaded: Mapping[str, str],
+    root: Path = ROOT,
+    rewrites: Mapping[tuple[str, str], str] | None = None,
+) -> list[str]:
     """The files of ``loaded`` (``{repository path: digest}``) whose bytes under ``root`` have
-    another digest now, or that are gone."""
+    another digest now that no chain of ``rewrites`` leads to, or that are gone."""
     return [
         path
         for path, digest in sorted(loaded.items())
-        if not (root / path).is_file() or file_digest(root / path) != digest
+        if not (root / path).is_file()
+        or not _same_code(path, digest, file_digest(root / path), rewrites or {})
     ]
 
 
@@ -141,12 +186,18 @@ def _named(files: list[str]) -> str:
     return ", ".join(files[:NAMED]) + more
 
 
-def staleness(code: Mapping[str, Any], digest: str, root: Path = ROOT) -> str | None:
+def staleness(
+    code: Mapping[str, Any],
+    digest: str,
+    root: Path = ROOT,
+    rewrites: Mapping[tuple[str, str], str] | None = None,
+) -> str | None:
     """Why the code a results file was made with (its provenance's ``stsf_gym``) has changed,
-    or None when it has not: by the files its run loaded, else (an older file) by the digest."""
+    or None when it has not: by the files its run loaded (``rewrites`` leave a file the same),
+    else (an older file) by the digest."""
     loaded, commit = code.get("loaded_code"), code.get("commit")
     if loaded is not None:
-        changed = changed_files(loaded, root)
+        changed = changed_files(loaded, root, rewrites)
         if not changed:
             return None
         return (
@@ -158,8 +209,14 @@ def staleness(code: Mapping[str, Any], digest: str, root: Path = ROOT) -> str | 
     return f"digest {code['source_digest']}, {changes_since(commit, root)}"
 
 
-def judge(block: Block, digest: str, root: Path = ROOT) -> list[str]:
-    """Set ``block.state`` and ``block.notes``; return the rules it breaks."""
+def judge(
+    block: Block,
+    digest: str,
+    root: Path = ROOT,
+    rewrites: Mapping[tuple[str, str], str] | None = None,
+) -> list[str]:
+    """Set ``block.state`` and ``block.notes``; return the rules it breaks. ``rewrites``
+    (:func:`equivalent_rewrites`) apply to every results file but timings."""
     problems = []
     where = f"{block.page}:{block.line} {block.name!r}"
     stale = False
@@ -176,7 +233,8 @@ def judge(block: Block, digest: str, root: Path = ROOT) -> list[str]:
         for shown in (made_by["command"], code["source_digest"]):
             if shown not in block.text:
                 problems.append(f"{where}: the block does not show {name}'s {shown!r}")
-        why = staleness(code, digest, root)
+        timings = made_by["command"].split()[:2] == TIMINGS
+        why = staleness(code, digest, root, None if timings else rewrites)
         if why is not None:
             stale = True
             block.notes.append(f"{name}: {why}")
@@ -191,9 +249,11 @@ def check(root: Path = ROOT, digest: str | None = None) -> tuple[list[Block], li
     (see the module's docstring)."""
     digest = digest or source_digest()
     blocks, problems = find_blocks(root)
+    rewrites, record_problems = equivalent_rewrites(root)
+    problems += record_problems
     not_tied = yaml.safe_load((root / NOT_TIED).read_text()) or {}
     for block in blocks:
-        problems += judge(block, digest, root)
+        problems += judge(block, digest, root, rewrites)
         if block.results:
             if block.name in not_tied:
                 problems.append(f"{block.name!r} is tied but listed in {NOT_TIED.name}")

@@ -23,6 +23,7 @@ from typing import Annotated
 
 import numpy as np
 
+from stsf_gym.geometry import compiled
 from stsf_gym.validation import ROBOT_EXTENT_M, Range, RobotLength
 
 UNDISTORT_ITERATIONS = 20
@@ -44,20 +45,40 @@ def distort(xy: np.ndarray, dist: np.ndarray) -> np.ndarray:
 def undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
     """Undistorted normalised coordinates of distorted ones: the fixed-point iteration of
     ``cv2.undistortPoints``, run to convergence for the distortions a lens has."""
-    k1, k2, p1, p2, k3 = dist
-    xy = np.array(xy_d, dtype=float)
-    x_d, y_d = xy[..., 0].copy(), xy[..., 1].copy()
-    x, y = xy[..., 0], xy[..., 1]  # views: each iteration writes the new estimate in place
-    for _ in range(UNDISTORT_ITERATIONS):
-        r2 = x * x + y * y
-        radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
-        dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
-        dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
-        x_new, y_new = (x_d - dx) / radial, (y_d - dy) / radial
-        if x_new.tobytes() == x.tobytes() and y_new.tobytes() == y.tobytes():
-            break  # a fixed point to the bit: every further iteration returns it unchanged
-        x[...], y[...] = x_new, y_new
+    xy_d = np.asarray(xy_d, dtype=float)
+    k1, k2, p1, p2, k3 = (float(k) for k in dist)
+    flat = _undistorted(xy_d.reshape(-1, 2), k1, k2, p1, p2, k3, UNDISTORT_ITERATIONS)
+    return flat.reshape(xy_d.shape)
+
+
+@compiled
+def _undistorted(
+    xy_d: np.ndarray, k1: float, k2: float, p1: float, p2: float, k3: float, iterations: int
+) -> np.ndarray:
+    """:func:`undistort` of points (N, 2), each iterated until it is a fixed point to the bit
+    (every further iteration would return it unchanged) or ``iterations`` are done."""
+    xy = xy_d.copy()
+    for i in range(xy.shape[0]):
+        x_d, y_d = xy_d[i, 0], xy_d[i, 1]
+        x, y = x_d, y_d
+        for _ in range(iterations):
+            r2 = x * x + y * y
+            radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+            dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+            dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+            x_new, y_new = (x_d - dx) / radial, (y_d - dy) / radial
+            if _same_bits(x_new, x) and _same_bits(y_new, y):
+                break
+            x, y = x_new, y_new
+        xy[i, 0], xy[i, 1] = x, y
     return xy
+
+
+@compiled
+def _same_bits(a: float, b: float) -> bool:
+    """Whether ``a`` and ``b`` are the same float to the bit (``-0.0`` is not ``0.0``; a NaN
+    is itself, as the iteration carries it)."""
+    return (a == b and math.copysign(1.0, a) == math.copysign(1.0, b)) or (a != a and b != b)
 
 
 @dataclass(frozen=True, eq=False)

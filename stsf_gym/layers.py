@@ -102,7 +102,8 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.geometry": ("stsf_gym.validation",),  # ranges of the odometry calibration
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
-    "stsf_gym.camera_model": ("stsf_gym.validation",),  # ranges of the camera mount
+    # ranges of the camera mount; the undistortion's compiled loop
+    "stsf_gym.camera_model": ("stsf_gym.validation", "stsf_gym.geometry"),
     "stsf_gym.video": (),
     "stsf_gym.terminal_table": (),
     "stsf_gym.layers": (),

@@ -178,3 +178,42 @@ def test_a_results_file_without_loaded_code_is_judged_by_the_whole_digest(
     (root / "docs" / "page.md").write_text(_block("a", SHOWN, "run.json"))
     (block,), problems = measured.check(root, digest)
     assert not problems and (block.state, block.notes) == (state, notes)
+
+
+def _rewrite(root: Path, before: str, proof: str = "tests/test_equal.py") -> None:
+    """Record envs/m1.py's change from digest ``before`` to its bytes now as bit-exact."""
+    (root / "tests").mkdir(exist_ok=True)
+    (root / "tests" / "test_equal.py").write_text("def test_equal(): pass\n")
+    entry = {
+        "path": "envs/m1.py",
+        "before": before,
+        "after": file_digest(root / "envs" / "m1.py"),
+        "before_commit": "abc1234",
+        "proof": [proof],
+    }
+    (root / "benchmarks" / "equivalent_code.yaml").write_text(json.dumps([entry]))
+
+
+@pytest.mark.parametrize("command", ["stsf-gym demo --seeds 1", "stsf-gym bench --out b"])
+def test_a_recorded_bit_exact_rewrite_keeps_results_current_but_not_timings(tmp_path, command):
+    root = _loaded_repository(tmp_path)
+    before = file_digest(root / "envs" / "m1.py")
+    (root / "envs" / "m1.py").write_text("X = 0 + 1  # the same number, other bytes\n")
+    _rewrite(root, before)
+    run = json.loads((root / "run.json").read_text())
+    run["provenance"]["command"] = command
+    (root / "run.json").write_text(json.dumps(run))
+    (root / "README.md").write_text(_block("a", f"`{command}` at `0123abcd`", "run.json"))
+    blocks, problems = measured.check(root, "0123abcd")
+    timings = "bench" in command
+    assert [b.state for b in blocks] == ["stale" if timings else "current"]
+    assert problems == (["README.md quotes 'a', which is stale"] if timings else [])
+
+
+def test_a_rewrite_from_other_bytes_or_without_a_test_proves_nothing(tmp_path):
+    root = _loaded_repository(tmp_path)
+    (root / "envs" / "m1.py").write_text("X = 0 + 1\n")
+    _rewrite(root, "0000000000000000", proof="notes/believe-me.md")  # not the run's digest
+    blocks, problems = measured.check(root, "0123abcd")
+    assert blocks[0].state == "stale"
+    assert any("proof notes/believe-me.md is no test file" in p for p in problems), problems

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from stsf_gym.envs.rendering.scene import Box, Cylinder, Scene
+from stsf_gym.geometry import compiled
 
 #: outward normals of a box's four faces in its own frame, and the corner each face starts at
 FACE_NORMALS = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
@@ -55,9 +56,9 @@ class PlaneCaster:
         normals = np.zeros((len(starts), 2))
         edges = self._reachable(centre, max(np.hypot(*(starts - centre).T)) + length)
         if len(edges):
-            self._edge_hits(edges, starts, directions, t, normals)
+            _edge_hits(edges, starts, directions, t, normals)
         if len(self._circles):
-            self._circle_hits(starts, directions, t, normals)
+            _circle_hits(self._circles, starts, directions, t, normals)
         hit = t <= length
         fractions = np.where(hit, t / length, 1.0)
         return fractions, np.where(hit[:, None], normals, 0.0)
@@ -87,42 +88,6 @@ class PlaneCaster:
         gap = np.hypot(*(to_centre - along[:, None] * e).T)
         return self._edges[(gap <= reach) & (np.sum(to_centre * n, axis=1) > -reach)]
 
-    def _edge_hits(
-        self, edges: np.ndarray, o: np.ndarray, d: np.ndarray, t: np.ndarray, normals: np.ndarray
-    ):
-        """The nearest edge each ray enters (``t`` and ``normals`` updated in place). With
-        ``a x b = a_x b_y - a_y b_x``: ``t = (p x e - o x e) / (d x e)`` and ``u = (p x d - o x
-        d) / (d x e)``, each term an outer product of a ray and an edge quantity."""
-        px, py, ex, ey, nx, ny = edges.T
-        (ox, oy), (dx, dy) = o.T[:, :, None], d.T[:, :, None]
-        facing = dx * nx + dy * ny < 0  # (N, S): the edge's outside is towards the ray
-        denominator = dx * ey - dy * ex
-        with np.errstate(divide="ignore", invalid="ignore"):
-            along = (px * ey - py * ex - (ox * ey - oy * ex)) / denominator
-            across = (px * dy - py * dx - (ox * dy - oy * dx)) / denominator
-        along[~(facing & (along >= 0) & (across >= 0) & (across <= 1))] = np.inf
-        nearest = np.argmin(along, axis=1)
-        best = along[np.arange(len(o)), nearest]
-        closer = best < t
-        t[closer] = best[closer]
-        normals[closer] = edges[nearest[closer], 4:6]
-
-    def _circle_hits(self, o: np.ndarray, d: np.ndarray, t: np.ndarray, normals: np.ndarray):
-        """The nearest circle each ray enters (``t`` and ``normals`` updated in place)."""
-        c, r = self._circles[:, 0:2], self._circles[:, 2]
-        oc = o[:, None, :] - c[None, :, :]
-        b = np.einsum("nk,nsk->ns", d, oc)
-        disc = b * b - np.einsum("nsk,nsk->ns", oc, oc) + r[None, :] ** 2
-        with np.errstate(invalid="ignore"):
-            along = np.where(disc >= 0, -b - np.sqrt(disc), np.inf)
-        along = np.where(along >= 0, along, np.inf)
-        nearest = np.argmin(along, axis=1)
-        best = along[np.arange(len(o)), nearest]
-        closer = best < t
-        t[closer] = best[closer]
-        point = o[closer] + best[closer, None] * d[closer]
-        normals[closer] = (point - c[nearest[closer]]) / r[nearest[closer], None]
-
     def _footprints(self, scene: Scene) -> None:
         """Edges (start, edge vector, outward normal) of the shown boxes and circles (centre,
         radius) of the shown cylinders that reach the ring's height."""
@@ -140,6 +105,56 @@ class PlaneCaster:
         self._selection = None
         self._circles = np.array(circles, dtype=float).reshape(-1, 3)
         self._built = (id(scene), scene.version)
+
+
+@compiled
+def _edge_hits(
+    edges: np.ndarray, o: np.ndarray, d: np.ndarray, t: np.ndarray, normals: np.ndarray
+) -> None:
+    """The nearest edge (rows ``[p, e, n]``) each ray ``o + t d`` enters, where nearer than
+    its ``t`` (``t`` and ``normals`` updated in place): ``t = (p x e - o x e) / (d x e)``, ``u
+    = (p x d - o x d) / (d x e)`` with ``a x b = a_x b_y - a_y b_x``; the first of equal
+    nearest edges wins."""
+    for i in range(o.shape[0]):
+        ox, oy, dx, dy = o[i, 0], o[i, 1], d[i, 0], d[i, 1]
+        best, nearest = np.inf, -1
+        for j in range(edges.shape[0]):
+            px, py, ex, ey, nx, ny = edges[j]
+            if not dx * nx + dy * ny < 0:  # the edge's outside is away from the ray
+                continue
+            denominator = dx * ey - dy * ex
+            along = (px * ey - py * ex - (ox * ey - oy * ex)) / denominator
+            across = (px * dy - py * dx - (ox * dy - oy * dx)) / denominator
+            if along >= 0 and 0 <= across <= 1 and along < best:
+                best, nearest = along, j
+        if nearest >= 0 and best < t[i]:
+            t[i] = best
+            normals[i, 0], normals[i, 1] = edges[nearest, 4], edges[nearest, 5]
+
+
+@compiled
+def _circle_hits(
+    circles: np.ndarray, o: np.ndarray, d: np.ndarray, t: np.ndarray, normals: np.ndarray
+) -> None:
+    """The nearest circle (rows ``[c, r]``) each ray enters, where nearer than its ``t``
+    (``t`` and ``normals`` updated in place): ``t = -b - sqrt(b^2 - |o - c|^2 + r^2)``, ``b =
+    d . (o - c)``, normal ``(o + t d - c) / r``; the first of equal nearest circles wins."""
+    for i in range(o.shape[0]):
+        best, nearest = np.inf, -1
+        for j in range(circles.shape[0]):
+            cx, cy, r = circles[j]
+            ocx, ocy = o[i, 0] - cx, o[i, 1] - cy
+            b = d[i, 0] * ocx + d[i, 1] * ocy
+            disc = b * b - (ocx * ocx + ocy * ocy) + r**2
+            if disc >= 0:
+                along = -b - np.sqrt(disc)
+                if along >= 0 and along < best:
+                    best, nearest = along, j
+        if nearest >= 0 and best < t[i]:
+            t[i] = best
+            cx, cy, r = circles[nearest]
+            normals[i, 0] = (o[i, 0] + best * d[i, 0] - cx) / r
+            normals[i, 1] = (o[i, 1] + best * d[i, 1] - cy) / r
 
 
 def _spans(centre: float, half: float, height: float) -> bool:

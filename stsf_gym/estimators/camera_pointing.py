@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from stsf_gym.estimators.base import MapLandmark
+from stsf_gym.geometry import compiled
 
 MIN_SIDEWAYS = 0.2  # sine of the smallest pan counted when scoring a landmark
 SWITCH_FACTOR = 1.5  # how much better another landmark must score to take over
@@ -69,40 +70,25 @@ class LandmarkPointer:
 
     def _candidates(self, pose: np.ndarray) -> list[tuple[int, float]]:
         """(index, pan) of every landmark that qualifies from ``pose``, in map order: range,
-        viewing angle and pan limit for all landmarks at once, then the line of sight for the
-        few left, all at once too (each number computed as the one-landmark tests did)."""
+        viewing angle and line of sight in one compiled pass over the landmarks, then the
+        pan limit for the few left."""
         eye = self._camera_xy(pose)
-        to_board = self._centres - eye
-        distance = np.hypot(to_board[:, 0], to_board[:, 1])
-        facing = -(self._normals[:, 0] * to_board[:, 0] + self._normals[:, 1] * to_board[:, 1])
-        near = (distance >= self.min_range) & (distance <= self.max_range)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            near &= facing / distance >= math.cos(self.max_view)
+        seen = _in_sight(
+            eye,
+            self._centres,
+            self._normals,
+            self._walls,
+            self.min_range,
+            self.max_range,
+            math.cos(self.max_view),
+        )
         candidates = []
-        for index in np.flatnonzero(near):
-            pan = math.remainder(
-                math.atan2(to_board[index, 1], to_board[index, 0]) - pose[2], math.tau
-            )
+        for index in np.flatnonzero(seen):
+            to_board = self._centres[index] - eye
+            pan = math.remainder(math.atan2(to_board[1], to_board[0]) - pose[2], math.tau)
             if abs(pan) <= self.pan_limit:
                 candidates.append((int(index), pan))
-        if not candidates:
-            return candidates
-        blocked = self._blocked(eye, np.array([index for index, _ in candidates]))
-        return [pair for pair, hidden in zip(candidates, blocked, strict=True) if not hidden]
-
-    def _blocked(self, eye: np.ndarray, indices: np.ndarray) -> np.ndarray:
-        """Whether a wall of the map crosses the line of sight from ``eye`` to each landmark of
-        ``indices`` (stopping short of the board): a segment intersection per (landmark,
-        wall)."""
-        target = self._centres[indices] + 0.2 * self._normals[indices]  # clear of its own wall
-        r = (target - eye)[:, None, :]
-        q, s = self._walls[None, :, :2], self._walls[None, :, 2:] - self._walls[None, :, :2]
-        denom = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = ((q[..., 0] - eye[0]) * s[..., 1] - (q[..., 1] - eye[1]) * s[..., 0]) / denom
-            u = ((q[..., 0] - eye[0]) * r[..., 1] - (q[..., 1] - eye[1]) * r[..., 0]) / denom
-        crossing = (np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
-        return np.any(crossing, axis=1)
+        return candidates
 
     def pan(self, pose: np.ndarray) -> float:
         """Pan towards the best-scoring landmark (0 if none qualifies). The current target
@@ -118,3 +104,40 @@ class LandmarkPointer:
                 best = (score, int(self._ids[index]), pan)
         self.target = None if best is None else best[1]
         return 0.0 if best is None else best[2]
+
+
+@compiled
+def _in_sight(
+    eye: np.ndarray,
+    centres: np.ndarray,
+    normals: np.ndarray,
+    walls: np.ndarray,
+    min_range: float,
+    max_range: float,
+    cos_max_view: float,
+) -> np.ndarray:
+    """Whether each landmark (board ``centres``, outward ``normals``) is within ``[min_range,
+    max_range]`` of ``eye``, faces it within the view angle, and no wall ``[x1, y1, x2, y2]``
+    crosses the line of sight from ``eye`` to 0.2 m in front of the board (clear of its own
+    wall): ``r = target - eye``, ``s = end - start``, crossing at ``t = (q - eye) x s / (r x
+    s)`` in (0, 1) and ``u = (q - eye) x r / (r x s)`` in [0, 1], ``r x s`` not ~0."""
+    seen = np.zeros(centres.shape[0], dtype=np.bool_)
+    for i in range(centres.shape[0]):
+        to_x, to_y = centres[i, 0] - eye[0], centres[i, 1] - eye[1]
+        distance = np.hypot(to_x, to_y)
+        facing = -(normals[i, 0] * to_x + normals[i, 1] * to_y)
+        if not (min_range <= distance <= max_range and facing / distance >= cos_max_view):
+            continue
+        r_x = centres[i, 0] + 0.2 * normals[i, 0] - eye[0]
+        r_y = centres[i, 1] + 0.2 * normals[i, 1] - eye[1]
+        seen[i] = True
+        for wall in walls:
+            s_x, s_y = wall[2] - wall[0], wall[3] - wall[1]
+            q_x, q_y = wall[0] - eye[0], wall[1] - eye[1]
+            denominator = r_x * s_y - r_y * s_x
+            t = (q_x * s_y - q_y * s_x) / denominator
+            u = (q_x * r_y - q_y * r_x) / denominator
+            if abs(denominator) > 1e-12 and 0 < t < 1 and 0 <= u <= 1:
+                seen[i] = False
+                break
+    return seen
