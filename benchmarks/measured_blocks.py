@@ -284,11 +284,49 @@ def listing(blocks: list[Block]) -> str:
     return "\n".join(lines)
 
 
+def record_rewrite(paths: Sequence[str], what: str, proof: Sequence[str], root: Path = ROOT):
+    """Append to :data:`EQUIVALENT` the rewrite of each of ``paths`` from its bytes at git's
+    ``HEAD`` to its bytes now (uncommitted), with ``what`` changed and the ``proof`` tests."""
+    import hashlib
+
+    commit = _git("rev-parse", "--short", "HEAD", root=root)
+    problems = [f"{t}: no test file" for t in proof if not (root / t).is_file()]
+    if commit is None or not proof or problems:
+        raise SystemExit(f"cannot record: {problems or 'no commit or no proof'}")
+    lines = []
+    for path in paths:
+        before = subprocess.run(["git", "show", f"HEAD:{path}"], cwd=root, capture_output=True)
+        if before.returncode or not (root / path).is_file():
+            raise SystemExit(f"cannot record {path}: not in HEAD or not here")
+        lines += [
+            f"- path: {path}",
+            f"  before: {hashlib.sha256(before.stdout).hexdigest()[:16]}",
+            f"  after: {file_digest(root / path)}",
+            f"  before_commit: {commit}",
+            f"  what: {json.dumps(what)}",
+            f"  proof: [{', '.join(proof)}]",
+        ]
+    with (root / EQUIVALENT).open("a") as record:
+        record.write("\n".join(lines) + "\n")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """List every measured block; exit 1 when a rule is broken."""
+    """List every measured block; exit 1 when a rule is broken. With ``--rewrite``, record a
+    bit-exact rewrite instead."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print the blocks as JSON")
+    parser.add_argument(
+        "--rewrite",
+        nargs="+",
+        metavar="PATH",
+        help="record these files' uncommitted change as a bit-exact rewrite (with --what, --proof)",
+    )
+    parser.add_argument("--what", default="", help="what the rewrite changed")
+    parser.add_argument("--proof", nargs="+", default=[], help="the tests that prove it")
     args = parser.parse_args(argv)
+    if args.rewrite:
+        record_rewrite(args.rewrite, args.what, args.proof)
+        return 0
     blocks, problems = check()
     if args.json:
         rows = [{k: v for k, v in asdict(b).items() if k != "text"} for b in blocks]

@@ -32,14 +32,23 @@ LINK_FROM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0
 
 
 def distort(xy: np.ndarray, dist: np.ndarray) -> np.ndarray:
-    """Distorted normalised coordinates (..., 2) of undistorted ones."""
-    k1, k2, p1, p2, k3 = dist
-    x, y = xy[..., 0], xy[..., 1]
-    r2 = x * x + y * y
-    radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
-    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
-    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
-    return np.stack([xd, yd], axis=-1)
+    """Distorted normalised coordinates (..., 2) of undistorted ones, in float64."""
+    xy = np.asarray(xy, dtype=float)
+    k1, k2, p1, p2, k3 = (float(k) for k in dist)
+    return _distorted(xy.reshape(-1, 2), k1, k2, p1, p2, k3).reshape(xy.shape)
+
+
+@compiled
+def _distorted(xy: np.ndarray, k1: float, k2: float, p1: float, p2: float, k3: float) -> np.ndarray:
+    """:func:`distort` of points (N, 2)."""
+    xy_d = np.empty_like(xy)
+    for i in range(xy.shape[0]):
+        x, y = xy[i, 0], xy[i, 1]
+        r2 = x * x + y * y
+        radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        xy_d[i, 0] = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        xy_d[i, 1] = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    return xy_d
 
 
 def undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from stsf_gym.camera_model import undistort
+from stsf_gym.camera_model import distort, undistort
 
 
 def numpy_undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
@@ -22,6 +22,27 @@ def numpy_undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
             break
         x[...], y[...] = x_new, y_new
     return xy
+
+
+def numpy_distort(xy: np.ndarray, dist: np.ndarray) -> np.ndarray:
+    """The lens model as numpy wrote it before it was compiled."""
+    k1, k2, p1, p2, k3 = dist
+    x, y = xy[..., 0], xy[..., 1]
+    r2 = x * x + y * y
+    radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    return np.stack([xd, yd], axis=-1)
+
+
+def test_distort_is_the_numpy_lens_model_to_the_bit():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        dist = rng.normal(0.0, [0.2, 0.1, 0.005, 0.005, 0.02])
+        points = rng.uniform(-0.8, 0.8, (int(rng.integers(1, 40)), 2))
+        assert distort(points, dist).tobytes() == numpy_distort(points, dist).tobytes()
+    grid = rng.uniform(-0.5, 0.5, (3, 5, 2))
+    assert distort(grid, dist).tobytes() == numpy_distort(grid, dist).tobytes()
 
 
 def test_undistort_is_the_numpy_iteration_to_the_bit():

@@ -217,3 +217,17 @@ def test_a_rewrite_from_other_bytes_or_without_a_test_proves_nothing(tmp_path):
     blocks, problems = measured.check(root, "0123abcd")
     assert blocks[0].state == "stale"
     assert any("proof notes/believe-me.md is no test file" in p for p in problems), problems
+
+
+def test_recording_a_rewrite_takes_the_digests_from_head_and_the_file_now(tmp_path):
+    root = _loaded_repository(tmp_path)
+    (root / "tests").mkdir()
+    (root / "tests" / "test_equal.py").write_text("def test_equal(): pass\n")
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-C", str(root)]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "-A"], check=True)
+    subprocess.run([*git, "commit", "-qm", "x"], check=True)
+    (root / "envs" / "m1.py").write_text("X = 0 + 1\n")
+    measured.record_rewrite(["envs/m1.py"], "same X", ["tests/test_equal.py"], root)
+    blocks, problems = measured.check(root, "0123abcd")
+    assert not problems and blocks[0].state == "current"

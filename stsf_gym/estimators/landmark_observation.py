@@ -53,9 +53,41 @@ class LandmarkObservation:
 def _board_pose(params: np.ndarray, robot_from_camera: np.ndarray) -> np.ndarray:
     """z = [x, y, phi] from PnP parameters (rvec, tvec) of camera-from-board."""
     rotation, _ = cv2.Rodrigues(params[:3])
-    centre = robot_from_camera[:3, :3] @ params[3:] + robot_from_camera[:3, 3]
-    normal = robot_from_camera[:3, :3] @ rotation[:, 2]  # board z: out of the board
-    return np.array([centre[0], centre[1], math.atan2(normal[1], normal[0])])
+    return np.array(
+        [*_board_centre(params[3:], robot_from_camera), _board_yaw(rotation, robot_from_camera)]
+    )
+
+
+def _board_centre(tvec: np.ndarray, robot_from_camera: np.ndarray) -> np.ndarray:
+    """[x, y] of the board centre in the robot frame, from camera-from-board ``tvec``."""
+    return (robot_from_camera[:3, :3] @ tvec + robot_from_camera[:3, 3])[:2]
+
+
+def _board_yaw(rotation: np.ndarray, robot_from_camera: np.ndarray) -> float:
+    """Yaw in the robot frame of the board's z axis (out of the board), from camera-from-board
+    ``rotation``."""
+    normal = robot_from_camera[:3, :3] @ rotation[:, 2]
+    return math.atan2(normal[1], normal[0])
+
+
+def _board_pose_jacobian(params: np.ndarray, robot_from_camera: np.ndarray) -> np.ndarray:
+    """dz/dparams (3, 6) of :func:`_board_pose` by central differences of 1e-6: the rotation
+    ``params[:3]`` moves only the yaw, the translation ``params[3:]`` only the centre, so each
+    difference evaluates only the part that moves (the other's difference is exactly 0)."""
+    G = np.zeros((3, 6))
+    for i in range(3):
+        ahead, behind = params[:3].copy(), params[:3].copy()
+        ahead[i] += 1e-6
+        behind[i] -= 1e-6
+        yaw_ahead = _board_yaw(cv2.Rodrigues(ahead)[0], robot_from_camera)
+        yaw_behind = _board_yaw(cv2.Rodrigues(behind)[0], robot_from_camera)
+        G[2, i] = math.remainder(yaw_ahead - yaw_behind, math.tau) / 2e-6
+        ahead, behind = params[3:].copy(), params[3:].copy()
+        ahead[i] += 1e-6
+        behind[i] -= 1e-6
+        diff = _board_centre(ahead, robot_from_camera) - _board_centre(behind, robot_from_camera)
+        G[:2, 3 + i] = diff / 2e-6
+    return G
 
 
 def observe(
@@ -82,15 +114,7 @@ def observe(
         return None
     robot_from_camera = model.robot_from_camera(pan, tilt)
     z = _board_pose(params, robot_from_camera)
-    G = np.empty((3, 6))  # dz/dparams by central differences
-    for i in range(6):
-        step = np.zeros(6)
-        step[i] = 1e-6
-        diff = _board_pose(params + step, robot_from_camera) - _board_pose(
-            params - step, robot_from_camera
-        )
-        diff[2] = math.remainder(diff[2], math.tau)
-        G[:, i] = diff / 2e-6
+    G = _board_pose_jacobian(params, robot_from_camera)
     cov = G @ params_cov @ G.T
     return LandmarkObservation(
         landmark,
