@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from stsf_gym.envs.worlds.generator_config import load_generator_config
-from stsf_gym.experiments.benchmark.trained import aggregate_runs
+from stsf_gym.experiments.benchmark.trained import aggregate_runs, paired_across_sources
 from stsf_gym.validation import ConfigError
 from stsf_gym.yaml_layers import SUITE_DIR
 
@@ -27,10 +27,10 @@ def test_train_val_and_test_worlds_are_disjoint():
         )
 
 
-def _scores(successes: list[list[int]]) -> dict:
-    """Synthetic per-model scores: ``successes[run][world]``."""
+def _scores(successes: list[list[int]], source: str = "stsf") -> dict:
+    """Synthetic per-model scores: ``successes[run][world]``, trained on and driving ``source``."""
     return {
-        (f"/runs/ppo-stsf/seed-{r}/model.zip", "stsf"): {
+        (f"/runs/ppo-{source}/seed-{r}/model.zip", source): {
             w: {"success": bool(v), "spl": 0.8 * v} for w, v in enumerate(row)
         }
         for r, row in enumerate(successes)
@@ -46,6 +46,19 @@ def test_aggregate_over_training_seeds():
     assert row["success_iqm"] == pytest.approx(np.mean([0.75, 0.5, 0.125]))  # 3 runs: no trim
     low, high = row["success_iqm_ci95"]
     assert 0 <= low < row["success_iqm"] < high <= 1
+
+
+def test_agents_trained_on_two_pose_sources_are_paired_run_by_run_on_the_same_worlds():
+    good = _scores([[1] * 12, [1] * 11 + [0]], "mcl")
+    poor = _scores([[0] * 12, [1] * 11 + [0]], "odometry")
+    (pair,) = paired_across_sources(good | poor)
+    assert pair["first"]["estimator"] != pair["second"]["estimator"]
+    first, second = pair["success_difference_per_run"]
+    sign = 1 if pair["first"]["estimator"] == "mcl" else -1
+    assert sign * first["difference"] == pytest.approx(1.0) and first["pairs"] == 12
+    assert second["difference"] == 0.0 and second["low"] < 0 < second["high"]
+    assert pair["runs_differing"] == 1  # seed 0 separates, seed 1 does not
+    assert paired_across_sources(good) == []  # one pose source: nothing to pair
 
 
 def test_the_iqm_is_over_runs_not_over_binary_episodes():
@@ -118,6 +131,7 @@ def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_
     agents = {(r["agent"], r["estimator"]) for r in result["rows"]}
     assert agents == {(m, "odometry") for m in models}  # own source
     (trained,) = result["trained"]
+    assert result["trained_paired"] == []  # one training folder: one pose source
     assert trained["agent"] == str(out.resolve()) and trained["runs"] == 2
     assert trained["worlds"] == 2 and len(trained["success_per_run"]) == 2
     saved = json.loads((tmp_path / "bench" / "results.json").read_text())

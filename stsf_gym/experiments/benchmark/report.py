@@ -85,6 +85,27 @@ def leaderboard_markdown(summary: dict) -> str:
                 for t in summary["trained"]
             ]
         )
+    if summary.get("trained_paired"):
+        text += (
+            "\n## Trained agents on their own pose sources, paired run by run (success "
+            "difference, Newcombe 1998, method 10)\n\n"
+        )
+        text += markdown_table(
+            [
+                {
+                    "first - second": f"{agent_name(p['first']['agent'])} on "
+                    f"{p['first']['estimator']} - {agent_name(p['second']['agent'])} on "
+                    f"{p['second']['estimator']}",
+                    "per run (95 % CI)": "; ".join(
+                        f"{d['difference']:+.2f} ({d['low']:+.2f} to {d['high']:+.2f})"
+                        for d in p["success_difference_per_run"]
+                    ),
+                    "runs whose CI excludes 0": f"{p['runs_differing']} of "
+                    f"{len(p['success_difference_per_run'])}",
+                }
+                for p in summary["trained_paired"]
+            ]
+        )
     if summary["paired"]:
         text += "\n## Paired differences in success (Newcombe 1998, method 10) and SPL\n\n"
         pairs = []

@@ -33,6 +33,7 @@ from stsf_gym.experiments.benchmark.trained import (
     agent_pose_sources,
     aggregate_runs,
     expand_agents,
+    paired_across_sources,
 )
 from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.sweep.backends import make_runner
@@ -166,6 +167,7 @@ def summarise_benchmark(suite: Suite, cells: list[dict], results: list[dict]) ->
         "seeds": [min(c["seed"] for c in cells), max(c["seed"] for c in cells)],
         "rows": rows,
         "trained": aggregate_runs(scores),
+        "trained_paired": paired_across_sources(scores),
         "paired": paired,
         "failed": failed,
     }

@@ -15,6 +15,7 @@ the interval carries the spread between training seeds, not only between worlds.
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -129,3 +130,34 @@ def _against_follower(follower: dict[int, dict], runs: list[dict[int, dict]], ro
         "ratio_to_follower": row["success_iqm"] / rate if rate else None,
         "paired_vs_follower": paired,
     }
+
+
+def paired_across_sources(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
+    """Protocol (b)'s question, whether learnt agents separate pose sources as the follower
+    does: for every two training folders that drove on different pose sources, their runs
+    paired seed by seed (the i-th run of each, in training-seed order), each pair's success
+    compared on the test worlds both finished (Newcombe's interval)."""
+    groups = [(key, runs) for key, runs in training_groups(scores).items()]
+    pairs = []
+    for ((first, source), runs), ((second, other), runs_b) in itertools.combinations(groups, 2):
+        if source == other:
+            continue
+        per_run = []
+        for run, run_b in zip(runs, runs_b, strict=False):
+            a, b = scores[run, source], scores[run_b, other]
+            worlds = sorted(set(a) & set(b))
+            per_run.append(
+                newcombe_paired(
+                    [bool(a[w]["success"]) for w in worlds],
+                    [bool(b[w]["success"]) for w in worlds],
+                )
+            )
+        pairs.append(
+            {
+                "first": {"agent": first, "estimator": source},
+                "second": {"agent": second, "estimator": other},
+                "success_difference_per_run": per_run,
+                "runs_differing": sum(p["low"] > 0 or p["high"] < 0 for p in per_run),
+            }
+        )
+    return pairs
