@@ -54,7 +54,7 @@ from stsf_gym.estimators.landmark_observation import (
     robot_pose_jacobian,
 )
 from stsf_gym.estimators.odometry import odometry_step
-from stsf_gym.estimators.pair_range import pair_range
+from stsf_gym.estimators.pair_range import matched_rays, pair_range
 from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import ConventionalSettings, STSFSettings
 from stsf_gym.fusion import STSFTrack
@@ -201,24 +201,19 @@ class LandmarkFusionEstimator(OdometryEstimator):
         camera_from_robot = current.robot_from_camera[:3, :3].T
         phi = current.z[2]
         normal = camera_from_robot @ -np.array([np.cos(phi), np.sin(phi), 0.0])
-        points_prev = dict(zip(prev_obs.indices.tolist(), prev_obs.image_points, strict=True))
-        points_curr = dict(zip(current.indices.tolist(), current.image_points, strict=True))
+        rays = matched_rays(
+            dict(zip(prev_obs.indices.tolist(), prev_obs.image_points, strict=True)),
+            dict(zip(current.indices.tolist(), current.image_points, strict=True)),
+            self.model.camera_matrix,
+        )
+        if rays is None:
+            return None
+        prev_camera_from_robot = np.linalg.inv(prev_obs.robot_from_camera)
 
         def stereo(motion: np.ndarray, motion_cov: np.ndarray | None) -> tuple[float, float] | None:
-            prev_from_curr = (
-                np.linalg.inv(prev_obs.robot_from_camera)
-                @ to_se3(motion)
-                @ current.robot_from_camera
-            )
+            prev_from_curr = prev_camera_from_robot @ to_se3(motion) @ current.robot_from_camera
             return pair_range(
-                points_prev,
-                points_curr,
-                self.model.camera_matrix,
-                prev_from_curr,
-                normal,
-                motion_cov,
-                camera_from_robot,
-                self.sigma_px,
+                rays, prev_from_curr, normal, motion_cov, camera_from_robot, self.sigma_px
             )
 
         measured = stereo(previous.motion, previous.slip_cov)

@@ -25,7 +25,7 @@ from itertools import pairwise
 
 import numpy as np
 
-from stsf_gym.estimators.pair_range import pair_range
+from stsf_gym.estimators.pair_range import matched_rays, pair_range
 from stsf_gym.fusion import stsf_fuse, to_inverse_range, transform_range_track
 from stsf_gym.geometry import to_se3
 
@@ -65,10 +65,11 @@ def pair_distance(
     ``sigma_px``: one frame's feature noise, averaged over the place's frames."""
     rotation = b.world_from_camera[:3, :3]
     frames = min(a.frames, b.frames)
+    rays = matched_rays(a.points, b.points, camera_matrix)
+    if rays is None:
+        return None
     return pair_range(
-        a.points,
-        b.points,
-        camera_matrix,
+        rays,
         np.linalg.inv(a.world_from_camera) @ b.world_from_camera,
         rotation.T @ -normal,  # towards the plane, in camera-b axes
         b.motion_cov,
