@@ -10,7 +10,12 @@ import pytest
 import yaml
 
 from stsf_gym.envs.worlds.generator_config import load_generator_config
-from stsf_gym.experiments.benchmark.trained import aggregate_runs, paired_across_sources
+from stsf_gym.experiments.benchmark.trained import (
+    DEFAULT_ESTIMATORS,
+    agent_pose_sources,
+    aggregate_runs,
+    paired_across_sources,
+)
 from stsf_gym.validation import ConfigError
 from stsf_gym.yaml_layers import SUITE_DIR
 
@@ -59,6 +64,12 @@ def test_agents_trained_on_two_pose_sources_are_paired_run_by_run_on_the_same_wo
     assert second["difference"] == 0.0 and second["low"] < 0 < second["high"]
     assert pair["runs_differing"] == 1  # seed 0 separates, seed 1 does not
     assert paired_across_sources(good) == []  # one pose source: nothing to pair
+
+
+def test_in_protocol_b_the_follower_drives_every_learnt_agents_pose_source_too():
+    sources = agent_pose_sources("follower", None, ["mcl", "odometry", "mcl"])
+    assert sources == [*DEFAULT_ESTIMATORS, "mcl"]  # the defaults hold odometry already
+    assert agent_pose_sources("follower", ["stsf"], ["mcl"]) == ["stsf"]  # protocol (a)
 
 
 def test_the_iqm_is_over_runs_not_over_binary_episodes():

@@ -19,6 +19,7 @@ from __future__ import annotations
 import itertools
 from pathlib import Path
 
+from stsf_gym.agents.registry import trained_on
 from stsf_gym.envs.config import ConfigError, load_config
 from stsf_gym.envs.generated_env import check_distinct_worlds, world_seed_for
 from stsf_gym.envs.suite import Suite, load_suite
@@ -53,9 +54,10 @@ def benchmark_cells(
     """One evaluate cell per agent, pose source and episode seed (the pose sources of
     :func:`~stsf_gym.experiments.benchmark.trained.agent_pose_sources`); per agent seed by
     seed, so a run cut short has every pose source on the same worlds."""
-    cells = []
-    for agent in expand_agents(agents):
-        pose_sources = agent_pose_sources(agent, estimators)
+    cells, expanded = [], expand_agents(agents)
+    learnt_sources = [record["estimator"] for a in expanded if (record := trained_on(a))]
+    for agent in expanded:
+        pose_sources = agent_pose_sources(agent, estimators, learnt_sources)
         for seed, estimator in itertools.product(seeds, pose_sources):
             cells.append(
                 {

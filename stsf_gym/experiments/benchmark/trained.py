@@ -56,14 +56,20 @@ def expand_agents(agents: list[str]) -> list[str]:
     return expanded
 
 
-def agent_pose_sources(agent: str, estimators: list[str] | None) -> list[str]:
+def agent_pose_sources(
+    agent: str, estimators: list[str] | None, learnt_sources: list[str] = ()
+) -> list[str]:
     """The pose sources ``agent`` drives on: those of ``estimators`` when given (a learnt agent
     trained on one, deployed on each: protocol (a)); without, a learnt agent its own (protocol
-    (b)) and any other :data:`DEFAULT_ESTIMATORS`."""
+    (b)) and any other :data:`DEFAULT_ESTIMATORS` followed by ``learnt_sources``, the pose
+    sources the run's learnt agents drive on, so each is paired with the follower on its
+    own."""
     if estimators is not None:
         return list(estimators)
     record = trained_on(agent)
-    return list(DEFAULT_ESTIMATORS) if record is None else [record["estimator"]]
+    if record is not None:
+        return [record["estimator"]]
+    return list(dict.fromkeys([*DEFAULT_ESTIMATORS, *learnt_sources]))
 
 
 def training_group(agent: str) -> str | None:
