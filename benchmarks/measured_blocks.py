@@ -37,6 +37,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import re
 import subprocess
@@ -287,8 +288,6 @@ def listing(blocks: list[Block]) -> str:
 def record_rewrite(paths: Sequence[str], what: str, proof: Sequence[str], root: Path = ROOT):
     """Append to :data:`EQUIVALENT` the rewrite of each of ``paths`` from its bytes at git's
     ``HEAD`` to its bytes now (uncommitted), with ``what`` changed and the ``proof`` tests."""
-    import hashlib
-
     commit = _git("rev-parse", "--short", "HEAD", root=root)
     problems = [f"{t}: no test file" for t in proof if not (root / t).is_file()]
     if commit is None or not proof or problems:
@@ -300,7 +299,7 @@ def record_rewrite(paths: Sequence[str], what: str, proof: Sequence[str], root: 
             raise SystemExit(f"cannot record {path}: not in HEAD or not here")
         lines += [
             f"- path: {path}",
-            f"  before: {hashlib.sha256(before.stdout).hexdigest()[:16]}",
+            f"  before: {hashlib.sha256(before.stdout).hexdigest()[:16]}",  # as file_digest
             f"  after: {file_digest(root / path)}",
             f"  before_commit: {commit}",
             f"  what: {json.dumps(what)}",

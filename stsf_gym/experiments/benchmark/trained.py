@@ -121,15 +121,7 @@ def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]
 
 def _against_follower(follower: dict[int, dict], runs: list[dict[int, dict]], row: dict) -> dict:
     """Each run's success paired with the follower's, and the IQM's ratio to its rate."""
-    paired = []
-    for run in runs:
-        worlds = sorted(set(run) & set(follower))
-        paired.append(
-            newcombe_paired(
-                [bool(run[w]["success"]) for w in worlds],
-                [bool(follower[w]["success"]) for w in worlds],
-            )
-        )
+    paired = [_paired_success(run, follower) for run in runs]
     rate = float(np.mean([bool(v["success"]) for v in follower.values()]))
     return {
         "follower_success_rate": rate,
@@ -143,21 +135,15 @@ def paired_across_sources(scores: dict[tuple[str, str], dict[int, dict]]) -> lis
     does: for every two training folders that drove on different pose sources, their runs
     paired seed by seed (the i-th run of each, in training-seed order), each pair's success
     compared on the test worlds both finished (Newcombe's interval)."""
-    groups = [(key, runs) for key, runs in training_groups(scores).items()]
+    groups = list(training_groups(scores).items())
     pairs = []
     for ((first, source), runs), ((second, other), runs_b) in itertools.combinations(groups, 2):
         if source == other:
             continue
-        per_run = []
-        for run, run_b in zip(runs, runs_b, strict=False):
-            a, b = scores[run, source], scores[run_b, other]
-            worlds = sorted(set(a) & set(b))
-            per_run.append(
-                newcombe_paired(
-                    [bool(a[w]["success"]) for w in worlds],
-                    [bool(b[w]["success"]) for w in worlds],
-                )
-            )
+        per_run = [
+            _paired_success(scores[run, source], scores[run_b, other])
+            for run, run_b in zip(runs, runs_b, strict=False)
+        ]
         pairs.append(
             {
                 "first": {"agent": first, "estimator": source},
@@ -167,3 +153,12 @@ def paired_across_sources(scores: dict[tuple[str, str], dict[int, dict]]) -> lis
             }
         )
     return pairs
+
+
+def _paired_success(first: dict[int, dict], second: dict[int, dict]) -> dict:
+    """Success of ``first`` minus ``second`` (scores by world) on the worlds both finished,
+    with Newcombe's paired interval."""
+    worlds = sorted(set(first) & set(second))
+    return newcombe_paired(
+        [bool(first[w]["success"]) for w in worlds], [bool(second[w]["success"]) for w in worlds]
+    )
