@@ -4,10 +4,14 @@ and the trained agent evaluated behind the same policy stack it was trained with
 from __future__ import annotations
 
 import json
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 from gymnasium import spaces
+from stable_baselines3 import PPO
 
 from stsf_gym.agents.demonstrations.cloning import CloningConfig, clone
 from stsf_gym.agents.demonstrations.dagger import demonstration_config, kept_round
@@ -16,6 +20,7 @@ from stsf_gym.agents.training.train import train
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
+from stsf_gym.io import write_json
 
 
 def test_cloning_fits_the_expert_and_its_rare_stops():
@@ -85,8 +90,29 @@ def test_the_demonstration_stage_resumes_and_its_agent_drives_behind_its_stack(t
     )
     assert json.loads((out / "demonstrations.json").read_text()) == log  # resumed: nothing redone
     assert again["demonstrations"] == summary["demonstrations"]
+    _resumed_after_round_0_drives_the_same_round_1(out, log, tmp_path / "resumed")
     agent = make_agent(str(out / "model.zip"))
     assert isinstance(agent, SB3Agent) and agent.env_overrides() == {"task": {"stop_action": True}}
     env = {**load_suite("corridor").episode_env, "sim": {"max_episode_seconds": 3.0}}
     episode = run_episode(EpisodeSpec("generated:test", "truth", 0, str(out / "model.zip"), env))
     assert episode.steps <= 30 and len(episode.true_poses) == episode.steps + 1  # every step
+
+
+def _resumed_after_round_0_drives_the_same_round_1(out: Path, log: dict, resumed: Path) -> None:
+    """Killed after round 0 (and after round 1's data were written, before its log): the
+    resumed stage collects and clones round 1 as the uninterrupted one did."""
+    shutil.copytree(out, resumed)
+    for finished in ("model.zip", "train.json"):
+        (resumed / finished).unlink()
+    (resumed / "demonstrations" / "round_1.zip").unlink()
+    write_json(resumed / "demonstrations.json", {**log, "rounds": log["rounds"][:1]})
+    train(
+        "ppo", "truth", resumed, 0, n_envs=1, overrides=TINY, progress_bar=False, suite="corridor"
+    )
+    again = json.loads((resumed / "demonstrations.json").read_text())["rounds"]
+    timeless = [{k: v for k, v in r.items() if k != "wall_time_s"} for r in log["rounds"]]
+    assert [{k: v for k, v in r.items() if k != "wall_time_s"} for r in again] == timeless
+    weights = [
+        PPO.load(run / "model.zip", device="cpu").policy.state_dict() for run in (out, resumed)
+    ]
+    assert all(torch.equal(weights[0][k], weights[1][k]) for k in weights[0])

@@ -9,11 +9,13 @@ into the policy. Rounds
 labels every state it reaches, the labels join the data set (aggregation), and the policy is
 cloned again on all of it. Plain cloning leaves the learner where the expert never was (after
 a late turn, too near a wall, past a goal) with no idea what to do; DAgger's rounds label
-exactly those states. After each round the learner is evaluated on the validation worlds (the
+exactly those states. Each round's episodes start from the round's own seed
+(:func:`round_seed`). After each round the learner is evaluated on the validation worlds (the
 same ones each round) and the round is saved (model, data, log), so an interrupted stage
-resumes after its last round. The stage ends with the last round's policy, or (``keep:
-best``) with the round's that did best on the validation worlds, the latest of equals: later
-rounds add data where the learner strays, yet a round can lose what an earlier one had.
+resumes after its last round with the result an uninterrupted one gives. The stage ends with
+the last round's policy, or (``keep: best``) with the round's that did best on the validation
+worlds, the latest of equals: later rounds add data where the learner strays, yet a round can
+lose what an earlier one had.
 """
 
 from __future__ import annotations
@@ -131,15 +133,16 @@ def run_demonstrations(
     folder.mkdir(parents=True, exist_ok=True)
     history = _resume(model, folder, log)
     data = None
-    if history:
-        saved = np.load(folder / "data.npz")
-        data = (saved["observations"], saved["actions"])
+    if history:  # the logged rounds' samples (a kill between the two writes left more)
+        saved, logged = np.load(folder / "data.npz"), history[-1]["samples"]
+        data = (saved["observations"][:logged], saved["actions"][:logged])
     settings = cfg.clone_settings
     for round_ in range(len(history), cfg.rounds + 1):
         started = time.perf_counter()
         rng = np.random.default_rng([seed, round_])
         episodes = cfg.expert_episodes if round_ == 0 else cfg.episodes_per_round
         driver = None if round_ == 0 else model
+        venv.seed(round_seed(seed, round_))
         obs, actions, steps, decisions = collect(venv, episodes, driver, cfg.every_control_step)
         data = (
             (obs, actions)
@@ -176,6 +179,13 @@ def run_demonstrations(
     if kept != history[-1]["round"]:
         _load_round(model, folder / f"round_{kept}.zip")
     return {**{k: v for k, v in history[-1].items() if k != "val_episodes"}, "kept_round": kept}
+
+
+def round_seed(seed: int, round_: int) -> int:
+    """The seed of round ``round_``'s episodes (worlds, legs, the estimators' draws): each
+    round starts from its own, so a stage resumed after any round drives the episodes an
+    uninterrupted one would."""
+    return int(np.random.SeedSequence([seed, round_]).generate_state(1)[0])
 
 
 def kept_round(history: list[dict], keep: str) -> int:

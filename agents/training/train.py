@@ -287,7 +287,6 @@ def _demonstrate(model, cfg, n_envs: int, out: Path, spec: dict, eval_env, train
     """The demonstration stage (:func:`run_demonstrations`) in envs whose states the expert
     labels; the learner is evaluated after each round on the evaluation worlds."""
     venv = make_vec_env(n_envs, out, "demonstrations", expert=True, **spec)
-    venv.seed(seed)
     layout = venv.get_attr("action_layout", [0])[0]
     stop = layout.index("stop") if "stop" in layout else None
     evaluate = partial(
