@@ -195,7 +195,9 @@ class MonteCarloLocalization(PoseEstimator):
         self._estimate()
 
     def _boards(self, obs: dict) -> list[Board]:
-        """Every usable board of the frame."""
+        """Every usable board of the frame: a finite PnP pose (near a fronto-parallel view
+        OpenCV's IPPE can report success with a NaN rotation, which the Kalman estimators'
+        gates reject) within ``min_range`` and ``max_range``."""
         s, found = self.settings, []
         pan, tilt = (float(a) for a in obs["camera_pan_tilt"])
         detections = self.detector(obs)
@@ -203,7 +205,9 @@ class MonteCarloLocalization(PoseEstimator):
         self.counters["frames_matched"] += bool(detections)
         for detection in detections:
             seen = observe(detection, self.model, pan, tilt, s.sigma_px)
-            if seen is None or not s.min_range <= math.hypot(*seen.z[:2]) <= s.max_range:
+            if seen is None or not np.isfinite([*seen.z, *seen.cov.ravel()]).all():
+                continue
+            if not s.min_range <= math.hypot(*seen.z[:2]) <= s.max_range:
                 continue
             measurement = landmark_pose(
                 seen, s.position_std_floor, s.position_std_per_m, s.orientation_std_floor
