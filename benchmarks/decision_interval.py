@@ -25,6 +25,7 @@ from stsf_gym.experiments.episodes import EpisodeSpec, run_episodes
 from stsf_gym.io import write_json
 from stsf_gym.metrics import ate_rmse
 from stsf_gym.results import stat
+from stsf_gym.results.provenance import provenance
 from stsf_gym.yaml_layers import deep_merge
 
 
@@ -67,7 +68,11 @@ def main() -> None:
             }
         )
         print(_line(rows[-1], args.k), flush=True)
-    write_json(args.out / "results.json", {"suite": args.suite, "k": args.k, "rows": rows})
+    record = provenance(env, seeds=range(args.seed, args.seed + args.worlds))
+    write_json(
+        args.out / "results.json",
+        {"suite": args.suite, "k": args.k, "rows": rows, "provenance": record},
+    )
     (args.out / "results.md").write_text("\n".join(_line(r, args.k) for r in rows) + "\n")
 
 
