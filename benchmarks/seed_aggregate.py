@@ -54,8 +54,10 @@ def main() -> None:
             f"{', '.join(f'{v:.2f}' for v in e['success_per_run'])}; SPL IQM {e['spl_iqm']:.3f}"
         )
         if "ratio_to_follower" in e:
+            ratio = e["ratio_to_follower"]  # None: the follower never succeeded
             print(
-                f"  follower {e['follower_success_rate']:.3f}; ratio {e['ratio_to_follower']:.3f}"
+                f"  follower {e['follower_success_rate']:.3f}; ratio "
+                + ("-" if ratio is None else f"{ratio:.3f}")
             )
             for run, p in zip(range(e["runs"]), e["paired_vs_follower"], strict=True):
                 print(

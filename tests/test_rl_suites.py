@@ -174,3 +174,22 @@ def test_seed_aggregate_recomputes_a_committed_benchmark():
     assert entry["success_per_run"] == pytest.approx(saved["success_per_run"])
     assert [p["pairs"] for p in entry["paired_vs_follower"]] == [100, 100, 100]
     assert entry["follower_success_rate"] == 1.0
+
+
+def test_seed_aggregate_prints_a_pose_source_the_follower_never_completed():
+    """On protocol (b)'s committed results the follower completes no odometry route: the
+    ratio to it is undefined, printed as '-', and every other row still printed."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    results = root / "benchmarks/results/learner-sparse/protocol-b/results.json"
+    done = subprocess.run(
+        [sys.executable, str(root / "benchmarks/seed_aggregate.py"), str(results)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert "follower 0.000; ratio -" in done.stdout
+    assert done.stdout.count("success IQM over") == len(json.loads(results.read_text())["trained"])
