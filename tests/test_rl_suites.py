@@ -4,6 +4,9 @@ seeds, and the benchmark's aggregate over them (IQM with a stratified bootstrap 
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -153,22 +156,26 @@ def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_
     )
 
 
-def test_seed_aggregate_recomputes_a_committed_benchmark():
-    """``benchmarks/seed_aggregate.py`` on the learner's committed results: the benchmark's own
-    IQM, and each seed paired with the follower on all 100 worlds."""
-    import subprocess
-    import sys
-    from pathlib import Path
+ROOT = Path(__file__).resolve().parents[1]
 
-    root = Path(__file__).resolve().parents[1]
-    results = root / "benchmarks/results/learner-corridor/benchmark-truth-results.json"
+
+def _seed_aggregate(results: Path, *options: str) -> str:
+    """What ``benchmarks/seed_aggregate.py`` prints for a committed ``results.json``."""
+    script = ROOT / "benchmarks/seed_aggregate.py"
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks/seed_aggregate.py"), str(results), "--json"],
+        [sys.executable, str(script), str(results), *options],
         capture_output=True,
         text=True,
         check=True,
     )
-    (entry,) = json.loads(done.stdout)
+    return done.stdout
+
+
+def test_seed_aggregate_recomputes_a_committed_benchmark():
+    """``benchmarks/seed_aggregate.py`` on the learner's committed results: the benchmark's own
+    IQM, and each seed paired with the follower on all 100 worlds."""
+    results = ROOT / "benchmarks/results/learner-corridor/benchmark-truth-results.json"
+    (entry,) = json.loads(_seed_aggregate(results, "--json"))
     (saved,) = json.loads(results.read_text())["trained"]
     assert entry["success_iqm"] == pytest.approx(saved["success_iqm"])
     assert entry["success_per_run"] == pytest.approx(saved["success_per_run"])
@@ -179,17 +186,7 @@ def test_seed_aggregate_recomputes_a_committed_benchmark():
 def test_seed_aggregate_prints_a_pose_source_the_follower_never_completed():
     """On protocol (b)'s committed results the follower completes no odometry route: the
     ratio to it is undefined, printed as '-', and every other row still printed."""
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[1]
-    results = root / "benchmarks/results/learner-sparse/protocol-b/results.json"
-    done = subprocess.run(
-        [sys.executable, str(root / "benchmarks/seed_aggregate.py"), str(results)],
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    assert "follower 0.000; ratio -" in done.stdout
-    assert done.stdout.count("success IQM over") == len(json.loads(results.read_text())["trained"])
+    results = ROOT / "benchmarks/results/learner-sparse/protocol-b/results.json"
+    printed = _seed_aggregate(results)
+    assert "follower 0.000; ratio -" in printed
+    assert printed.count("success IQM over") == len(json.loads(results.read_text())["trained"])
