@@ -13,9 +13,10 @@ exactly those states. Each round's episodes start from the round's own seed
 (:func:`round_seed`). After each round the learner is evaluated on the validation worlds (the
 same ones each round) and the round is saved (model, data, log), so an interrupted stage
 resumes after its last round with the result an uninterrupted one gives. The stage ends with
-the last round's policy, or (``keep: best``) with the round's that did best on the validation
-worlds, the latest of equals: later rounds add data where the learner strays, yet a round can
-lose what an earlier one had.
+the round's policy that did best on the validation worlds, the latest of equals (``keep:
+best``, the default), or with the last round's (``keep: last``): later rounds add data where
+the learner strays, yet a round can lose what an earlier one had (docs/agents.md measures
+both).
 """
 
 from __future__ import annotations
@@ -50,7 +51,7 @@ class DemonstrationConfig:
     rounds: Episodes = 0
     episodes_per_round: Episodes = 0
     every_control_step: bool = True  # label the held steps between decisions too (else: not)
-    keep: Literal["last", "best"] = "last"  # the policy the stage ends with (see the module)
+    keep: Literal["last", "best"] = "best"  # the policy the stage ends with (see the module)
     cloning: dict = field(default_factory=dict)  # CloningConfig's keys
 
     @property

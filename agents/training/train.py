@@ -373,6 +373,7 @@ def train(
         "decision_steps": cfg.decision_steps,
     }
     training = {k: v for k, v in asdict(cfg).items() if k not in ("env", "observation")}
+    training["demonstrations"] = asdict(demonstrations)  # defaults too: they can change
     hyperparams = {"section": hp.section, **training, **hp.algo_kwargs, "n_envs": n_envs}
     resolved = {
         **resolved_config(world, estimator, env_settings),
