@@ -375,7 +375,10 @@ def _evaluation_line(summary: dict) -> str:
         rate = last["success_rate"]
         return f"last evaluation (at {last['timesteps']} timesteps): success rate {rate:.2f}"
     if stage is not None:
-        return f"demonstrations round {stage['round']}: val success {stage['val_success']:.2f}"
+        return (
+            f"demonstrations, {stage['round']} rounds, kept round {stage['kept_round']}: "
+            f"val success {stage['val_success']:.2f}"
+        )
     return "no evaluation ran (fewer timesteps than eval_freq)"
 
 

@@ -85,6 +85,8 @@ def test_the_demonstration_stage_resumes_and_its_agent_drives_behind_its_stack(t
     # every control step is a sample (and each reset's first state), decisions every 5 steps
     assert rounds[0]["samples"] >= rounds[0]["control_steps"] >= 4 * rounds[0]["decisions"]
     assert summary["demonstrations"]["round"] == 1 and summary["timesteps"] == 0
+    kept = summary["demonstrations"]["kept_round"]
+    assert summary["demonstrations"]["val_success"] == rounds[kept]["val_success"]
     recorded = json.loads((out / "train.json").read_text())["hyperparams"]["demonstrations"]
     assert recorded["keep"] == "best"  # a default is recorded: the run's fingerprint holds it
     again = train(

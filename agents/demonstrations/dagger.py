@@ -115,8 +115,8 @@ def run_demonstrations(
     """The demonstration stage on ``model``'s policy (resumed from ``out/demonstrations`` when
     the same code and settings, ``made_by``, logged it); each round is logged in
     ``out/demonstrations.json`` (its totals and the success of each validation episode);
-    returns the last round's totals and ``kept_round``, the round whose policy ``model`` ends
-    with (``cfg.keep``)."""
+    returns the last round's totals, ``kept_round``, the round whose policy ``model`` ends
+    with (``cfg.keep``), and that round's ``val_success``."""
     folder = out / "demonstrations"
     log = out / DEMONSTRATIONS_JSON
     if log.is_file() and json.loads(log.read_text()).get("made_by") != made_by:
@@ -179,7 +179,8 @@ def run_demonstrations(
     kept = kept_round(history, cfg.keep)
     if kept != history[-1]["round"]:
         _load_round(model, folder / f"round_{kept}.zip")
-    return {**{k: v for k, v in history[-1].items() if k != "val_episodes"}, "kept_round": kept}
+    stage = {k: v for k, v in history[-1].items() if k != "val_episodes"}  # the stage's totals
+    return {**stage, "kept_round": kept, "val_success": history[kept]["val_success"]}
 
 
 def round_seed(seed: int, round_: int) -> int:
