@@ -16,11 +16,12 @@ import gymnasium as gym
 from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
 from stsf_gym.envs.corridor_env import CorridorEnv
 from stsf_gym.envs.random_streams import RandomStreams
-from stsf_gym.envs.worlds.generator import generate_world, world_tree
+from stsf_gym.envs.worlds.generator import GenerationError, generate_world, world_tree
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
 from stsf_gym.validation import ConfigError
 from stsf_gym.yaml_layers import merge_settings
 
+REDRAWS = 10  # drawn worlds the generator cannot lay out, skipped before the error is raised
 GENERATED = "generated"  # the world name of generated worlds; ``generated:<split>`` labels
 
 
@@ -155,11 +156,10 @@ class GeneratedCorridorEnv(CorridorEnv):
         world_seed = options.pop("world_seed", None)
         gym.Env.reset(self, seed=seed)
         self.streams = RandomStreams.draw(self.np_random)
+        drawn = world_seed is None and seed is None
         if world_seed is None:
             world_seed = (
-                world_seed_for(self.world_seeds, seed)
-                if seed is not None
-                else int(self.world_seeds[int(self.streams.world.integers(len(self.world_seeds)))])
+                world_seed_for(self.world_seeds, seed) if seed is not None else self._draw()
             )
         elif isinstance(world_seed, bool) or world_seed not in self.world_seeds:
             first, last = self.world_seeds.start, self.world_seeds.stop - 1
@@ -168,6 +168,22 @@ class GeneratedCorridorEnv(CorridorEnv):
                 f"[{first}, {last}], got {world_seed!r}"
             )
         if world_seed != self.world_seed:
-            self._build_world(generate_world(int(world_seed), self.generator, self.config))
-            self.world_seed = int(world_seed)
+            world_seed, world = self._generated(int(world_seed), redraw=drawn)
+            self._build_world(world)
+            self.world_seed = world_seed
         return self._start_episode(options)
+
+    def _draw(self) -> int:
+        """A world seed of the split from the episode's world stream."""
+        return int(self.world_seeds[int(self.streams.world.integers(len(self.world_seeds)))])
+
+    def _generated(self, world_seed: int, redraw: bool) -> tuple[int, WorldConfig]:
+        """World ``world_seed`` and its seed. A drawn world the generator cannot lay out (a rare
+        seed of a demanding suite: no layout of the landmark coverage asked) is replaced by the
+        next draw, up to :data:`REDRAWS` times; a world asked for by seed raises."""
+        for _ in range(REDRAWS if redraw else 0):
+            try:
+                return world_seed, generate_world(world_seed, self.generator, self.config)
+            except GenerationError:
+                world_seed = self._draw()
+        return world_seed, generate_world(world_seed, self.generator, self.config)

@@ -11,6 +11,8 @@ import yaml
 from conftest import drive
 
 from stsf_gym.agents.observation import PolicyObservation
+from stsf_gym.envs import generated_env
+from stsf_gym.envs.worlds.generator import GenerationError, generate_world
 from stsf_gym.envs.worlds.generator_config import load_generator_config
 
 FAST = {"camera__mode": "fast"}
@@ -137,3 +139,30 @@ def test_cli_split_errors(tmp_path, args, message):
         [*CLI, "evaluate", *args, "--out", str(tmp_path)], capture_output=True, text=True
     )
     assert result.returncode == 2 and message in result.stderr
+
+
+def test_a_drawn_world_the_generator_cannot_lay_out_is_drawn_again(make_env, monkeypatch):
+    """A train world seed of the sparse suite had no layout of its landmark coverage and ended
+    a training run (`stsf-gym train --suite sparse`, seed 0, DAgger round 1). A drawn world
+    that cannot be generated is replaced by the next draw, the same one on every run; a world
+    asked for by seed still raises."""
+    reference = make_env("stsf_gym/Generated-v0", split="train", camera__enabled=False)
+    reference.reset(seed=0)
+    reference.reset()
+    unbuildable = reference.unwrapped.world_seed
+
+    def generate(world_seed, *args):
+        if world_seed == unbuildable:
+            raise GenerationError(f"world seed {world_seed}: no layout")
+        return generate_world(world_seed, *args)
+
+    monkeypatch.setattr(generated_env, "generate_world", generate)
+    redrawn = []
+    for _ in range(2):
+        env = make_env("stsf_gym/Generated-v0", split="train", camera__enabled=False)
+        env.reset(seed=0)
+        env.reset()
+        redrawn.append(env.unwrapped.world_seed)
+    assert redrawn[0] == redrawn[1] != unbuildable
+    with pytest.raises(GenerationError, match=str(unbuildable)):
+        env.reset(options={"world_seed": unbuildable})
