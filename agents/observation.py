@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import gymnasium as gym
 import numpy as np
@@ -29,12 +30,15 @@ class ObservationConfig:
     in the robot frame the policy sees; ``scale``: metres that map to 1 in those features;
     ``goal_horizon``: metres beyond which the goal features saturate (None: never). An agent
     trained on legs a few metres long meets goals 20-40 m away on a full route, inputs it has
-    never seen; saturated at a horizon its legs reach, a far goal reads as one at the horizon
-    (direction kept), and the lookahead points steer until it comes nearer."""
+    never seen; saturated at a horizon its legs reach, they read as a goal at the horizon.
+    ``far_goal`` says which: ``direction``, the goal's own direction (the straight line to a
+    goal can point back across a wall when the route turns around); ``route``, the route's
+    point ``goal_horizon`` metres ahead along the path, as a leg's goal that far ahead reads."""
 
     lookahead: tuple[float, ...] = (0.0, 0.5, 1.0, 2.0, 4.0)
     scale: float = 4.0
     goal_horizon: Positive | None = None
+    far_goal: Literal["direction", "route"] = "direction"
 
 
 def observation_config(data: dict | None) -> ObservationConfig:
@@ -50,8 +54,8 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     - the path length left to the current goal (negative past it), over ``scale``;
     - the current goal of the route (the task's, ``declare``: where to stop next) in the
       estimated robot frame, over ``scale`` (Habitat's GPS+compass goal vector, from the
-      estimate), and the share of the route's goals still to declare; the path left and the
-      goal vector's length are cut at ``goal_horizon``;
+      estimate), and the share of the route's goals still to declare; the path left is cut
+      at ``goal_horizon`` and the goal vector beyond it as ``far_goal`` says;
     - ``sin`` and ``cos`` of the heading error (path direction minus estimated yaw);
     - ``log10`` of the standard deviations of the estimate along and across the robot's
       heading and of its yaw (each clipped to 1 mm..10 m or rad), over 3;
@@ -108,7 +112,10 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         goal_arc = task.goal_arcs[min(task.goal_index, len(task.goals) - 1)]
         left = goal_arc - here
         horizon = self.config.goal_horizon
-        if horizon is not None:
+        if horizon is not None and self.config.far_goal == "route" and left > horizon:
+            goal = (self.path.point_at(here + horizon) - (x, y)) @ to_robot.T
+            left = horizon
+        elif horizon is not None:
             left = min(left, horizon)
             goal *= min(1.0, horizon / max(float(np.hypot(*goal)), 1e-9))
         features = np.concatenate(

@@ -99,6 +99,32 @@ def test_goal_features_saturate_at_the_horizon(make_env):
     )
 
 
+def test_a_far_goal_reads_as_the_route_point_at_the_horizon(make_env):
+    """With ``far_goal: route`` a goal beyond the horizon reads as the path's point that far
+    ahead (the 2 m lookahead point here); within it, the goal itself, as with ``direction``."""
+    k = len(ObservationConfig().lookahead)
+    route, direction = (
+        PolicyObservation(
+            PoseEstimateWrapper(make_env(**NO_CAMERA), "truth"),
+            ObservationConfig(goal_horizon=horizon, far_goal=far_goal),
+        )
+        for horizon, far_goal in ((2.0, "route"), (2.0, "direction"))
+    )
+    cut, _ = route.reset(seed=0)
+    straight, _ = direction.reset(seed=0)
+    np.testing.assert_allclose(cut[2 * k + 1 : 2 * k + 3], cut[6:8], atol=1e-6)  # lookahead 2 m
+    assert cut[2 * k] == straight[2 * k]
+    # the corridor's goal lies off the route's line: the two readings differ
+    assert np.abs(cut[2 * k + 1 : 2 * k + 3] - straight[2 * k + 1 : 2 * k + 3]).max() > 0.05
+    np.testing.assert_array_equal(
+        np.delete(cut, [2 * k + 1, 2 * k + 2]), np.delete(straight, [2 * k + 1, 2 * k + 2])
+    )
+    near = ObservationConfig(goal_horizon=1000.0, far_goal="route")
+    whole = PolicyObservation(PoseEstimateWrapper(make_env(**NO_CAMERA), "truth"), near)
+    unbounded = PolicyObservation(PoseEstimateWrapper(make_env(**NO_CAMERA), "truth"))
+    np.testing.assert_array_equal(whole.reset(seed=0)[0], unbounded.reset(seed=0)[0])
+
+
 def _write(tmp_path, text: str):
     path = tmp_path / "bad.yaml"
     path.write_text(text)
