@@ -27,7 +27,9 @@ file's bytes, not what a run computes. ``benchmarks/equivalent_code.yaml`` recor
 rewrite: the file, its digest before and after, the commit before it, and the tests that prove the
 equality (they must exist and run in ``make test``). A loaded file whose digest reaches its
 current one through a chain of these records counts as unchanged, except for timings
-(results of ``stsf-gym bench``): a rewrite is made to change those.
+(results of ``stsf-gym bench``): a rewrite is made to change those. A record's optional
+``changes`` names other commands whose results it does change (``[stsf-gym train]`` for a
+setting only training reads): for their results the file has changed.
 
 Usage::
 
@@ -54,8 +56,8 @@ from stsf_gym.results.provenance import file_digest, source_digest
 ROOT = Path(__file__).resolve().parent.parent
 NOT_TIED = Path("benchmarks/measured_not_tied.yaml")  # relative to the repository
 EQUIVALENT = Path("benchmarks/equivalent_code.yaml")  # bit-exact rewrites, relative too
-#: The command whose results are timings, which an equivalent rewrite is made to change.
-TIMINGS = ["stsf-gym", "bench"]
+#: The command whose results are timings, which every equivalent rewrite is made to change.
+TIMINGS = "stsf-gym bench"
 #: The Markdown files searched: the README and every page of the site.
 PAGES = ("README.md", "docs")
 #: The folders whose code the digest covers (pyproject's package-dir).
@@ -137,10 +139,13 @@ def changes_since(commit: str | None, root: Path = ROOT, files: Sequence[str] = 
     return f"made at commit {commit[:10]}; {count} later commits changed {what}"
 
 
-def equivalent_rewrites(root: Path = ROOT) -> tuple[dict[tuple[str, str], str], list[str]]:
-    """``{(path, digest before): digest after}`` of the bit-exact rewrites recorded in
-    :data:`EQUIVALENT`, and the problems of the record (a missing key, a proof that is no
-    test file of the repository)."""
+Rewrites = Mapping[tuple[str, str], tuple[str, tuple[str, ...]]]
+
+
+def equivalent_rewrites(root: Path = ROOT) -> tuple[Rewrites, list[str]]:
+    """``{(path, digest before): (digest after, commands it changes)}`` of the bit-exact
+    rewrites recorded in :data:`EQUIVALENT` (every one changes :data:`TIMINGS`), and the
+    problems of the record (a missing key, a proof that is no test file of the repository)."""
     record = root / EQUIVALENT
     entries = yaml.safe_load(record.read_text()) if record.is_file() else None
     rewrites, problems = {}, []
@@ -154,8 +159,20 @@ def equivalent_rewrites(root: Path = ROOT) -> tuple[dict[tuple[str, str], str], 
         for proof in entry["proof"]:
             if not (proof.startswith("tests/") and (root / proof).is_file()):
                 problems.append(f"{EQUIVALENT}: rewrite {number}'s proof {proof} is no test file")
-        rewrites[(entry["path"], entry["before"])] = entry["after"]
+        changes = (TIMINGS, *entry.get("changes", []))
+        rewrites[(entry["path"], entry["before"])] = (entry["after"], changes)
     return rewrites, problems
+
+
+def applying(rewrites: Rewrites, command: str) -> dict[tuple[str, str], str]:
+    """``{(path, digest before): digest after}`` of the ``rewrites`` that leave the results of
+    ``command`` unchanged (those that name no prefix of it in their ``changes``)."""
+    words = command.split()
+    return {
+        key: after
+        for key, (after, changes) in rewrites.items()
+        if not any(words[: len(c.split())] == c.split() for c in changes)
+    }
 
 
 def _same_code(path: str, digest: str, now: str, rewrites: Mapping[tuple[str, str], str]) -> bool:
@@ -214,10 +231,10 @@ def judge(
     block: Block,
     digest: str,
     root: Path = ROOT,
-    rewrites: Mapping[tuple[str, str], str] | None = None,
+    rewrites: Rewrites | None = None,
 ) -> list[str]:
     """Set ``block.state`` and ``block.notes``; return the rules it breaks. ``rewrites``
-    (:func:`equivalent_rewrites`) apply to every results file but timings."""
+    (:func:`equivalent_rewrites`) apply to the results of every command they do not change."""
     problems = []
     where = f"{block.page}:{block.line} {block.name!r}"
     stale = False
@@ -234,8 +251,7 @@ def judge(
         for shown in (made_by["command"], code["source_digest"]):
             if shown not in block.text:
                 problems.append(f"{where}: the block does not show {name}'s {shown!r}")
-        timings = made_by["command"].split()[:2] == TIMINGS
-        why = staleness(code, digest, root, None if timings else rewrites)
+        why = staleness(code, digest, root, applying(rewrites or {}, made_by["command"]))
         if why is not None:
             stale = True
             block.notes.append(f"{name}: {why}")
@@ -285,9 +301,16 @@ def listing(blocks: list[Block]) -> str:
     return "\n".join(lines)
 
 
-def record_rewrite(paths: Sequence[str], what: str, proof: Sequence[str], root: Path = ROOT):
+def record_rewrite(
+    paths: Sequence[str],
+    what: str,
+    proof: Sequence[str],
+    root: Path = ROOT,
+    changes: Sequence[str] = (),
+):
     """Append to :data:`EQUIVALENT` the rewrite of each of ``paths`` from its bytes at git's
-    ``HEAD`` to its bytes now (uncommitted), with ``what`` changed and the ``proof`` tests."""
+    ``HEAD`` to its bytes now (uncommitted), with ``what`` changed, the ``proof`` tests and
+    the commands whose results it ``changes`` (besides timings)."""
     commit = _git("rev-parse", "--short", "HEAD", root=root)
     problems = [f"{t}: no test file" for t in proof if not (root / t).is_file()]
     if commit is None or not proof or problems:
@@ -304,6 +327,7 @@ def record_rewrite(paths: Sequence[str], what: str, proof: Sequence[str], root: 
             f"  before_commit: {commit}",
             f"  what: {json.dumps(what)}",
             f"  proof: [{', '.join(proof)}]",
+            *([f"  changes: [{', '.join(changes)}]"] if changes else []),
         ]
     with (root / EQUIVALENT).open("a") as record:
         record.write("\n".join(lines) + "\n")
@@ -322,9 +346,12 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--what", default="", help="what the rewrite changed")
     parser.add_argument("--proof", nargs="+", default=[], help="the tests that prove it")
+    parser.add_argument(
+        "--changes", nargs="+", default=[], help="commands whose results it does change"
+    )
     args = parser.parse_args(argv)
     if args.rewrite:
-        record_rewrite(args.rewrite, args.what, args.proof)
+        record_rewrite(args.rewrite, args.what, args.proof, changes=args.changes)
         return 0
     blocks, problems = check()
     if args.json:

@@ -180,8 +180,11 @@ def test_a_results_file_without_loaded_code_is_judged_by_the_whole_digest(
     assert not problems and (block.state, block.notes) == (state, notes)
 
 
-def _rewrite(root: Path, before: str, proof: str = "tests/test_equal.py") -> None:
-    """Record envs/m1.py's change from digest ``before`` to its bytes now as bit-exact."""
+def _rewrite(
+    root: Path, before: str, proof: str = "tests/test_equal.py", changes: list | None = None
+) -> None:
+    """Record envs/m1.py's change from digest ``before`` to its bytes now as bit-exact (for
+    every command but ``changes``)."""
     (root / "tests").mkdir(exist_ok=True)
     (root / "tests" / "test_equal.py").write_text("def test_equal(): pass\n")
     entry = {
@@ -190,24 +193,34 @@ def _rewrite(root: Path, before: str, proof: str = "tests/test_equal.py") -> Non
         "after": file_digest(root / "envs" / "m1.py"),
         "before_commit": "abc1234",
         "proof": [proof],
+        **({"changes": changes} if changes else {}),
     }
     (root / "benchmarks" / "equivalent_code.yaml").write_text(json.dumps([entry]))
 
 
-@pytest.mark.parametrize("command", ["stsf-gym demo --seeds 1", "stsf-gym bench --out b"])
-def test_a_recorded_bit_exact_rewrite_keeps_results_current_but_not_timings(tmp_path, command):
+@pytest.mark.parametrize(
+    ("command", "changed"),
+    [
+        ("stsf-gym demo --seeds 1", False),
+        ("stsf-gym bench --out b", True),  # timings: every rewrite changes them
+        ("stsf-gym train --suite s", True),  # named in the record's changes
+        ("stsf-gym trainer", False),  # a prefix is whole words
+    ],
+)
+def test_a_recorded_bit_exact_rewrite_keeps_results_current_but_not_the_commands_it_changes(
+    tmp_path, command, changed
+):
     root = _loaded_repository(tmp_path)
     before = file_digest(root / "envs" / "m1.py")
     (root / "envs" / "m1.py").write_text("X = 0 + 1  # the same number, other bytes\n")
-    _rewrite(root, before)
+    _rewrite(root, before, changes=["stsf-gym train"])
     run = json.loads((root / "run.json").read_text())
     run["provenance"]["command"] = command
     (root / "run.json").write_text(json.dumps(run))
     (root / "README.md").write_text(_block("a", f"`{command}` at `0123abcd`", "run.json"))
     blocks, problems = measured.check(root, "0123abcd")
-    timings = "bench" in command
-    assert [b.state for b in blocks] == ["stale" if timings else "current"]
-    assert problems == (["README.md quotes 'a', which is stale"] if timings else [])
+    assert [b.state for b in blocks] == ["stale" if changed else "current"]
+    assert problems == (["README.md quotes 'a', which is stale"] if changed else [])
 
 
 def test_a_rewrite_from_other_bytes_or_without_a_test_proves_nothing(tmp_path):
@@ -228,6 +241,8 @@ def test_recording_a_rewrite_takes_the_digests_from_head_and_the_file_now(tmp_pa
     subprocess.run([*git, "add", "-A"], check=True)
     subprocess.run([*git, "commit", "-qm", "x"], check=True)
     (root / "envs" / "m1.py").write_text("X = 0 + 1\n")
-    measured.record_rewrite(["envs/m1.py"], "same X", ["tests/test_equal.py"], root)
+    measured.record_rewrite(["envs/m1.py"], "same X", ["tests/test_equal.py"], root, ["x y"])
     blocks, problems = measured.check(root, "0123abcd")
     assert not problems and blocks[0].state == "current"
+    rewrites, _ = measured.equivalent_rewrites(root)
+    assert [changes for _, changes in rewrites.values()] == [("stsf-gym bench", "x y")]
