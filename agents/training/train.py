@@ -34,7 +34,7 @@ import gymnasium as gym
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList, EvalCallback
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
-from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
+from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 
 import stsf_gym
 from stsf_gym.agents.demonstrations.dagger import demonstration_config, run_demonstrations
@@ -57,6 +57,7 @@ from stsf_gym.agents.training.training_log import (
     last_evaluation,
     plot_learning_curve,
 )
+from stsf_gym.agents.training.worker_envs import FailFastSubprocVecEnv
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.generated_env import generated_label, parse_world
 from stsf_gym.envs.suite import load_suite
@@ -142,7 +143,7 @@ def make_vec_env(n_envs: int, out: Path, tag: str, **spec) -> VecEnv:
         )
         for rank in range(n_envs)
     ]
-    return SubprocVecEnv(factories, "forkserver") if in_workers else DummyVecEnv(factories)
+    return FailFastSubprocVecEnv(factories, "forkserver") if in_workers else DummyVecEnv(factories)
 
 
 def latest_checkpoint(out: Path) -> tuple[Path, int] | None:
