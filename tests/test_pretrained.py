@@ -4,6 +4,7 @@ when the code changes what it sees."""
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -69,6 +70,17 @@ def test_a_shipped_name_expands_to_its_seeds_and_groups_under_its_name():
     assert {training_group(m) for m in models} == {"pretrained:corridor/ppo-truth"}
     with pytest.raises(ConfigError, match="no shipped agent 'pretrained:corridor/ppo-nothing'"):
         expand_agents(["pretrained:corridor/ppo-nothing"])
+
+
+def test_a_run_that_names_a_shipped_agent_counts_its_models_as_loaded_code():
+    """Results quoted from a shipped agent go stale when it is shipped again."""
+    from stsf_gym.results.provenance import file_digest, loaded_code
+
+    models = expand_agents(["pretrained:corridor/ppo-truth"])
+    code = loaded_code()
+    for model in map(Path, models):
+        path = f"agents/pretrained/trained-models/corridor/ppo-truth/{model.name}"
+        assert code[path] == file_digest(model)
 
 
 def test_the_accuracy_curve_takes_a_shipped_agent(tmp_path):

@@ -20,6 +20,7 @@ import numpy as np
 
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.io import write_json
+from stsf_gym.results.provenance import note_data_files
 
 PREFIX = "pretrained:"
 MODELS = Path(__file__).parent / "trained-models"  # not a package name: data, not code
@@ -46,8 +47,11 @@ def folder(name: str) -> Path:
 
 
 def models(name: str) -> list[Path]:
-    """The model file of each training seed of shipped agent ``name``."""
-    return [folder(name) / f"seed-{seed}.zip" for seed in summary(name)["seeds"]]
+    """The model file of each training seed of shipped agent ``name`` (each counted as code
+    the run loaded, so results quoted from it go stale when it is shipped again)."""
+    files = [folder(name) / f"seed-{seed}.zip" for seed in summary(name)["seeds"]]
+    note_data_files(files)
+    return files
 
 
 def summary(name: str) -> dict:

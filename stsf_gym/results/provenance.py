@@ -56,6 +56,8 @@ T = TypeVar("T")
 _command: list[str] | None = None
 #: The package modules (relative paths, see :func:`loaded_modules`) workers of this run loaded.
 _worker_modules: set[str] = set()
+#: The package data files this run read (relative paths: a shipped agent's model).
+_data_files: set[str] = set()
 
 
 def set_command(argv: Sequence[str]) -> None:
@@ -111,6 +113,13 @@ def note_worker_modules(modules: Iterable[str]) -> None:
     _worker_modules.update(modules)
 
 
+def note_data_files(paths: Iterable[Path]) -> None:
+    """Count the package files ``paths`` (a shipped agent's models) as code this run loaded:
+    results made with other bytes there are stale."""
+    folders = _package_folders()
+    _data_files.update(_relative(Path(os.path.abspath(path)), folders) for path in paths)
+
+
 def worker_result(reply: tuple[T, list[str]]) -> T:
     """The result in a :func:`run_reporting_modules` reply, its modules noted as this run's."""
     result, modules = reply
@@ -120,7 +129,8 @@ def worker_result(reply: tuple[T, list[str]]) -> T:
 
 def loaded_code() -> dict[str, str]:
     """``{relative path: file_digest}`` of the code this run loaded: the package modules
-    imported here and in its workers, and every package config (read by name at run time)."""
+    imported here and in its workers, every package config (read by name at run time) and the
+    package data files it read (:func:`note_data_files`)."""
     folders = _package_folders()
     configs = {
         _relative(path, folders)
@@ -130,7 +140,7 @@ def loaded_code() -> dict[str, str]:
     }
     parents = {folder.name: folder.parent for folder in folders}
     code = {}
-    for path in sorted({*loaded_modules(), *_worker_modules, *configs} - {None}):
+    for path in sorted({*loaded_modules(), *_worker_modules, *configs, *_data_files} - {None}):
         parent = parents.get(path.split("/", 1)[0])
         if parent is not None and (parent / path).is_file():
             code[path] = file_digest(parent / path)
