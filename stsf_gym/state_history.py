@@ -13,6 +13,11 @@ exposure, fuses the frame there, and replays the odometry (and any frame) of eve
 A frame older than the history (``horizon_s``) is dropped and counted (``frames_too_late``).
 Counters rewind with the state, so a replayed frame is counted once (``frames_late`` counts the
 frames fused late); timings keep the cost of the replays.
+
+:class:`EstimatorDriver` steps an estimator through this history when the camera has a
+latency: :class:`~stsf_gym.wrappers.PoseEstimateWrapper` and
+:func:`~stsf_gym.recording.replay.replay` both run it, so a replayed log gives the estimates the
+live run gave.
 """
 
 from __future__ import annotations
@@ -99,3 +104,39 @@ def _snapshot(estimator: PoseEstimator) -> PoseEstimator:
     """A copy of ``estimator``'s state sharing its (immutable) sensor model."""
     memo = {id(estimator.model): estimator.model, id(estimator.timings): estimator.timings}
     return copy.deepcopy(estimator, memo)
+
+
+def history_horizon(delay_s: float, jitter_s: float, control_dt: float) -> float | None:
+    """How far back (s) a late frame can be fused for a camera latency of ``delay_s`` with
+    jitter ``jitter_s``; ``None`` without latency (no history kept)."""
+    if delay_s + jitter_s > 0:
+        return delay_s + 5 * jitter_s + 2 * control_dt
+    return None
+
+
+class EstimatorDriver:
+    """Starts and updates ``estimator``, through a history of ``horizon_s`` seconds when
+    frames may arrive late (``None``: every frame fused when it arrives)."""
+
+    def __init__(self, estimator: PoseEstimator, horizon_s: float | None = None) -> None:
+        self.estimator = estimator
+        self.history = None if horizon_s is None else StateHistory(horizon_s)
+
+    def start(self, obs: dict, true_pose: np.ndarray | None) -> None:
+        """Begin the episode at the (already reset) estimator with the start's observation."""
+        if self.history is not None:
+            self.history.reset(self.estimator, obs)
+        if hasattr(self.estimator, "see"):  # privileged: handed the true pose
+            self.estimator.see(true_pose)
+
+    def update(
+        self, obs: dict, dt: float, true_pose: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Fold one step's ``obs`` (``dt`` seconds after the last) into the estimate; returns
+        its mean and covariance."""
+        if hasattr(self.estimator, "see"):
+            self.estimator.see(true_pose)
+        if self.history is None:
+            return self.estimator.update(obs, dt)
+        self.estimator, mean, cov = self.history.update(self.estimator, obs, dt)
+        return mean, cov

@@ -28,7 +28,7 @@ from stsf_gym.estimators.camera_pointing import LandmarkPointer
 from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.settings import OdometrySettings
 from stsf_gym.geometry import bounded
-from stsf_gym.state_history import StateHistory
+from stsf_gym.state_history import EstimatorDriver, history_horizon
 from stsf_gym.validation import ConfigError
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
@@ -166,6 +166,16 @@ def check_sensors(name: str, sensors: tuple[str, ...], camera_enabled: bool) -> 
         )
 
 
+def estimator_driver(
+    name: str, estimator: PoseEstimator, delay_s: float, jitter_s: float, control_dt: float
+) -> EstimatorDriver:
+    """The driver of pose source ``name``: through a history of late frames when the camera
+    has a latency (``delay_s``, ``jitter_s``), unless the source is privileged."""
+    privileged = name in (TRUTH, *PRIVILEGED)
+    horizon = None if privileged else history_horizon(delay_s, jitter_s, control_dt)
+    return EstimatorDriver(estimator, horizon)
+
+
 class TruePose(PoseEstimator):
     """The privileged reference "estimator": the true pose with a tiny fixed covariance.
 
@@ -199,8 +209,9 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     The estimator's ``dt`` is the time between the encoders' timestamps. When the camera has
     a latency (``camera.latency``), a late frame is fused at its exposure time: the estimator
-    is rewound and the odometry since replayed (:class:`~stsf_gym.state_history.StateHistory`,
-    so ``wrapper.estimator`` may be a new object after a step).
+    is rewound and the odometry since replayed
+    (:class:`~stsf_gym.state_history.EstimatorDriver`, which a log's replay runs too; so
+    ``wrapper.estimator`` may be a new object after a step).
 
     With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):
     privileged, for reference runs only; ``"degraded-truth"`` corrupts it with a configurable
@@ -233,9 +244,13 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         gym.Wrapper.__init__(self, env)
         if estimator == TRUTH and options:
             raise ConfigError(f"the truth pose source takes no options, got {sorted(options)}")
-        self.estimator = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
+        source = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
+        latency = env.unwrapped.config.camera.latency
+        self.driver = estimator_driver(
+            estimator, source, latency.delay_s, latency.jitter_s, env.unwrapped.dt
+        )
         self.pose_source = estimator  # the name errors give it
-        check_sensors(estimator, self.estimator.sensors, env.unwrapped.config.camera.enabled)
+        check_sensors(estimator, source.sensors, env.unwrapped.config.camera.enabled)
         robot = env.unwrapped.config.robot
         self.pointer = None
         #: the agent's action entries (:class:`~stsf_gym.envs.action_layout.ActionLayout`)
@@ -247,11 +262,6 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             )
             self.action_layout = self.action_layout.without("pan")
             self.action_space = self.action_layout.space
-        latency = env.unwrapped.config.camera.latency
-        self.history = None  # late frames fused at their exposure (estimators only)
-        if estimator not in (TRUTH, *PRIVILEGED) and latency.delay_s + latency.jitter_s > 0:
-            dt = env.unwrapped.dt
-            self.history = StateHistory(latency.delay_s + 5 * latency.jitter_s + 2 * dt)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
         self.start, self.searching_since = None, None  # set by reset
         lo, hi = env.unwrapped.world.bounds[0] - 50.0, env.unwrapped.world.bounds[1] + 50.0
@@ -264,6 +274,11 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.observation_space = spaces.Dict(
             {**env.observation_space.spaces, "pose": pose_space, "pose_cov": cov_space}
         )
+
+    @property
+    def estimator(self) -> PoseEstimator:
+        """The live pose estimator (a new object after a late frame rewound it)."""
+        return self.driver.estimator
 
     def reset(self, *, seed=None, options=None):
         """Reset the env and start the estimator at the commanded start pose; ``options`` as
@@ -283,10 +298,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             self._forget_start()
             self.searching_since = 0.0
         self._time = float(obs["encoders_time"][0])
-        if self.history is not None:
-            self.history.reset(self.estimator, obs)
-        if hasattr(self.estimator, "see"):  # privileged: handed the true pose
-            self.estimator.see(info["true_pose"])
+        self.driver.start(obs, info["true_pose"])
         if self.pointer is not None:
             self.pointer.landmarks, self.pointer.walls = model.landmarks, model.walls
             self.pointer.reset()
@@ -323,14 +335,9 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 pan = self.pointer.pan(self.estimator.mean) / self.pointer.pan_limit
             action = self.env.unwrapped.action_layout.fill(action, self.action_layout, pan=pan)
         obs, reward, terminated, truncated, info = self.env.step(action)
-        if hasattr(self.estimator, "see"):
-            self.estimator.see(info["true_pose"])
         time = float(obs["encoders_time"][0])
         dt, self._time = time - self._time, time  # from the sensors' timestamps
-        if self.history is None:
-            mean, cov = self.estimator.update(obs, dt)
-        else:
-            self.estimator, mean, cov = self.history.update(self.estimator, obs, dt)
+        mean, cov = self.driver.update(obs, dt, info["true_pose"])
         return self._with_pose(obs, mean, cov), reward, terminated, truncated, info
 
     def _with_pose(self, obs: dict, mean: np.ndarray, cov: np.ndarray) -> dict:
