@@ -124,6 +124,19 @@ def test_a_recorded_episode_replays_bit_for_bit(fast_log):
     assert run.counters["frames"] > 0
 
 
+@pytest.mark.parametrize("estimator", ["stsf", "ekf"])
+def test_an_episode_with_camera_latency_replays_bit_for_bit(tmp_path, estimator):
+    """Late frames are fused at their exposure on replay as they were live (the history)."""
+    latency = {"camera": {"mode": "fast", "latency": {"profile": "paper"}}}
+    env, means, covs, history = record(tmp_path, estimator, 8.0, latency)
+    late = [obs for obs, _ in history if obs["image_time"][0] < obs["encoders_time"][0] - 1e-6]
+    assert any(obs["image_new"] for obs in late)  # frames did arrive late
+    run = replay(read_log(env.paths[0]), estimator)
+    assert run.counters["frames_late"] > 0 and run.counters["landmark_updates"] > 0
+    assert np.array_equal(run.means, means)
+    assert np.array_equal(run.covs, covs)
+
+
 @pytest.mark.parametrize("frames", ["raw", "png"])
 def test_rendered_frames_lossless_exact_and_jpeg_approximate(tmp_path, frames):
     env, means, _, history = record(tmp_path, "ekf", 3.0, {}, frames=frames)

@@ -3,9 +3,11 @@
 Steps are the ``/wheel_ticks`` messages: the first is the start (the estimator is reset
 there, not updated), each later one a control step whose encoder ticks are the difference of
 the cumulative counts. A camera frame (image, or fast-mode detections) belongs to the first
-step at or after its stamp (``image_new`` 1 there); the mount angles and sonar ranges of a step
-are the latest at or before it. The observation dicts match the env's
-(:class:`stsf_gym.envs.corridor_env.CorridorEnv`), so estimators run on them unchanged.
+step at or after its log time, its arrival (``image_new`` 1 there); its header stamp is its
+exposure (``image_time``, earlier when the camera has a latency). The mount angles and sonar
+ranges of a step are the latest at or before it; times are seconds from the first step. The
+observation dicts match the env's (:class:`stsf_gym.envs.corridor_env.CorridorEnv`), so
+estimators run on them unchanged.
 Nothing here imports the simulator.
 """
 
@@ -27,7 +29,7 @@ from stsf_gym.estimators import SensorModel
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording import topics
 from stsf_gym.recording.sensor_model_json import sensor_model_from_dict
-from stsf_gym.validation import ConfigError, Coordinate, Positive, Range, build
+from stsf_gym.validation import ConfigError, Coordinate, NonNegative, Positive, Range, build
 
 #: Topics a replay does not need (for looking at only), left unread.
 NOT_READ = frozenset({topics.TF, topics.TF_STATIC, topics.CMD_VEL, topics.CAMERA_INFO})
@@ -36,11 +38,21 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 @dataclass(frozen=True)
+class CameraLatency:
+    """The recorded camera's latency (``camera.latency``): a replay keeps the live run's
+    history of late frames."""
+
+    delay_s: NonNegative = 0.0
+    jitter_s: NonNegative = 0.0
+
+
+@dataclass(frozen=True)
 class EpisodeDocument:
     """The keys of ``/robot/episode`` a replay reads, checked as a config's; others are kept
     as they are (``frames`` and ``lossless`` are claims: the frames themselves decide)."""
 
     control_dt: Positive  # s between two steps
+    camera_latency: CameraLatency = CameraLatency()  # the live wrapper's history of late frames
     seed: Annotated[int, Range(ge=0)] | None = None
     path: tuple[tuple[Coordinate, Coordinate], ...] = ()  # for the path error
 
@@ -59,7 +71,7 @@ class RecordedLog:
     initial_cov: np.ndarray
     stamps: np.ndarray  # ns of each step
     ticks: np.ndarray  # (N, 2) int64 deltas (0 at the start)
-    frames: list[tuple[int, object]]  # (stamp, message) of camera frames, in time order
+    frames: list[tuple[int, object]]  # (log time, message) of camera frames, in time order
     pan_tilt: list[tuple[int, np.ndarray]]
     sonar: list[tuple[int, np.ndarray]]
     aided: dict[int, object]  # stamp -> the fast mode's track-aided slots of that frame
@@ -76,6 +88,11 @@ class RecordedLog:
     @property
     def control_dt(self) -> float:
         return float(self.episode["control_dt"])
+
+    @property
+    def camera_latency(self) -> CameraLatency:
+        """The latency of the recorded camera (none for a log that does not give one)."""
+        return build(CameraLatency, self.episode.get("camera_latency", {}), "camera_latency")
 
     @property
     def lossless(self) -> bool:
@@ -96,10 +113,13 @@ class RecordedLog:
         camera: dict = {}
         pan_tilt_at = [stamp for stamp, _ in self.pan_tilt]
         sonar_at = [stamp for stamp, _ in self.sonar]
+        exposure = np.array([-1.0])  # no frame yet, as the env gives it
         for k, stamp in enumerate(self.stamps):
             if new_frames.get(k):
-                stamp_of_frame, message = new_frames[k][-1]
+                _, message = new_frames[k][-1]
                 camera = decode_frame(message)
+                stamp_of_frame = ros.stamp_ns(message)
+                exposure = np.array([(stamp_of_frame - self.stamps[0]) / 1e9])
                 if stamp_of_frame in self.aided:  # the fast mode's track-aided slots
                     ids, points = ros.slots_of(ros.detection_points(self.aided[stamp_of_frame]))
                     camera.update(aided_ids=ids, aided_points=points)
@@ -111,6 +131,8 @@ class RecordedLog:
                 ),
                 "sonar": _latest(self.sonar, sonar_at, stamp, np.zeros(0, np.float32)),
                 "encoders": self.ticks[k].copy(),
+                "encoders_time": np.array([(stamp - self.stamps[0]) / 1e9]),
+                "image_time": exposure.copy(),
             }
 
 
@@ -142,12 +164,15 @@ def read_log(path: str | Path) -> RecordedLog:
     if not path.is_file():
         raise FileNotFoundError(f"no log file {path}")
     by_topic: dict[str, list] = defaultdict(list)
+    frames = []  # (log time, message): a frame arrives at its log time
     try:
         with Reader(path) as reader:
             wanted = [c for c in reader.connections if c.topic not in NOT_READ]
-            for connection, _, data in reader.messages(connections=wanted):
+            for connection, log_time, data in reader.messages(connections=wanted):
                 message = ros.deserialize(data, connection.msgtype)
                 by_topic[connection.topic].append(message)
+                if connection.topic in topics.CAMERA:
+                    frames.append((log_time, message))
     except Exception as err:
         raise ConfigError(f"{path}: not a readable MCAP log ({err})") from None
     missing = [t for t in topics.REQUIRED if not by_topic.get(t)]
@@ -167,7 +192,6 @@ def read_log(path: str | Path) -> RecordedLog:
     stamps = np.array([ros.stamp_ns(m) for m in wheels], np.int64)
     counts = np.array([np.asarray(m.position) for m in wheels], np.float64).astype(np.int64)
     ticks = np.diff(counts, axis=0, prepend=counts[:1])
-    frames = [(ros.stamp_ns(m), m) for t in topics.CAMERA for m in by_topic.get(t, [])]
     pan_tilt = [
         (ros.stamp_ns(m), np.asarray(m.position, np.float32)) for m in by_topic[topics.PAN_TILT]
     ]

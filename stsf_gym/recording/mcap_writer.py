@@ -166,23 +166,26 @@ class McapRecorder:
         self.log.write_cdr(topics.TF, stamp, cdr.tf_message(stamp, transforms))
 
     def _frame(self, stamp: int, record: StepRecord) -> None:
+        """The frame that arrived at ``stamp`` (the log time), its header stamped with its
+        exposure (earlier when the camera has a latency)."""
         obs, write = record.obs, self.log.write_cdr
+        exposure = nanoseconds(float(obs["image_time"][0]))
         pan_tilt = np.asarray(obs["camera_pan_tilt"], np.float64)
         write(topics.PAN_TILT, stamp, cdr.joint_state(stamp, "", topics.MOUNT_JOINTS, pan_tilt))
-        write(topics.CAMERA_INFO, stamp, cdr.restamped(self._camera_info, stamp))
+        write(topics.CAMERA_INFO, stamp, cdr.restamped(self._camera_info, exposure))
         if "image" in obs:
-            self._image(stamp, obs["image"])
+            self._image(stamp, exposure, obs["image"])
         else:
             slots = [(topics.DETECTIONS, "landmark")]
             if "aided_ids" in obs:  # the boards a track-aided search would find
                 slots.append((topics.AIDED, "aided"))
             for topic, key in slots:
                 points = ros.detection_slots(obs[f"{key}_ids"], obs[f"{key}_points"])
-                write(topic, stamp, cdr.detection_cloud(stamp, "camera_image", points))
+                write(topic, stamp, cdr.detection_cloud(exposure, "camera_image", points))
 
-    def _image(self, stamp: int, rgb: np.ndarray) -> None:
+    def _image(self, stamp: int, exposure: int, rgb: np.ndarray) -> None:
         if self.frames == "raw":
-            self._write(topics.IMAGE_RAW, stamp, ros.raw_image(stamp, rgb))
+            self._write(topics.IMAGE_RAW, stamp, ros.raw_image(exposure, rgb))
             return
         bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
         if self.frames == "png":
@@ -192,7 +195,9 @@ class McapRecorder:
         if not ok:
             raise RuntimeError(f"could not encode a camera frame as {self.frames}")
         self._write(
-            topics.IMAGE_COMPRESSED, stamp, ros.compressed_image(stamp, data.tobytes(), self.frames)
+            topics.IMAGE_COMPRESSED,
+            stamp,
+            ros.compressed_image(exposure, data.tobytes(), self.frames),
         )
 
     def close(self, end: dict | None = None) -> None:

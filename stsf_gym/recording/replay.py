@@ -1,8 +1,10 @@
 """Any pose source rerun on a recorded log, with no simulator: what the live wrapper did.
 
 :class:`~stsf_gym.wrappers.PoseEstimateWrapper` resets the estimator at the start pose and
-updates it with each step's observation and the control period; :func:`replay` does the same
-with the observations of a :class:`~stsf_gym.recording.log_reader.RecordedLog`. On a log with
+drives it with each step's observation (:class:`~stsf_gym.state_history.EstimatorDriver`:
+with a camera latency, late frames are fused at their exposure); :func:`replay` runs the same
+driver, with the recorded latency, on the observations of a
+:class:`~stsf_gym.recording.log_reader.RecordedLog` and the control period. On a log with
 lossless frames the estimates equal the live run's bit for bit. The privileged sources
 (``truth``, ``degraded-truth``) are handed the log's true poses as the wrapper hands them
 ``info["true_pose"]``.
@@ -19,7 +21,7 @@ from stsf_gym.estimators import PoseEstimator, make_estimator
 from stsf_gym.recording import topics
 from stsf_gym.recording.log_reader import RecordedLog
 from stsf_gym.validation import ConfigError
-from stsf_gym.wrappers import TRUTH, TruePose, check_estimate
+from stsf_gym.wrappers import TRUTH, TruePose, check_estimate, estimator_driver
 
 
 @dataclass
@@ -61,22 +63,21 @@ def replay(log: RecordedLog, name: str, observations: list[dict] | None = None, 
     ``observations`` (``list(log.observations())``) to decode the frames once for many."""
     estimator = pose_source(name, **options)
     check_replayable(log, name, estimator)
-    privileged = hasattr(estimator, "see")
+    latency = log.camera_latency
+    driver = estimator_driver(name, estimator, latency.delay_s, latency.jitter_s, log.control_dt)
+    truth = log.truth if log.truth is not None else [None] * len(log.stamps)
     started = time.perf_counter()
     steps = iter(observations if observations is not None else log.observations())
-    next(steps)  # the start: the estimator is reset, not updated
     if hasattr(estimator, "seed"):
         estimator.seed(log.episode.get("seed"))
     estimator.reset(log.model, log.initial_pose, log.initial_cov)
-    if privileged:
-        estimator.see(log.truth[0])
+    driver.start(next(steps), truth[0])  # the start: the estimator is reset, not updated
     means, covs = [estimator.mean.copy()], [estimator.cov.copy()]
     for k, obs in enumerate(steps, start=1):
-        if privileged:
-            estimator.see(log.truth[k])
-        mean, cov = check_estimate(name, *estimator.update(obs, log.control_dt))
+        mean, cov = check_estimate(name, *driver.update(obs, log.control_dt, truth[k]))
         means.append(mean.copy())
         covs.append(cov.copy())
+    estimator = driver.estimator  # the live one (a rewound copy after a late frame)
     return ReplayedRun(
         name=name,
         means=np.array(means),

@@ -157,6 +157,10 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
             "seed": seed,
             "camera_mode": cfg.camera.mode if cfg.camera.enabled else "off",
             "pose_source": None if estimator is None else estimator.name,
+            "camera_latency": {
+                "delay_s": cfg.camera.latency.delay_s,
+                "jitter_s": cfg.camera.latency.jitter_s,
+            },
             **self.meta,
         }
         return EpisodeStart(sensor_model(self.env), pose, cov, float(u.dt), layout, meta)
