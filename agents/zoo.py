@@ -10,7 +10,10 @@ python -m rl_zoo3.train --algo ppo --env stsf_gym/Corridor-STSF-v0 --gym-package
 ```
 
 rl-zoo3's own options (``--eval-freq``, ``--save-freq``, ``-params``) replace the training keys
-rl-zoo3 does not know (``eval_freq``, ``checkpoint_freq``, ``n_eval_episodes``). PPO only:
+rl-zoo3 does not know (``eval_freq``, ``checkpoint_freq``, ``n_eval_episodes``). Unlike
+``stsf-gym train --suite``, rl-zoo3 trains a suite id without the file's ``train_env`` (no
+training legs of 2-10 m under 150 s: every episode a full route under the suite's limit) and
+without the demonstration stage (``demonstrations``). PPO only:
 :func:`zoo_hyperparams` gives the sections of another algorithm for a file of your own.
 """
 

@@ -22,9 +22,10 @@ def _common(
     parser: argparse.ArgumentParser,
     out: str,
     config_help: str = "YAML config (env: merged over configs/default.yaml)",
+    out_help: str = "output folder",
 ) -> None:
     parser.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
-    parser.add_argument("--out", type=Path, default=Path(out), help=f"output folder ({out})")
+    parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} ({out})")
     parser.add_argument("--config", help=config_help)
     parser.add_argument(
         "--set",
@@ -676,7 +677,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench_suite = commands.add_parser(
         "benchmark", help="agents x pose sources on a suite's test worlds: the leaderboard"
     )
-    _common(bench_suite, "out/benchmark")
+    _common(bench_suite, "out/benchmark", out_help="output folder: the results go to OUT/<suite>/")
     bench_suite.add_argument("--suite", required=True, choices=suite_names(), help="difficulty")
     bench_suite.add_argument(
         "--agents",
