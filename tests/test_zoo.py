@@ -44,6 +44,35 @@ def test_sections_follow_the_training_config():
     assert truth["policy"] == "MlpPolicy" and truth["n_steps"] == 1024
 
 
+@pytest.mark.parametrize("env_id", sorted(hyperparams))
+def test_rl_zoo3_builds_the_agent_on_every_estimating_id(tmp_path, env_id):
+    """rl-zoo3's own ExperimentManager reads each id's section, builds the env and the model,
+    and the env steps (what ``rl_zoo3.train`` does before learning)."""
+    import argparse
+
+    import numpy as np
+    from rl_zoo3.exp_manager import ExperimentManager
+
+    manager = ExperimentManager(
+        argparse.Namespace(),
+        "ppo",
+        env_id,
+        str(tmp_path),
+        n_timesteps=64,
+        eval_freq=-1,
+        hyperparams={"n_envs": 1, "n_steps": 64, "batch_size": 32},
+        config="stsf_gym.agents.zoo",
+        verbose=0,
+    )
+    model, _ = manager.setup_experiment()
+    try:
+        obs = model.env.reset()
+        obs, *_ = model.env.step(np.array([model.action_space.sample()]))
+        assert obs.shape == (1, *model.observation_space.shape)
+    finally:
+        model.env.close()
+
+
 @pytest.mark.parametrize(
     "env_id", ["stsf_gym/Straight10m-Truth-v0", "stsf_gym/Suite-Corridor-STSF-v0"]
 )
