@@ -63,6 +63,9 @@ PAGES = ("README.md", "docs")
 #: The folders whose code the digest covers (pyproject's package-dir).
 CODE = ("stsf_gym", "envs", "agents", "configs")
 NAMED = 3  # changed files a note names before "and N more"
+#: A shipped agent named in a command (``pretrained:<suite>/<agent>``), and its models' folder.
+SHIPPED = re.compile(r"pretrained:(?P<name>[\w.-]+/[\w.-]+)")
+SHIPPED_MODELS = "agents/pretrained/trained-models/{name}/"
 MARKER = re.compile(
     r"<!-- measured: (?P<name>.+?) \((?P<edge>begin|end)\)(?: results: (?P<results>[^>]*?))? -->"
 )
@@ -204,16 +207,35 @@ def _named(files: list[str]) -> str:
     return ", ".join(files[:NAMED]) + more
 
 
+def unrecorded_agents(command: str, loaded: Mapping[str, str] | None) -> list[str]:
+    """The shipped agents ``command`` names whose model files ``loaded`` does not list (a run
+    made before it recorded them): whether the agent shipped now made its results is unknown."""
+    names = dict.fromkeys(match["name"] for match in SHIPPED.finditer(command))
+    return [
+        f"pretrained:{name}"
+        for name in names
+        if not any(path.startswith(SHIPPED_MODELS.format(name=name)) for path in loaded or {})
+    ]
+
+
 def staleness(
     code: Mapping[str, Any],
     digest: str,
     root: Path = ROOT,
     rewrites: Mapping[tuple[str, str], str] | None = None,
+    command: str = "",
 ) -> str | None:
     """Why the code a results file was made with (its provenance's ``stsf_gym``) has changed,
     or None when it has not: by the files its run loaded (``rewrites`` leave a file the same),
-    else (an older file) by the digest."""
+    else (an older file) by the digest. A shipped agent ``command`` names counts as code: a
+    run that did not record its models' digests is stale."""
     loaded, commit = code.get("loaded_code"), code.get("commit")
+    unrecorded = unrecorded_agents(command, loaded)
+    if unrecorded:
+        return (
+            f"it ran {_named(unrecorded)} without recording the models' digests (made before "
+            f"runs recorded them), so the agents shipped now may not be the ones it measured"
+        )
     if loaded is not None:
         changed = changed_files(loaded, root, rewrites)
         if not changed:
@@ -251,7 +273,8 @@ def judge(
         for shown in (made_by["command"], code["source_digest"]):
             if shown not in block.text:
                 problems.append(f"{where}: the block does not show {name}'s {shown!r}")
-        why = staleness(code, digest, root, applying(rewrites or {}, made_by["command"]))
+        rewritten = applying(rewrites or {}, made_by["command"])
+        why = staleness(code, digest, root, rewritten, made_by["command"])
         if why is not None:
             stale = True
             block.notes.append(f"{name}: {why}")

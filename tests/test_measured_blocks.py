@@ -246,3 +246,23 @@ def test_recording_a_rewrite_takes_the_digests_from_head_and_the_file_now(tmp_pa
     assert not problems and blocks[0].state == "current"
     rewrites, _ = measured.equivalent_rewrites(root)
     assert [changes for _, changes in rewrites.values()] == [("stsf-gym bench", "x y")]
+
+
+@pytest.mark.parametrize("recorded", [False, True])
+def test_a_run_of_a_shipped_agent_is_current_only_with_its_models_recorded(tmp_path, recorded):
+    root = _repository(tmp_path, _block("a", SHOWN, "run.json"))
+    models = root / "agents" / "pretrained" / "trained-models" / "sparse" / "ppo-truth"
+    models.mkdir(parents=True)
+    (models / "seed-0.zip").write_bytes(b"the policy")
+    loaded = {"agents/pretrained/trained-models/sparse/ppo-truth/seed-0.zip": "0000"}
+    _write_run(root, {path: file_digest(root / path) for path in loaded} if recorded else {})
+    run = json.loads((root / "run.json").read_text())
+    run["provenance"]["command"] += " --agents follower,pretrained:sparse/ppo-truth"
+    (root / "run.json").write_text(json.dumps(run))
+    (block,), _ = measured.check(root, "0123abcd")
+    assert block.state == ("current" if recorded else "stale")
+    if not recorded:
+        assert "pretrained:sparse/ppo-truth without recording" in block.notes[0]
+    (models / "seed-0.zip").write_bytes(b"trained again")  # a new agent shipped under the name
+    (block,), _ = measured.check(root, "0123abcd")
+    assert block.state == "stale"
