@@ -13,7 +13,9 @@ now have the same digest (a file deleted since counts as changed), so an edit to
 never loaded leaves it current; a stale block's note names the changed files. A file without
 that list (made before it was recorded) is unchanged only when its ``source_digest`` is the
 digest of all the code now (:func:`stsf_gym.results.provenance.source_digest`: every module and
-config of stsf_gym/, envs/, agents/ and configs/). A block that names no results is **not
+config of stsf_gym/, envs/, agents/ and configs/). A shipped agent a command names
+(``pretrained:<suite>/<agent>``) is code too: its model files are in the run's list, and a run
+that did not list them (made before runs did) is stale. A block that names no results is **not
 tied**; it must be listed in ``benchmarks/measured_not_tied.yaml`` with the reason, so the list
 stays visible.
 
