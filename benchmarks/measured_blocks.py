@@ -53,6 +53,7 @@ from typing import Any
 
 import yaml
 
+from stsf_gym.agents.pretrained import MODELS, PREFIX
 from stsf_gym.results.provenance import file_digest, source_digest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -66,8 +67,8 @@ PAGES = ("README.md", "docs")
 CODE = ("stsf_gym", "envs", "agents", "configs")
 NAMED = 3  # changed files a note names before "and N more"
 #: A shipped agent named in a command (``pretrained:<suite>/<agent>``), and its models' folder.
-SHIPPED = re.compile(r"pretrained:(?P<name>[\w.-]+/[\w.-]+)")
-SHIPPED_MODELS = "agents/pretrained/trained-models/{name}/"
+SHIPPED = re.compile(re.escape(PREFIX) + r"(?P<name>[\w.-]+/[\w.-]+)")
+SHIPPED_MODELS = MODELS.relative_to(ROOT).as_posix() + "/{name}/"
 MARKER = re.compile(
     r"<!-- measured: (?P<name>.+?) \((?P<edge>begin|end)\)(?: results: (?P<results>[^>]*?))? -->"
 )
@@ -214,7 +215,7 @@ def unrecorded_agents(command: str, loaded: Mapping[str, str] | None) -> list[st
     made before it recorded them): whether the agent shipped now made its results is unknown."""
     names = dict.fromkeys(match["name"] for match in SHIPPED.finditer(command))
     return [
-        f"pretrained:{name}"
+        PREFIX + name
         for name in names
         if not any(path.startswith(SHIPPED_MODELS.format(name=name)) for path in loaded or {})
     ]
