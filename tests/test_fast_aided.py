@@ -70,3 +70,25 @@ def test_fast_frames_list_findable_boards_only_when_the_detector_missed_them():
             seen_aided += bool(aided)
     env.close()
     assert seen_aided > 0
+
+
+def test_undistorted_detections_fit_their_homography_only_when_asked():
+    """The estimators use an undistorted detection's points; its homography (which no
+    estimator reads) is fitted by ``project`` on demand, to the undistorted points."""
+    import cv2
+
+    from stsf_gym.camera_model import CameraCalibration
+
+    K = np.array([[300.0, 0.0, 159.5], [0.0, 300.0, 119.5], [0.0, 0.0, 1.0]])
+    lens = CameraCalibration(K, np.array([-0.2, 0.05, 0.001, -0.001, 0.0]))
+    obs, _ = findable_obs(5, np.array([150.0, 110.0]), 40.0)
+    obs["landmark_ids"], obs["landmark_points"] = obs["aided_ids"], obs["aided_points"]
+    (raw,) = FrameDetector(PATTERN, {5})(obs)
+    (detection,) = FrameDetector(PATTERN, {5}, lens)(obs)
+    assert raw.homography is not None and detection.homography is None
+    np.testing.assert_array_equal(detection.image_points, lens.undistort_pixels(raw.image_points))
+    fitted, _ = cv2.findHomography(detection.plane_points, detection.image_points)
+    origin = np.zeros((1, 2))
+    expected = fitted @ np.array([0.0, 0.0, 1.0])
+    np.testing.assert_allclose(detection.project(origin)[0], expected[:2] / expected[2])
+    assert not np.allclose(detection.project(origin), raw.project(origin))  # the lens moved it

@@ -64,6 +64,7 @@ class PinholeCamera:
         f = (height / 2) / math.tan(self.vfov / 2)
         K = np.array([[f, 0.0, width / 2 - 0.5], [0.0, f, height / 2 - 0.5], [0.0, 0.0, 1.0]])
         self.calibration = CameraCalibration(K, np.asarray(dist, float))
+        self._inverse: tuple[np.ndarray, np.ndarray] | None = None  # the last pose, inverted
 
     @property
     def focal_px(self) -> float:
@@ -84,9 +85,17 @@ class PinholeCamera:
     def project(self, world_from_camera: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Pixel coordinates (N, 2) of world points (N, 3) through K and the distortion, as
         ``cv2.projectPoints``; points behind the camera give NaN."""
-        camera_from_world = np.linalg.inv(world_from_camera)
+        camera_from_world = self._camera_from_world(world_from_camera)
         pc = points @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
         return self.calibration.project(pc)
+
+    def _camera_from_world(self, world_from_camera: np.ndarray) -> np.ndarray:
+        """The pose's inverse, kept for the next call from the same pose (a frame projects
+        several sets of points from one)."""
+        if self._inverse is None or not np.array_equal(self._inverse[0], world_from_camera):
+            pose = np.array(world_from_camera, dtype=float)
+            self._inverse = (pose, np.linalg.inv(pose))
+        return self._inverse[1]
 
 
 def believed_calibration(

@@ -126,8 +126,15 @@ class FrameDetector:
         self, obs: dict, predictions: list[BoardPrediction], found: list[Detection]
     ) -> list[Detection]:
         """The fast mode's track-aided matches: findable boards a prediction covers."""
-        findable = {d.landmark_id: d for d in self._unpack(obs["aided_ids"], obs["aided_points"])}
         have = {d.landmark_id for d in found}
+        # only the boards some prediction could take are unpacked (and fitted)
+        wanted = {
+            p.landmark_id
+            for p in predictions
+            if p.landmark_id not in have and p.size_px >= self.matcher.min_board_px
+        }
+        aided = self._unpack(obs["aided_ids"], obs["aided_points"], self.valid_ids & wanted)
+        findable = {d.landmark_id: d for d in aided}
         matches = []
         for prediction in predictions:
             board = findable.get(prediction.landmark_id)
@@ -144,14 +151,20 @@ class FrameDetector:
         return matches
 
     def _undistorted(self, detection: Detection) -> Detection:
+        """The detection with its points undistorted; the estimators use the points, so no
+        homography is fitted to them (:meth:`Detection.project` fits one if asked)."""
         points = self.calibration.undistort_pixels(detection.image_points)
-        homography, _ = cv2.findHomography(detection.plane_points, points)
-        return replace(detection, image_points=points, homography=homography)
+        return replace(detection, image_points=points, homography=None)
 
-    def _unpack(self, ids: np.ndarray, points: np.ndarray) -> list[Detection]:
+    def _unpack(
+        self, ids: np.ndarray, points: np.ndarray, wanted: frozenset[int] | None = None
+    ) -> list[Detection]:
+        """The slots' boards of an id in ``wanted`` (default: the map's) whose points a
+        homography fits (a degenerate board is no detection)."""
+        wanted = self.valid_ids if wanted is None else wanted
         detections = []
         for landmark_id, slot in zip(ids.tolist(), points.reshape(len(ids), -1, 2), strict=True):
-            if landmark_id not in self.valid_ids:
+            if landmark_id not in wanted:
                 continue
             plane = square_centres(landmark_id, self.pattern)
             image = slot[: len(plane)].astype(np.float64)

@@ -44,7 +44,7 @@ from typing import ClassVar
 import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
-from stsf_gym.estimators.board_prediction import predict_board
+from stsf_gym.estimators.board_prediction import board_outline, predict_board
 from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
@@ -119,6 +119,8 @@ class LandmarkFusionEstimator(OdometryEstimator):
         )
         self.seen: dict[int, _Seen] = {}
         self.tracks: dict[int, STSFTrack] = {}
+        #: each predicted landmark's board outline (:func:`board_outline`), once per episode
+        self.outlines: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.frame_count = 0
         self.relocaliser.clear()
 
@@ -177,15 +179,20 @@ class LandmarkFusionEstimator(OdometryEstimator):
         only; none otherwise)."""
         if self.detector.matcher is None:
             return []
-        robot_from_camera = self.model.robot_from_camera(pan, tilt)
+        camera_from_robot = np.linalg.inv(self.model.robot_from_camera(pan, tilt))
         predictions = []
         for landmark_id, seen in self.seen.items():
+            if landmark_id not in self.outlines:
+                self.outlines[landmark_id] = board_outline(
+                    self.model.landmarks[landmark_id], self.model
+                )
             predicted = predict_board(
-                self.model.landmarks[landmark_id],
+                landmark_id,
+                self.outlines[landmark_id],
                 seen.observation.z,
                 seen.motion,
-                self.model,
-                robot_from_camera,
+                camera_from_robot,
+                self.model.camera_calibration,
                 self.aided_search_px,
             )
             if predicted is not None:

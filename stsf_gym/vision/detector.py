@@ -54,13 +54,18 @@ class Detection:
     plane_points: np.ndarray  # (N, 2) float64 metres in the landmark plane
     indices: np.ndarray  # (N,) int64 rows of square_centres(landmark_id, pattern)
     score: float  # NCC (eq. 7, normalised) of the candidate that led to this detection
-    homography: np.ndarray = field(repr=False)  # 3x3, landmark plane (m) -> image (px)
+    #: 3x3, landmark plane (m) -> image (px); None where none was fitted (the estimators'
+    #: undistorted copies, which use the points themselves): :meth:`project` fits one then
+    homography: np.ndarray | None = field(repr=False)
     reprojection_rms: float = 0.0  # px, image_points vs homography @ plane_points
     corners: np.ndarray = field(default=None, repr=False)  # (4, 2) board corners in pixels
 
     def project(self, plane_xy: np.ndarray) -> np.ndarray:
         """Pixels of landmark-plane points (..., 2) through the fitted homography."""
-        return apply_homography(self.homography, np.asarray(plane_xy, dtype=np.float64))
+        homography = self.homography
+        if homography is None:
+            homography, _ = cv2.findHomography(self.plane_points, self.image_points)
+        return apply_homography(homography, np.asarray(plane_xy, dtype=np.float64))
 
 
 def to_grey(image: np.ndarray) -> np.ndarray:
