@@ -85,9 +85,16 @@ def suite_test_env(agent, suite: str, pose_source: str, env: dict | None = None)
     return agent.wrap(make_episode_env("generated:test", pose_source, settings))
 
 
-def seen_inputs(model: Path, suite: str, pose_source: str) -> np.ndarray:
+def seen_inputs(
+    model: Path, suite: str, pose_source: str, recorded: np.ndarray | None = None
+) -> np.ndarray:
     """The policy's inputs over the first :data:`SEEN_STEPS` decisions of ``model`` driving
-    test world :data:`SEEN_WORLD_SEED` of ``suite`` on ``pose_source``."""
+    test world :data:`SEEN_WORLD_SEED` of ``suite`` on ``pose_source``. With ``recorded``
+    (inputs recorded before), each decision is the policy's on the recorded input, not on the
+    new one (teacher forcing): the episode follows the recorded one, so a last-bit difference
+    of another CPU's floating point (numpy's and the BLAS's kernels are chosen per CPU) is not
+    fed back through the policy and grown into another trajectory, while a change of what the
+    agent sees shows at the decision it starts."""
     from stsf_gym.agents.registry import SB3Agent
 
     agent = SB3Agent(str(model))
@@ -95,9 +102,10 @@ def seen_inputs(model: Path, suite: str, pose_source: str) -> np.ndarray:
     try:
         obs, _ = env.reset(seed=SEEN_WORLD_SEED)
         inputs = []
-        for _ in range(SEEN_STEPS):
+        for step in range(SEEN_STEPS):
             inputs.append(obs)
-            obs, _, terminated, truncated, _ = env.step(agent.act(obs))
+            shown = obs if recorded is None or step >= len(recorded) else recorded[step]
+            obs, _, terminated, truncated, _ = env.step(agent.act(shown))
             if terminated or truncated:
                 break
         return np.array(inputs, dtype=np.float32)
@@ -120,8 +128,8 @@ def moved(name: str, seed: int) -> bool:
     episode than those recorded when it was shipped."""
     record = summary(name)
     model = folder(name) / f"seed-{seed}.zip"
-    now = seen_inputs(model, record["suite"], record["pose_source"])
     then = np.array(record["seen"][str(seed)], dtype=np.float32)
+    now = seen_inputs(model, record["suite"], record["pose_source"], then)
     return now.shape != then.shape or not np.allclose(now, then, atol=SEEN_TOLERANCE)
 
 
