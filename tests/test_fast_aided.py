@@ -72,9 +72,9 @@ def test_fast_frames_list_findable_boards_only_when_the_detector_missed_them():
     assert seen_aided > 0
 
 
-def test_undistorted_detections_fit_their_homography_only_when_asked():
-    """The estimators use an undistorted detection's points; its homography (which no
-    estimator reads) is fitted by ``project`` on demand, to the undistorted points."""
+def test_fast_detections_fit_their_homography_only_when_asked():
+    """The fast mode's detections carry no homography (the estimators use the points, raw
+    or undistorted); ``project`` fits one on demand, to the points the detection holds."""
     import cv2
 
     from stsf_gym.camera_model import CameraCalibration
@@ -85,10 +85,40 @@ def test_undistorted_detections_fit_their_homography_only_when_asked():
     obs["landmark_ids"], obs["landmark_points"] = obs["aided_ids"], obs["aided_points"]
     (raw,) = FrameDetector(PATTERN, {5})(obs)
     (detection,) = FrameDetector(PATTERN, {5}, lens)(obs)
-    assert raw.homography is not None and detection.homography is None
+    assert raw.homography is None and detection.homography is None
     np.testing.assert_array_equal(detection.image_points, lens.undistort_pixels(raw.image_points))
     fitted, _ = cv2.findHomography(detection.plane_points, detection.image_points)
     origin = np.zeros((1, 2))
     expected = fitted @ np.array([0.0, 0.0, 1.0])
     np.testing.assert_allclose(detection.project(origin)[0], expected[:2] / expected[2])
     assert not np.allclose(detection.project(origin), raw.project(origin))  # the lens moved it
+
+
+def test_degenerate_boards_are_those_opencv_fits_no_homography():
+    """A fast-mode board is dropped exactly when OpenCV's least-squares fit would fail:
+    checked against ``cv2.findHomography`` on random boards and on boards whose x or y
+    spread is nil, one float32 step or below ``DBL_EPSILON``."""
+    import cv2
+
+    from stsf_gym.estimators.frame_detector import _homography_fits
+
+    rng = np.random.default_rng(0)
+    failures = 0
+    for trial in range(3000):
+        k = int(rng.integers(4, 20))
+        plane, image = rng.normal(size=(k, 2)) * 0.1, rng.uniform(0.0, 320.0, size=(k, 2))
+        column = int(rng.integers(2))
+        match trial % 5:
+            case 1:
+                image[:, column] = image[0, column]
+            case 2:
+                image[:, column] = image[0, column]
+                image[rng.integers(k), column] = np.nextafter(np.float32(image[0, column]), 1e9)
+            case 3:
+                plane[:, column] = plane[0, column]
+            case 4:
+                image[:, column] = 1e-17 * rng.normal(size=k)
+        fitted, _ = cv2.findHomography(plane, image)
+        assert _homography_fits(plane, image) == (fitted is not None), (trial, k)
+        failures += fitted is None
+    assert 1000 < failures < 3000  # both answers were exercised

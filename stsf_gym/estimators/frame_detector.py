@@ -40,6 +40,8 @@ from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
 #: the predicted windows only).
 FULL_FRAME_EVERY = 3
 
+DBL_EPSILON = float(np.finfo(np.float64).eps)
+
 
 class FrameDetector:
     """``detector(obs, predictions) -> list[Detection]`` for boards whose id is in
@@ -143,7 +145,8 @@ class FrameDetector:
             if prediction.size_px < self.matcher.min_board_px:
                 continue
             # the board's centre: its homography maps the pattern's origin there
-            centre = board.homography @ np.array([0.0, 0.0, 1.0])
+            homography, _ = cv2.findHomography(board.plane_points, board.image_points)
+            centre = homography @ np.array([0.0, 0.0, 1.0])
             offset = centre[:2] / centre[2] - prediction.corners.mean(axis=0)
             if np.hypot(*offset) <= prediction.search_px:
                 matches.append(board)
@@ -160,7 +163,8 @@ class FrameDetector:
         self, ids: np.ndarray, points: np.ndarray, wanted: frozenset[int] | None = None
     ) -> list[Detection]:
         """The slots' boards of an id in ``wanted`` (default: the map's) whose points a
-        homography fits (a degenerate board is no detection)."""
+        homography fits (a degenerate board is no detection); none is fitted here
+        (:meth:`Detection.project` fits one if asked)."""
         wanted = self.valid_ids if wanted is None else wanted
         detections = []
         for landmark_id, slot in zip(ids.tolist(), points.reshape(len(ids), -1, 2), strict=True):
@@ -168,8 +172,7 @@ class FrameDetector:
                 continue
             plane = square_centres(landmark_id, self.pattern)
             image = slot[: len(plane)].astype(np.float64)
-            homography, _ = cv2.findHomography(plane, image)
-            if homography is None:
+            if not _homography_fits(plane, image):
                 continue
             detections.append(
                 Detection(
@@ -178,10 +181,23 @@ class FrameDetector:
                     plane_points=plane,
                     indices=np.arange(len(plane)),
                     score=1.0,
-                    homography=homography,
+                    homography=None,
                 )
             )
         return detections
+
+
+def _homography_fits(plane: np.ndarray, image: np.ndarray) -> bool:
+    """Whether ``cv2.findHomography(plane, image)`` (least squares, every point) fits one,
+    without fitting it: OpenCV takes the points as float32 and gives up when the summed
+    absolute deviation from the mean, of x or of y in either set, is below ``DBL_EPSILON``
+    (its normalisation would divide by it). The sums are sequential in double, as OpenCV's
+    loops; ``tests/test_fast_aided.py`` checks the answer against OpenCV's."""
+    points = np.hstack([plane, image]).astype(np.float32).astype(np.float64)
+    mean = np.cumsum(points, axis=0)[-1] / len(points)
+    with np.errstate(invalid="ignore"):  # inf - inf: a NaN deviation
+        deviation = np.cumsum(np.abs(points - mean), axis=0)[-1]
+    return not bool(np.any(deviation < DBL_EPSILON))  # a NaN deviation fits, as in OpenCV
 
 
 #: The last image detected and what was found in it: an evaluation's floor recorder detects the
