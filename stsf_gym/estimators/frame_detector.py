@@ -129,20 +129,19 @@ class FrameDetector:
     ) -> list[Detection]:
         """The fast mode's track-aided matches: findable boards a prediction covers."""
         have = {d.landmark_id for d in found}
-        # only the boards some prediction could take are unpacked (and fitted)
-        wanted = {
-            p.landmark_id
+        candidates = [
+            p
             for p in predictions
             if p.landmark_id not in have and p.size_px >= self.matcher.min_board_px
-        }
-        aided = self._unpack(obs["aided_ids"], obs["aided_points"], self.valid_ids & wanted)
+        ]
+        # only the boards some candidate could take are unpacked
+        wanted = self.valid_ids & {p.landmark_id for p in candidates}
+        aided = self._unpack(obs["aided_ids"], obs["aided_points"], wanted)
         findable = {d.landmark_id: d for d in aided}
         matches = []
-        for prediction in predictions:
+        for prediction in candidates:
             board = findable.get(prediction.landmark_id)
-            if board is None or prediction.landmark_id in have:
-                continue
-            if prediction.size_px < self.matcher.min_board_px:
+            if board is None or board.landmark_id in have:
                 continue
             # the board's centre: its homography maps the pattern's origin there
             homography, _ = cv2.findHomography(board.plane_points, board.image_points)
