@@ -151,7 +151,18 @@ def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
         assert row["this"] > 0 and row["baseline"] > 0
         assert row["ratio"] == pytest.approx(row["this"] / row["baseline"])
         assert row["ratio_cpu"] == pytest.approx(row["this_cpu"] / row["baseline_cpu"])
-    assert "Env steps per second" in (tmp_path / "bench.md").read_text()
+    # each follower case profiled once per code, its stages nested as they run
+    profiles = {(p["case"], p["side"]): p for p in summary["step"]["profiles"]}
+    followed = [case for case in CASES if case.endswith("follower")]
+    assert set(profiles) == {(case, side) for case in followed for side in ("this", "baseline")}
+    for (case, _), profile in profiles.items():
+        ms = profile["stages_ms"]
+        assert ms["physics"] + ms["sonar"] + ms["fast camera"] <= ms["env step"]
+        assert ms["env step"] < ms["pose wrapper"] <= profile["step_ms"]
+        assert ms["estimator, frames"] <= ms["estimator, update"]
+        assert (ms["estimator, update"] > 0) == case.startswith("stsf")
+    text = (tmp_path / "bench.md").read_text()
+    assert "Env steps per second" in text and "Where a step goes: stsf, fast camera" in text
 
 
 def test_a_baseline_that_is_no_checkout_is_refused(tmp_path):

@@ -29,7 +29,7 @@ from tqdm import tqdm
 
 from stsf_gym.bench.recording import recording_costs
 from stsf_gym.bench.speed import CASES, FAST_CASES, render_latency, run_case, vector_scaling
-from stsf_gym.bench.step import step_section
+from stsf_gym.bench.step import STAGES, step_section
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.recording import missing_modules
 from stsf_gym.results.provenance import provenance, reference_ms
@@ -306,8 +306,32 @@ def step_markdown(step: dict) -> str:
         f"## Env steps per second (suite corridor world, {step['steps']} steps a case, best "
         f"of {step['rounds']} fresh processes a case{against}; of wall time and, `_cpu`, of "
         f"the process's CPU time)\n\nReference workload "
-        f"{step['reference_ms']:.1f} ms.\n\n" + markdown_table(step["rows"])
+        f"{step['reference_ms']:.1f} ms.\n\n"
+        + markdown_table(step["rows"])
+        + _profiles_markdown(step)
     )
+
+
+def _profiles_markdown(step: dict) -> str:
+    """Each profiled case's stages, ms per step under cProfile, one column per code."""
+    cases: dict[str, dict[str, dict]] = {}
+    for profile in step.get("profiles", []):
+        cases.setdefault(profile["case"], {})[profile["side"]] = profile
+    text = ""
+    for case, sides in cases.items():
+        rows = [
+            {"stage": stage, **{side: p["stages_ms"][stage] for side, p in sides.items()}}
+            for stage in STAGES
+            if any(p["stages_ms"][stage] for p in sides.values())  # none: not in this case
+        ]
+        rows.append({"stage": "whole step", **{side: p["step_ms"] for side, p in sides.items()}})
+        text += (
+            f"\n### Where a step goes: {case} (ms per step under cProfile, one profiled process "
+            "per code; nested stages: physics, sonar and fast camera are within the env step, "
+            "which is within the pose wrapper's step, as are the estimator and the camera "
+            "pointing; the estimator's update holds its frames)\n\n" + markdown_table(rows)
+        )
+    return text
 
 
 def to_markdown(summary: dict) -> str:

@@ -44,12 +44,35 @@ CASES: dict[str, tuple[str, dict, str]] = {
     "stsf, fast camera, follower": ("stsf_gym/Suite-Corridor-STSF-v0", {}, "follower"),
     "stsf, fast camera, random": ("stsf_gym/Suite-Corridor-STSF-v0", {}, "random"),
 }
+#: A step's stages, each the cumulative time of a function as both this code and the code
+#: before issue 36 name it (file, function; its outermost call where several match): the
+#: env's step and, within it, the physics, the sonar and the fast camera; the pose wrapper's
+#: step (which holds the env's) and, within it, the estimator's camera frames, the rest of its
+#: update and the camera pointing; the follower.
+STAGES: dict[str, tuple[str, str]] = {
+    "env step": ("corridor_env.py", "step"),
+    "physics": ("simulator.py", "step"),
+    "sonar": ("sonar.py", "read"),
+    "fast camera": ("fast_camera.py", "capture"),
+    "pose wrapper": ("wrappers.py", "step"),
+    "estimator, frames": ("landmark_fusion.py", "_frame"),
+    "estimator, update": ("landmark_fusion.py", "update"),
+    "camera pointing": ("camera_pointing.py", "pan"),
+    "follower": ("follower.py", "act"),
+}
 #: The package folders of a checkout, as ``pyproject.toml`` installs them into ``stsf_gym``.
 MAPPED_FOLDERS = ("envs", "agents", "configs")
 
 
-def measure(case: str, steps: int = 1500, warmup: int = 100, seed: int = 0) -> dict:
-    """Steps per second of wall time and of the process's CPU time for ``case``."""
+def measure(
+    case: str,
+    steps: int = 1500,
+    warmup: int = 100,
+    seed: int = 0,
+    profiler: cProfile.Profile | None = None,
+) -> dict:
+    """Steps per second of wall time and of the process's CPU time for ``case``; ``profiler``
+    watches the timed steps (not the warm-up: imports, compiled loops' loading) if given."""
     import stsf_gym  # noqa: F401 - registers the ids
     from stsf_gym.agents.registry import make_agent
 
@@ -78,9 +101,13 @@ def measure(case: str, steps: int = 1500, warmup: int = 100, seed: int = 0) -> d
         return obs
 
     obs = drive(warmup, start())
+    if profiler is not None:
+        profiler.enable()
     wall, cpu = time.perf_counter(), time.process_time()
     drive(steps, obs)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    if profiler is not None:
+        profiler.disable()
     env.close()
     return {
         "case": case,
@@ -94,9 +121,7 @@ def measure(case: str, steps: int = 1500, warmup: int = 100, seed: int = 0) -> d
 def profile(case: str, steps: int = 1500, seed: int = 0, count: int = 25) -> list[dict]:
     """cProfile's ``count`` functions with the most own time while ``case`` runs."""
     profiler = cProfile.Profile()
-    profiler.enable()
-    row = measure(case, steps, warmup=0, seed=seed)
-    profiler.disable()
+    row = measure(case, steps, seed=seed, profiler=profiler)
     total = row["steps"] / row["steps_per_s"]
     stats = pstats.Stats(profiler).stats
     top = sorted(stats.items(), key=lambda item: item[1][2], reverse=True)[:count]
@@ -109,6 +134,25 @@ def profile(case: str, steps: int = 1500, seed: int = 0, count: int = 25) -> lis
         }
         for (file, line, name), (_, calls, own, cumulative, _) in top
     ]
+
+
+def stage_profile(case: str, steps: int = 1500, seed: int = 0) -> dict:
+    """Milliseconds per step of each of :data:`STAGES` while cProfile watches ``case`` (its
+    overhead inflates every figure; compare shares, or the same stage of two codes), and
+    the whole step's."""
+    profiler = cProfile.Profile()
+    row = measure(case, steps, seed=seed, profiler=profiler)
+    cumulative: dict[tuple[str, str], float] = {}
+    for (file, _, name), (*_, seconds, _) in pstats.Stats(profiler).stats.items():
+        key = (Path(file).name, name)
+        cumulative[key] = max(cumulative.get(key, 0.0), seconds)
+    return {
+        "case": case,
+        "step_ms": 1e3 / row["steps_per_s"],
+        "stages_ms": {
+            stage: 1e3 * cumulative.get(key, 0.0) / steps for stage, key in STAGES.items()
+        },
+    }
 
 
 def step_section(
@@ -130,11 +174,25 @@ def step_section(
         for round_ in range(rounds):
             for case in CASES:
                 for label in sorted(sides, reverse=bool(round_ % 2)):
-                    (run,) = _run_script(sides[label], case, steps, seed, label == "this")
+                    arguments = ["--case", case, "--steps", str(steps), "--seed", str(seed)]
+                    (run,) = _run_script(sides[label], arguments, label == "this")
                     best = rows[case]
                     best[label] = max(best.get(label, 0.0), run["steps_per_s"])
                     cpu = f"{label}_cpu"
                     best[cpu] = max(best.get(cpu, 0.0), run["steps_per_cpu_s"])
+        profiles = [
+            {
+                "side": label,
+                **_run_script(
+                    sides[label],
+                    ["--stages", case, "--steps", str(steps), "--seed", str(seed)],
+                    label == "this",
+                ),
+            }
+            for case in CASES
+            if case.endswith("follower")
+            for label in sorted(sides)
+        ]
     if baseline is not None:
         for row in rows.values():
             row["ratio"] = row["this"] / row["baseline"]
@@ -145,6 +203,7 @@ def step_section(
         "baseline": None if baseline is None else str(baseline),
         "reference_ms": reference_ms(),
         "rows": list(rows.values()),
+        "profiles": profiles,
     }
 
 
@@ -182,14 +241,13 @@ def _interpreter(baseline: Path, staged: Path) -> list[str]:
     ]
 
 
-def _run_script(
-    command: list[str], case: str, steps: int, seed: int, this_code: bool
-) -> list[dict]:
-    """This file run as a script by ``command`` on ``case``: its row; on ``this_code`` (this
-    package, not a baseline) the package modules it loaded are counted as the run's code."""
+def _run_script(command: list[str], arguments: list[str], this_code: bool) -> list | dict:
+    """This file run as a script by ``command`` with ``arguments``: its output; on
+    ``this_code`` (this package, not a baseline) the package modules it loaded are counted as
+    the run's code."""
     modules = ["--modules"] if this_code else []
     done = subprocess.run(
-        [*command, __file__, "--case", case, "--steps", str(steps), "--seed", str(seed), *modules],
+        [*command, __file__, *arguments, *modules],
         capture_output=True,
         text=True,
         check=False,
@@ -209,16 +267,19 @@ def _run_script(
 def main() -> None:
     """``python step.py [--case C ...] [--steps N] [--seed S] [--modules]``: the rows of the
     cases (default all) as JSON on stdout (with ``--modules``, ``{"rows", "modules"}``: the
-    package modules loaded, too)."""
+    package modules loaded, too); ``--profile C`` or ``--stages C`` profile case C instead."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1500)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--case", choices=list(CASES), action="append")
     parser.add_argument("--profile", choices=list(CASES))
+    parser.add_argument("--stages", choices=list(CASES), help="ms per step of each stage")
     parser.add_argument("--modules", action="store_true", help="report the modules loaded, too")
     args = parser.parse_args()
     if args.profile:
         result = profile(args.profile, args.steps, args.seed)
+    elif args.stages:
+        result = stage_profile(args.stages, args.steps, args.seed)
     else:
         result = [measure(case, args.steps, seed=args.seed) for case in args.case or CASES]
     if args.modules:  # this code's own helper: a baseline's package may lack it
