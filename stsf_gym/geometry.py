@@ -78,10 +78,11 @@ def inverse(a: ArrayLike) -> Array:
 def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[Array, Array]:
     """Jacobians ``(d(a (+) b)/da, d(a (+) b)/db)`` of :func:`compose`."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    shape = np.broadcast_shapes(a.shape, b.shape)[:-1]
     rot = rot2(a[..., 2])
     rb = (rot @ b[..., :2, None])[..., 0]  # b's offset, rotated into the parent
-    ja = np.broadcast_to(np.eye(3), (*shape, 3, 3)).copy()
+    shape = rb.shape[:-1]  # a's and b's leading axes, broadcast
+    ja = np.zeros((*shape, 3, 3))
+    ja.reshape(*shape, 9)[..., ::4] = 1.0  # the identity: every fourth of the nine entries
     ja[..., 0, 2] = -rb[..., 1]
     ja[..., 1, 2] = rb[..., 0]
     jb = np.zeros((*shape, 3, 3))

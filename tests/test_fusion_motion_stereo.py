@@ -12,6 +12,7 @@ from stsf_gym.fusion import (
     motion_stereo_variance,
     stereo_range_bound,
 )
+from stsf_gym.fusion.motion_stereo import motion_stereo_ranges
 
 SEEDS = st.integers(0, 2**32 - 1)
 FAST = settings(max_examples=40, deadline=None)
@@ -84,6 +85,26 @@ def test_degenerate_geometry_raises(seed, n_points):
     prev = _project((R @ point + 1e-12 * t)[None], q_curr[0, 2])
     with pytest.raises(DegenerateGeometryError):
         motion_stereo_range(prev[0], q_curr[0], R, 1e-12 * t, n)
+
+
+@given(SEEDS, st.integers(1, 6))
+@FAST
+def test_ranges_under_several_motions_equal_one_solve_each(seed, n_points):
+    """The finite-difference helper's ranges are motion_stereo_range's to the bit, the rotation
+    repeated or not, with None where one motion is degenerate."""
+    rng = np.random.default_rng(seed)
+    q_prev, q_curr, R, t, n, _ = _scene(rng, n_points)
+    shift = np.eye(3) * 1e-6
+    turned = Rotation.from_rotvec(shift[1]).as_matrix() @ R
+    motions = [(R, t), (R, t + shift[0]), (R, t + shift[1]), (turned, t), (R, np.zeros(3))]
+    expected = []
+    for motion in motions:
+        try:
+            expected.append(motion_stereo_range(q_prev, q_curr, *motion, n))
+        except DegenerateGeometryError:
+            expected.append(None)
+    assert expected[-1] is None and None not in expected[:-1]
+    assert motion_stereo_ranges(q_prev, q_curr, motions, n) == expected
 
 
 def test_ray_parallel_to_plane_and_bad_inputs_raise():

@@ -23,6 +23,9 @@ import numpy as np
 
 from stsf_gym.envs.config import SonarBeamConfig
 
+#: the neighbour a transducer's crosstalk comes from: the one before or the one after
+NEIGHBOUR_SIDES = np.array([-1, 1])
+
 
 def detection_probability(incidence: np.ndarray, cfg: SonarBeamConfig) -> np.ndarray:
     """Chance that a ray meeting a surface at ``incidence`` (rad from its normal) echoes back."""
@@ -56,7 +59,7 @@ def corrupt(
     ranges = ranges.copy()
     if simultaneous and len(ranges) == count:
         crossed = rng.random(count) < cfg.crosstalk_prob
-        side = rng.choice([-1, 1], count)
+        side = NEIGHBOUR_SIDES[rng.integers(0, 2, count)]  # rng.choice([-1, 1], count)'s draw
         ranges = np.where(crossed, np.minimum(ranges, ranges[(transducers + side) % count]), ranges)
     random = rng.random(len(ranges)) < cfg.random_prob
     return np.where(random, rng.uniform(*limits, len(ranges)), ranges)

@@ -54,7 +54,7 @@ from stsf_gym.estimators.landmark_observation import (
     robot_pose_jacobian,
 )
 from stsf_gym.estimators.odometry import odometry_step
-from stsf_gym.estimators.pair_range import matched_rays, pair_range
+from stsf_gym.estimators.pair_range import matched_rays, pair_range, pair_ranges
 from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import ConventionalSettings, STSFSettings
 from stsf_gym.fusion import STSFTrack
@@ -217,22 +217,26 @@ class LandmarkFusionEstimator(OdometryEstimator):
             return None
         prev_camera_from_robot = np.linalg.inv(prev_obs.robot_from_camera)
 
-        def stereo(motion: np.ndarray, motion_cov: np.ndarray | None) -> tuple[float, float] | None:
-            prev_from_curr = prev_camera_from_robot @ to_se3(motion) @ current.robot_from_camera
-            return pair_range(
-                rays, prev_from_curr, normal, motion_cov, camera_from_robot, self.sigma_px
-            )
+        def prev_from_curr(motion: np.ndarray) -> np.ndarray:
+            return prev_camera_from_robot @ to_se3(motion) @ current.robot_from_camera
 
-        measured = stereo(previous.motion, previous.slip_cov)
+        measured = pair_range(
+            rays,
+            prev_from_curr(previous.motion),
+            normal,
+            previous.slip_cov,
+            camera_from_robot,
+            self.sigma_px,
+        )
         if measured is None:
             return None
         D, var_D = measured
-        by_motion = np.zeros(3)  # dD / d(motion), by forward differences
-        for i, step in enumerate(np.eye(3) * 1e-6):
-            shifted = stereo(previous.motion + step, None)
-            if shifted is None:
-                return None
-            by_motion[i] = (shifted[0] - D) / 1e-6
+        # dD / d(motion), by forward differences
+        shifted = [previous.motion + step for step in np.eye(3) * 1e-6]
+        shifted_D = pair_ranges(rays, [prev_from_curr(motion) for motion in shifted], normal)
+        if None in shifted_D:
+            return None
+        by_motion = (np.array(shifted_D) - D) / 1e-6
         by_calibration = by_motion @ previous.by_calibration  # dD / dc
         calibration_var = (
             by_calibration @ self.model.odometry_noise.calibration_cov @ by_calibration

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from stsf_gym.fusion import DegenerateGeometryError, motion_stereo_estimate, motion_stereo_range
+from stsf_gym.fusion.motion_stereo import motion_stereo_ranges
 
 
 def matched_rays(
@@ -68,3 +69,12 @@ def pair_range(
         return motion_stereo_estimate(q_prev, q_curr, R, t, normal, sigma_px, cov_t, cov_rot)
     except DegenerateGeometryError:
         return None
+
+
+def pair_ranges(
+    rays: tuple[np.ndarray, np.ndarray], prevs_from_curr: list[np.ndarray], normal: np.ndarray
+) -> list[float | None]:
+    """:func:`pair_range`'s ``D`` alone (no ``motion_cov``) for each of several poses of camera
+    k in camera k-1, ``None`` where not measurable: the rays are checked once."""
+    motions = [(pose[:3, :3], pose[:3, 3]) for pose in prevs_from_curr]
+    return motion_stereo_ranges(*rays, motions, normal)

@@ -46,24 +46,42 @@ def _validated(
     q_prev: ArrayLike, q_curr: ArrayLike, R: ArrayLike, t: ArrayLike, n: ArrayLike
 ) -> tuple[Array, Array, Array, Array, Array]:
     """Check shapes and values; return ``q_prev``, ``q_curr`` as ``(N, 3)`` and ``R, t, n``."""
+    qp, qc, n = _validated_rays(q_prev, q_curr, n)
+    return (qp, qc, *_validated_motion(R, t), n)
+
+
+def _validated_rays(
+    q_prev: ArrayLike, q_curr: ArrayLike, n: ArrayLike
+) -> tuple[Array, Array, Array]:
+    """The two views' points as ``(N, 3)`` and the plane normal, checked."""
     qp, qc = np.asarray(q_prev, dtype=float), np.asarray(q_curr, dtype=float)
-    R, t, n = (np.asarray(a, dtype=float) for a in (R, t, n))
+    n = np.asarray(n, dtype=float)
     if qp.shape != qc.shape or qp.shape[-1:] != (3,) or qp.ndim not in (1, 2):
         raise ValueError(
             f"q_prev and q_curr must both have shape (3,) or (N, 3), got {qp.shape}, {qc.shape}"
         )
-    if R.shape != (3, 3) or t.shape != (3,) or n.shape != (3,):
-        raise ValueError(f"need R (3, 3), t (3,), n (3,), got {R.shape}, {t.shape}, {n.shape}")
+    if n.shape != (3,):
+        raise ValueError(f"need n (3,), got {n.shape}")
     qp, qc = np.atleast_2d(qp), np.atleast_2d(qc)
-    if not all(np.isfinite(a).all() for a in (qp, qc, R, t, n)):
+    if not all(np.isfinite(a).all() for a in (qp, qc, n)):
         raise ValueError("inputs must be finite")
     if (qp[:, 2] <= 0).any() or (qc[:, 2] <= 0).any():
         raise ValueError("the third entry of each image point (the focal length f) must be > 0")
     if abs(np.linalg.norm(n) - 1.0) > 1e-6:
         raise ValueError(f"the plane normal n must be a unit vector, |n| = {np.linalg.norm(n)}")
+    return qp, qc, n
+
+
+def _validated_motion(R: ArrayLike, t: ArrayLike) -> tuple[Array, Array]:
+    """The motion ``(R, t)``, checked."""
+    R, t = np.asarray(R, dtype=float), np.asarray(t, dtype=float)
+    if R.shape != (3, 3) or t.shape != (3,):
+        raise ValueError(f"need R (3, 3), t (3,), got {R.shape}, {t.shape}")
+    if not (np.isfinite(R).all() and np.isfinite(t).all()):
+        raise ValueError("inputs must be finite")
     if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
         raise ValueError("R must be a rotation matrix")
-    return qp, qc, R, t, n
+    return R, t
 
 
 def _linear_system(
@@ -74,14 +92,19 @@ def _linear_system(
     With ``M = [[f', 0, -u'], [0, f', -v']]`` per point: ``(a, b) = M R q_k`` and
     ``(c, d) = -(n.q_k) M t``.
     """
-    f, u, v = qp[:, 2], qp[:, 0], qp[:, 1]
-    zero = np.zeros_like(f)
-    M = np.stack([np.stack([f, zero, -u], -1), np.stack([zero, f, -v], -1)], -2)
+    M, nq = _view_terms(qp, qc, n)
     r = qc @ R.T
-    nq = qc @ n
     A = np.einsum("iab,ib->ia", M, r)
     B = -nq[:, None] * (M @ t)
     return A, B, M, r, nq
+
+
+def _view_terms(qp: Array, qc: Array, n: Array) -> tuple[Array, Array]:
+    """The parts of eq. 16-18 the motion does not enter: ``M`` per point and ``n.q_k``."""
+    f, u, v = qp[:, 2], qp[:, 0], qp[:, 1]
+    zero = np.zeros_like(f)
+    M = np.stack([np.stack([f, zero, -u], -1), np.stack([zero, f, -v], -1)], -2)
+    return M, qc @ n
 
 
 def _solve(
@@ -136,6 +159,33 @@ def motion_stereo_range(
     qp, qc, R, t, n = _validated(q_prev, q_curr, R, t, n)
     A, B, _, _, nq = _linear_system(qp, qc, R, t, n)
     return _solve(A.ravel(), B.ravel(), qp, qc, t, nq, min_parallax)
+
+
+def motion_stereo_ranges(
+    q_prev: ArrayLike,
+    q_curr: ArrayLike,
+    motions: list[tuple[ArrayLike, ArrayLike]],
+    n: ArrayLike,
+    min_parallax: float = MIN_PARALLAX,
+) -> list[float | None]:
+    """:func:`motion_stereo_range` of one pair of views under each of ``motions`` ``(R, t)``
+    (a motion and its perturbations, for a Jacobian by finite differences): the same numbers,
+    ``None`` where the geometry is degenerate, with the views checked and the terms of eq.
+    16-18 that the motion does not enter built once (``R q_k`` too, while ``R`` repeats)."""
+    qp, qc, n = _validated_rays(q_prev, q_curr, n)
+    M, nq = _view_terms(qp, qc, n)
+    ranges: list[float | None] = []
+    rotated: tuple[Array, Array] | None = None  # the last R and its (a, b) rows
+    for motion in motions:
+        R, t = _validated_motion(*motion)
+        if rotated is None or not np.array_equal(rotated[0], R):
+            rotated = R, np.einsum("iab,ib->ia", M, qc @ R.T)
+        B = -nq[:, None] * (M @ t)
+        try:
+            ranges.append(_solve(rotated[1].ravel(), B.ravel(), qp, qc, t, nq, min_parallax))
+        except DegenerateGeometryError:
+            ranges.append(None)
+    return ranges
 
 
 def _skew(w: Array) -> Array:
