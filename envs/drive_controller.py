@@ -32,11 +32,14 @@ class VelocityController:
         """The (v, w) sent to the wheels ``dt`` seconds after the previous update, moving
         towards ``target`` as fast as the acceleration limits allow. Plain floats: two numbers
         an update, six updates a step, cost more in numpy's call overhead than in arithmetic."""
-        self._command = tuple(
-            now + _clip(_clip(float(wanted), limit) - now, accel * dt)
-            for wanted, now, limit, accel in zip(
-                target, self._command, self.max_velocity, self.max_acceleration, strict=True
-            )
+        (v, w), (v_max, w_max), (a_v, a_w) = (
+            self._command,
+            self.max_velocity,
+            self.max_acceleration,
+        )
+        self._command = (
+            v + _clip(_clip(float(target[0]), v_max) - v, a_v * dt),
+            w + _clip(_clip(float(target[1]), w_max) - w, a_w * dt),
         )
         return self._command
 

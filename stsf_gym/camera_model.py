@@ -34,7 +34,7 @@ LINK_FROM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0
 def distort(xy: np.ndarray, dist: np.ndarray) -> np.ndarray:
     """Distorted normalised coordinates (..., 2) of undistorted ones, in float64."""
     xy = np.asarray(xy, dtype=float)
-    k1, k2, p1, p2, k3 = (float(k) for k in dist)
+    k1, k2, p1, p2, k3 = np.asarray(dist, dtype=float).tolist()
     return _distorted(xy.reshape(-1, 2), k1, k2, p1, p2, k3).reshape(xy.shape)
 
 
@@ -55,7 +55,7 @@ def undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
     """Undistorted normalised coordinates of distorted ones: the fixed-point iteration of
     ``cv2.undistortPoints``, run to convergence for the distortions a lens has."""
     xy_d = np.asarray(xy_d, dtype=float)
-    k1, k2, p1, p2, k3 = (float(k) for k in dist)
+    k1, k2, p1, p2, k3 = np.asarray(dist, dtype=float).tolist()
     flat = _undistorted(xy_d.reshape(-1, 2), k1, k2, p1, p2, k3, UNDISTORT_ITERATIONS)
     return flat.reshape(xy_d.shape)
 

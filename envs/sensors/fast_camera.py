@@ -45,6 +45,7 @@ from stsf_gym.envs.worlds.corridor import CorridorWorld
 from stsf_gym.vision.landmarks import square_centres
 
 PHANTOM_DEPTH = (2.0, 6.0)  # m, range of a false detection's depth
+NEXT_CORNER = [1, 2, 3, 0]  # each corner's successor round the board
 
 
 def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corners):
@@ -52,7 +53,7 @@ def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corne
     board's corners (4, 3), an array (N,) for N boards' (N, 4, 3), projected at once."""
     corners = np.asarray(corners, float)
     uv = camera.project(world_from_camera, corners.reshape(-1, 3)).reshape(-1, 4, 2)
-    sides = np.linalg.norm(uv - np.roll(uv, -1, axis=1), axis=2)  # top, right, bottom, left
+    sides = np.linalg.norm(uv - uv[:, NEXT_CORNER], axis=2)  # top, right, bottom, left
     sizes = np.minimum(sides[:, 0] + sides[:, 2], sides[:, 1] + sides[:, 3]) / 2
     return float(sizes[0]) if corners.ndim == 2 else sizes
 

@@ -85,5 +85,6 @@ def odometry_step(
         ]
     )
     by_turn = np.array([-distance * s / 2, distance * c / 2, 1.0])
-    G_c = np.column_stack([G[:, 0] * d_left, G[:, 1] * d_right, -turn * by_turn])
+    G_c = np.empty((3, 3))
+    G_c[:, 0], G_c[:, 1], G_c[:, 2] = G[:, 0] * d_left, G[:, 1] * d_right, -turn * by_turn
     return integrate_wheel_travel(pose, d_left, d_right, wheelbase), F, G, G_c

@@ -59,7 +59,7 @@ class BoardPrediction:
     @property
     def size_px(self) -> float:
         """The shorter of the predicted board's mean width and height (pixels)."""
-        sides = np.linalg.norm(self.corners - np.roll(self.corners, -1, axis=0), axis=1)
+        sides = np.linalg.norm(self.corners - self.corners[[1, 2, 3, 0]], axis=1)
         return float(min(sides[0] + sides[2], sides[1] + sides[3]) / 2)
 
 
