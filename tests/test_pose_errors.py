@@ -138,3 +138,24 @@ def test_merging_a_track_again_and_again_stays_consistent():
     assert nees(e, errors.P) == pytest.approx(3.0, rel=0.08)
     sampling_std = np.sqrt(np.outer(np.diag(errors.P), np.diag(errors.P)) / samples)
     assert np.all(np.abs(np.cov(e.T) - errors.P) < 4 * sampling_std)
+
+
+def test_prediction_moves_the_estimate_and_every_carried_pose_alike():
+    """``e <- F e + G_c c + G w`` and the same for each ``eps_j``: the joint prediction is
+    ``T Y T^T + B Q B^T`` with ``F`` and ``G_c`` in the rows of every pose, to the bit."""
+    rng = np.random.default_rng(4)
+    considered = np.diag(rng.uniform(1e-4, 1e-3, 5))
+    errors = PoseErrors(np.diag([4e-4, 1e-4, 2e-4]), considered)
+    for key in range(4):
+        errors.add(key, np.diag(rng.uniform(1e-4, 1e-3, 3)), rng.normal(size=(3, 3)))
+    F, Q = np.eye(3) + rng.normal(size=(3, 3)) / 10, np.diag([1e-5, 2e-5, 1e-6])
+    G_c = rng.normal(size=(3, 3))
+    size = len(errors.joint)
+    T, B = np.eye(size), np.zeros((size, 3))
+    for start in [0, *range(3 + len(considered), size, 3)]:
+        T[start : start + 3, start : start + 3] = F
+        T[start : start + 3, 3:6] = G_c  # the first three considered: the wheel calibration
+        B[start : start + 3] = np.eye(3)
+    joint = T @ errors.joint @ T.T + B @ Q @ B.T
+    errors.predict(F, Q, G_c)
+    np.testing.assert_array_equal(errors.joint, 0.5 * (joint + joint.T))

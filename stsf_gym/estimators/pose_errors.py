@@ -48,6 +48,7 @@ from collections.abc import Hashable, Mapping
 import numpy as np
 
 POSE = slice(0, 3)
+AXES = np.arange(3)  # x, y, yaw: the three rows of a pose
 
 
 class PoseErrors:
@@ -88,11 +89,13 @@ class PoseErrors:
     def predict(self, F: np.ndarray, Q: np.ndarray, G_c: np.ndarray) -> None:
         """One odometry step: ``F``, slip noise ``Q = G N G^T`` and calibration Jacobian ``G_c``."""
         size, G_c = len(self.joint), self._considered(G_c)
+        # the rows of e and of every eps_j, as (pose, 3, 1) index blocks
+        starts = np.array([0, *range(self.first_pose, size, 3)])
+        rows = starts[:, None, None] + AXES[:, None]
         T, B = np.eye(size), np.zeros((size, 3))
-        for rows in [POSE] + [self._pose_rows(i) for i in range(len(self.keys))]:
-            T[rows, rows] = F
-            T[rows, self.considered] = G_c
-            B[rows] = np.eye(3)
+        T[rows, rows.transpose(0, 2, 1)] = F
+        T[rows, np.arange(self.considered.start, self.considered.stop)] = G_c
+        B[rows, AXES] = np.eye(3)
         joint = T @ self.joint @ T.T + B @ Q @ B.T
         self.joint = 0.5 * (joint + joint.T)
 
