@@ -390,7 +390,7 @@ class CorridorEnv(gym.Env):
         a = raw.astype(np.float64).ravel()
         if a.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             raise ValueError(f"action contains NaN or infinite values: {a.tolist()}")
         a = bounded(a, -1.0, 1.0)
         robot, layout = self.config.robot, self.action_layout

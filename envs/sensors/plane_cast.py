@@ -54,7 +54,7 @@ class PlaneCaster:
         self._footprints(scene)
         t = np.full(len(starts), np.inf)
         normals = np.zeros((len(starts), 2))
-        edges = self._reachable(centre, max(np.hypot(*(starts - centre).T)) + length)
+        edges = self._reachable(centre, np.hypot(*(starts - centre).T).max() + length)
         if len(edges):
             _edge_hits(edges, starts, directions, t, normals)
         if len(self._circles):
