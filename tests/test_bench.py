@@ -144,13 +144,19 @@ def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
     from stsf_gym.bench.step import CASES
 
     checkout = Path(__file__).resolve().parents[1]
-    summary = run_step_bench(tmp_path, steps=5, baseline=checkout, rounds=1)
+    summary = run_step_bench(tmp_path, steps=5, baseline=checkout, rounds=2)
     rows = summary["step"]["rows"]
     assert [r["case"] for r in rows] == list(CASES)
     for row in rows:
         assert row["this"] > 0 and row["baseline"] > 0
         assert row["ratio"] == pytest.approx(row["this"] / row["baseline"])
         assert row["ratio_cpu"] == pytest.approx(row["this_cpu"] / row["baseline_cpu"])
+        # each segment's fastest round, summed, is at least as fast as the fastest round
+        for side in ("this", "baseline"):
+            assert row[f"{side}_segments"] >= row[side] * (1 - 1e-12)
+        segments = row["this_segments"] / row["baseline_segments"]
+        assert row["ratio_segments"] == pytest.approx(segments)
+        assert row["ratio_rounds"]["count"] == 2 and min(row["ratio_rounds"]["values"]) > 0
     # each follower case profiled once per code, its stages nested as they run
     profiles = {(p["case"], p["side"]): p for p in summary["step"]["profiles"]}
     followed = [case for case in CASES if case.endswith("follower")]
@@ -171,3 +177,13 @@ def test_a_baseline_that_is_no_checkout_is_refused(tmp_path):
 
     with pytest.raises(ConfigError, match="neither a Python interpreter nor a checkout"):
         check_baseline(tmp_path)
+
+
+def test_a_measured_case_times_its_steps_in_segments():
+    """The timed steps come in SEGMENT_STEPS pieces, the last one shorter; their wall times
+    add up to the steps/s reported."""
+    from stsf_gym.bench.step import SEGMENT_STEPS, measure
+
+    row = measure("truth, camera off, follower", steps=2 * SEGMENT_STEPS + 30, warmup=5)
+    assert len(row["segment_s"]) == 3 and min(row["segment_s"]) > 0
+    assert row["steps_per_s"] == pytest.approx(row["steps"] / sum(row["segment_s"]))

@@ -29,7 +29,7 @@ from tqdm import tqdm
 
 from stsf_gym.bench.recording import recording_costs
 from stsf_gym.bench.speed import CASES, FAST_CASES, render_latency, run_case, vector_scaling
-from stsf_gym.bench.step import STAGES, step_section
+from stsf_gym.bench.step import SEGMENT_STEPS, STAGES, step_section
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.recording import missing_modules
 from stsf_gym.results.provenance import provenance, reference_ms
@@ -302,13 +302,17 @@ def _load_text(m: dict) -> str:
 def step_markdown(step: dict) -> str:
     """The ``step`` section as Markdown: steps/s per case, beside the baseline's if run."""
     against = f" against {step['baseline']}, alternating" if step["baseline"] else ""
+    rows = [{k: v for k, v in row.items() if k != "ratio_rounds"} for row in step["rows"]]
+    for row, measured in zip(rows, step["rows"], strict=True):
+        if "ratio_rounds" in measured:
+            values = measured["ratio_rounds"]["values"]
+            row["ratio, rounds (lowest-highest)"] = f"{min(values):.2f}-{max(values):.2f}"
     return (
         f"## Env steps per second (suite corridor world, {step['steps']} steps a case, best "
         f"of {step['rounds']} fresh processes a case{against}; of wall time and, `_cpu`, of "
-        f"the process's CPU time)\n\nReference workload "
-        f"{step['reference_ms']:.1f} ms.\n\n"
-        + markdown_table(step["rows"])
-        + _profiles_markdown(step)
+        f"the process's CPU time; `_segments`: each {SEGMENT_STEPS} steps' fastest time over "
+        f"the rounds, summed; each round's ratio of its two runs)\n\nReference workload "
+        f"{step['reference_ms']:.1f} ms.\n\n" + markdown_table(rows) + _profiles_markdown(step)
     )
 
 

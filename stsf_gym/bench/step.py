@@ -60,6 +60,11 @@ STAGES: dict[str, tuple[str, str]] = {
     "camera pointing": ("camera_pointing.py", "pan"),
     "follower": ("follower.py", "act"),
 }
+#: The timed steps are split into segments of this many. A segment is the same steps in every
+#: round (a seed fixes them), so each side's fastest time of each segment over the rounds,
+#: summed, is its cost with the least interference: a shared machine's load comes and goes
+#: within a run, and seldom slows one segment in every round.
+SEGMENT_STEPS = 100
 #: The package folders of a checkout, as ``pyproject.toml`` installs them into ``stsf_gym``.
 MAPPED_FOLDERS = ("envs", "agents", "configs")
 
@@ -71,8 +76,9 @@ def measure(
     seed: int = 0,
     profiler: cProfile.Profile | None = None,
 ) -> dict:
-    """Steps per second of wall time and of the process's CPU time for ``case``; ``profiler``
-    watches the timed steps (not the warm-up: imports, compiled loops' loading) if given."""
+    """Steps per second of wall time and of the process's CPU time for ``case``, and the wall
+    seconds of each :data:`SEGMENT_STEPS` steps; ``profiler`` watches the timed steps (not the
+    warm-up: imports, compiled loops' loading) if given."""
     import stsf_gym  # noqa: F401 - registers the ids
     from stsf_gym.agents.registry import make_agent
 
@@ -103,9 +109,13 @@ def measure(
     obs = drive(warmup, start())
     if profiler is not None:
         profiler.enable()
-    wall, cpu = time.perf_counter(), time.process_time()
-    drive(steps, obs)
-    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    segments = []
+    cpu = time.process_time()
+    for done in range(0, steps, SEGMENT_STEPS):
+        start_s = time.perf_counter()
+        obs = drive(min(SEGMENT_STEPS, steps - done), obs)
+        segments.append(time.perf_counter() - start_s)
+    cpu = time.process_time() - cpu
     if profiler is not None:
         profiler.disable()
     env.close()
@@ -113,8 +123,9 @@ def measure(
         "case": case,
         "steps": steps,
         "episodes": len(episodes) - 1,
-        "steps_per_s": steps / wall,
+        "steps_per_s": steps / sum(segments),
         "steps_per_cpu_s": steps / cpu,
+        "segment_s": segments,
     }
 
 
@@ -159,27 +170,37 @@ def step_section(
     steps: int = 1500, seed: int = 0, baseline: Path | None = None, rounds: int = 5
 ) -> dict:
     """The bench's ``step`` section: each case's steps/s, of wall time and of the process's CPU
-    time, each the best of ``rounds`` fresh processes, on this code and, with ``baseline`` (a
-    checkout's folder, or a Python interpreter with another ``stsf_gym`` installed), on that
-    code too; their ratios, this code over the baseline. The two sides alternate case by case,
-    the first of a pair switching every round, so that a change of load (a virtual machine's
-    neighbours) hits both alike."""
+    time, each the best of ``rounds`` fresh processes, and (``*_segments``) from each segment's
+    fastest time over the rounds (:data:`SEGMENT_STEPS`), on this code and, with ``baseline``
+    (a checkout's folder, or a Python interpreter with another ``stsf_gym`` installed), on that
+    code too; their ratios, this code over the baseline, and each round's ratio of the two runs
+    made back to back (``ratio_rounds``: mean, std, count, values). The two sides alternate case
+    by case, the first of a pair switching every round, so that a change of load (a virtual
+    machine's neighbours) hits both alike."""
     from stsf_gym.results.provenance import reference_ms
 
     sides = {"this": [sys.executable]}
     rows = {case: {"case": case} for case in CASES}
+    fastest: dict[tuple[str, str], np.ndarray] = {}  # (case, side) -> each segment's fastest
+    paired: dict[str, list[float]] = {case: [] for case in CASES}  # each round's ratio
     with tempfile.TemporaryDirectory() as staged:
         if baseline is not None:
             sides["baseline"] = _interpreter(Path(baseline), Path(staged))
         for round_ in range(rounds):
             for case in CASES:
+                rates = {}
                 for label in sorted(sides, reverse=bool(round_ % 2)):
                     arguments = ["--case", case, "--steps", str(steps), "--seed", str(seed)]
                     (run,) = _run_script(sides[label], arguments, label == "this")
-                    best = rows[case]
+                    best, rates[label] = rows[case], run["steps_per_s"]
                     best[label] = max(best.get(label, 0.0), run["steps_per_s"])
                     cpu = f"{label}_cpu"
                     best[cpu] = max(best.get(cpu, 0.0), run["steps_per_cpu_s"])
+                    segments = np.array(run["segment_s"])
+                    known = fastest.setdefault((case, label), segments)
+                    fastest[case, label] = np.minimum(known, segments)
+                if baseline is not None:
+                    paired[case].append(rates["this"] / rates["baseline"])
         profiles = [
             {
                 "side": label,
@@ -193,10 +214,16 @@ def step_section(
             if case.endswith("follower")
             for label in sorted(sides)
         ]
+    for (case, label), segments in fastest.items():
+        rows[case][f"{label}_segments"] = steps / float(segments.sum())
     if baseline is not None:
-        for row in rows.values():
+        from stsf_gym.results.schema import stat
+
+        for case, row in rows.items():
             row["ratio"] = row["this"] / row["baseline"]
             row["ratio_cpu"] = row["this_cpu"] / row["baseline_cpu"]
+            row["ratio_segments"] = row["this_segments"] / row["baseline_segments"]
+            row["ratio_rounds"] = stat(paired[case])
     return {
         "steps": steps,
         "rounds": rounds,
