@@ -45,6 +45,25 @@ def test_a_prediction_within_its_search_radius_finds_the_board():
     assert plain(obs, [near]) == []
 
 
+def test_predictions_are_made_only_when_a_fast_frame_needs_them_or_they_are_asked_for():
+    """A fast frame without findable boards needs no prediction: the estimator's function that
+    makes them is not called, unless a reader (a recording) asks for them; then once."""
+    detector = FrameDetector(PATTERN, {5, 6}, matcher=PredictedMatcher(PATTERN))
+    obs, corners = findable_obs(5, np.array([160.0, 120.0]), 40.0)
+    near = BoardPrediction(5, corners + np.array([3.0, -2.0]), 6.0)
+    calls = []
+
+    def predict():
+        calls.append(1)
+        return [near]
+
+    assert [d.landmark_id for d in detector(obs, predict)] == [5] and len(calls) == 1
+    nothing_findable = {**obs, "aided_ids": np.full(4, -1)}
+    assert detector(nothing_findable, predict) == [] and len(calls) == 1
+    assert detector.predictions == [near] and detector.predictions == [near]
+    assert len(calls) == 2
+
+
 def test_the_search_finds_smaller_boards_than_the_detector():
     cfg = load_config().camera.fast  # the paper profile's fitted numbers
     sizes = np.array([12.0, 14.0, 18.0, 22.0])

@@ -11,7 +11,9 @@ predicted (track-aided matching, :class:`~stsf_gym.vision.predicted.PredictedMat
 fast mode the env lists the boards such a search would find (``obs["aided_ids"]``, drawn with
 the matcher's fitted rate by size, :mod:`stsf_gym.envs.sensors.fast_camera`); a prediction takes
 one when it is of that id, at least the matcher's smallest board size, and its centre lies
-within its search radius of the board's (as the matcher's search window).
+within its search radius of the board's (as the matcher's search window). ``predictions`` may be
+a function that makes them: it is called only when they are needed (a fast frame without such
+boards needs none) or asked for (:attr:`FrameDetector.predictions`).
 
 With predictions the rendered frame is searched where the tracks predict first: the detector's
 geometry stage runs on each predicted board's window (:meth:`LandmarkDetector.detect_at`), and
@@ -25,6 +27,7 @@ an ideal pinhole camera of that calibration's K.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from functools import lru_cache
 
@@ -62,25 +65,39 @@ class FrameDetector:
         #: The last call's detections in the image's own (distorted) pixels, and the boards it
         #: was told to expect (for recordings: :mod:`stsf_gym.recording`).
         self.found: list[Detection] = []
-        self.predictions: list[BoardPrediction] = []
+        self._predict: Callable[[], Sequence[BoardPrediction]] = list
+        self._predictions: list[BoardPrediction] | None = None
         self._since_full_frame = FULL_FRAME_EVERY  # frames since the whole frame was searched
 
-    def __call__(self, obs: dict, predictions: list[BoardPrediction] = ()) -> list[Detection]:
-        self.aided, self.predictions = [], list(predictions)
+    def __call__(
+        self,
+        obs: dict,
+        predictions: Sequence[BoardPrediction] | Callable[[], Sequence[BoardPrediction]] = (),
+    ) -> list[Detection]:
+        self.aided, self._predictions = [], None
+        self._predict = predictions if callable(predictions) else lambda: predictions
         if "landmark_ids" in obs:
             found = self._unpack(obs["landmark_ids"], obs["landmark_points"])
-            if self.matcher is not None and predictions and "aided_ids" in obs:
-                self.aided = self._simulated_search(obs, predictions, found)
+            aided_slots = "aided_ids" in obs and bool((obs["aided_ids"] >= 0).any())
+            if self.matcher is not None and aided_slots and self.predictions:
+                self.aided = self._simulated_search(obs, self.predictions, found)
                 found = found + self.aided
         else:
-            found = self._detect(obs["image"], predictions)
-            if self.matcher is not None and predictions:
-                self.aided = self._search(obs["image"], predictions, found)
+            found = self._detect(obs["image"], self.predictions)
+            if self.matcher is not None and self.predictions:
+                self.aided = self._search(obs["image"], self.predictions, found)
                 found = found + self.aided
         self.found = found
         if self.calibration is None or not self.calibration.distorted:
             return found
         return [self._undistorted(d) for d in found]
+
+    @property
+    def predictions(self) -> list[BoardPrediction]:
+        """The boards the last call was told to expect (made when first needed or asked for)."""
+        if self._predictions is None:
+            self._predictions = list(self._predict())
+        return self._predictions
 
     def _detect(self, image: np.ndarray, predictions: list[BoardPrediction]) -> list[Detection]:
         """The detector's boards: in the predicted windows, or in the whole frame when none is

@@ -39,6 +39,7 @@ no longer describes its error.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import ClassVar
 
 import numpy as np
@@ -174,30 +175,37 @@ class LandmarkFusionEstimator(OdometryEstimator):
                 del self.seen[landmark_id]
                 self._drop_track(landmark_id)
 
-    def _predictions(self, pan: float, tilt: float) -> list[BoardPrediction]:
+    def _predictions(self, pan: float, tilt: float) -> Callable[[], list[BoardPrediction]]:
         """Where each tracked landmark's board must appear in this frame (track-aided matching
-        only; none otherwise)."""
+        only; none otherwise): a function that makes them from the tracks as they are now, for
+        the detector to call when it needs them."""
         if self.detector.matcher is None:
-            return []
-        camera_from_robot = np.linalg.inv(self.model.robot_from_camera(pan, tilt))
-        predictions = []
-        for landmark_id, seen in self.seen.items():
-            if landmark_id not in self.outlines:
-                self.outlines[landmark_id] = board_outline(
-                    self.model.landmarks[landmark_id], self.model
+            return list
+        # the frame and motion each track has now (a later step replaces, never mutates them)
+        tracked = [(i, seen.observation.z, seen.motion) for i, seen in self.seen.items()]
+
+        def predict() -> list[BoardPrediction]:
+            camera_from_robot = np.linalg.inv(self.model.robot_from_camera(pan, tilt))
+            predictions = []
+            for landmark_id, z, motion in tracked:
+                if landmark_id not in self.outlines:
+                    self.outlines[landmark_id] = board_outline(
+                        self.model.landmarks[landmark_id], self.model
+                    )
+                predicted = predict_board(
+                    landmark_id,
+                    self.outlines[landmark_id],
+                    z,
+                    motion,
+                    camera_from_robot,
+                    self.model.camera_calibration,
+                    self.aided_search_px,
                 )
-            predicted = predict_board(
-                landmark_id,
-                self.outlines[landmark_id],
-                seen.observation.z,
-                seen.motion,
-                camera_from_robot,
-                self.model.camera_calibration,
-                self.aided_search_px,
-            )
-            if predicted is not None:
-                predictions.append(predicted)
-        return predictions
+                if predicted is not None:
+                    predictions.append(predicted)
+            return predictions
+
+        return predict
 
     def _pair_measurement(
         self, previous: _Seen, current: LandmarkObservation
