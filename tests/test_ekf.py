@@ -139,7 +139,7 @@ def synthetic_observation(model, landmark_id, pose, range_offset=0.0, bearing_of
     r = math.hypot(dx, dy) + range_offset
     b = math.atan2(dy, dx) - pose[2] + bearing_offset
     phi = math.atan2(landmark.normal[1], landmark.normal[0]) - pose[2]
-    return LandmarkObservation(
+    return LandmarkObservation.given(
         landmark,
         np.arange(4),
         np.zeros((4, 2)),

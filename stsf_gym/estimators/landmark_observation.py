@@ -9,6 +9,7 @@ outward normal, the SE(2) pose of the landmark relative to the robot.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -29,7 +30,33 @@ class LandmarkObservation:
     image_points: np.ndarray  # (N, 2) pixels
     robot_from_camera: np.ndarray  # 4x4, nominal mount kinematics at the frame's pan/tilt
     z: np.ndarray  # [x, y, phi]: landmark pose in the robot frame
-    cov: np.ndarray  # 3x3 covariance of z
+    pnp_params: np.ndarray  # [rvec, tvec]: the board's pose in the camera (solvePnP)
+    pnp_cov: np.ndarray  # 6x6 covariance of pnp_params, sigma_px^2 (J^T J)^-1
+
+    @classmethod
+    def given(
+        cls,
+        landmark: MapLandmark,
+        indices: np.ndarray,
+        image_points: np.ndarray,
+        robot_from_camera: np.ndarray,
+        z: np.ndarray,
+        cov: np.ndarray,
+    ) -> LandmarkObservation:
+        """An observation with ``z`` and its covariance given (a synthetic measurement)."""
+        observation = cls(
+            landmark, indices, image_points, robot_from_camera, z, np.zeros(6), np.zeros((6, 6))
+        )
+        observation.__dict__["cov"] = cov  # where functools.cached_property keeps its value
+        return observation
+
+    @functools.cached_property
+    def cov(self) -> np.ndarray:
+        """3x3 covariance of ``z``: ``pnp_cov`` through z's Jacobian by the PnP parameters,
+        made when first asked for (most frames' observations serve only their ``z``)."""
+        G = _board_pose_jacobian(self.pnp_params, self.robot_from_camera)
+        cov = G @ self.pnp_cov @ G.T
+        return (cov + cov.T) / 2
 
     def by_camera(self) -> np.ndarray:
         """Jacobian (3, 2) of ``z`` by the considered camera errors ``[theta, s]``.
@@ -113,16 +140,14 @@ def observe(
     except np.linalg.LinAlgError:
         return None
     robot_from_camera = model.robot_from_camera(pan, tilt)
-    z = _board_pose(params, robot_from_camera)
-    G = _board_pose_jacobian(params, robot_from_camera)
-    cov = G @ params_cov @ G.T
     return LandmarkObservation(
         landmark,
         np.asarray(detection.indices),
         image_points,
         robot_from_camera,
-        z,
-        (cov + cov.T) / 2,
+        _board_pose(params, robot_from_camera),
+        params,
+        params_cov,
     )
 
 
