@@ -35,6 +35,7 @@ import cv2
 import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration
+from stsf_gym.geometry import compiled
 from stsf_gym.vision.detector import Detection, LandmarkDetector, to_grey
 from stsf_gym.vision.landmarks import LandmarkPattern, square_centres
 from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
@@ -209,11 +210,26 @@ def _homography_fits(plane: np.ndarray, image: np.ndarray) -> bool:
     absolute deviation from the mean, of x or of y in either set, is below ``DBL_EPSILON``
     (its normalisation would divide by it). The sums are sequential in double, as OpenCV's
     loops; ``tests/test_fast_aided.py`` checks the answer against OpenCV's."""
-    points = np.hstack([plane, image]).astype(np.float32).astype(np.float64)
-    mean = np.cumsum(points, axis=0)[-1] / len(points)
-    with np.errstate(invalid="ignore"):  # inf - inf: a NaN deviation
-        deviation = np.cumsum(np.abs(points - mean), axis=0)[-1]
-    return not bool(np.any(deviation < DBL_EPSILON))  # a NaN deviation fits, as in OpenCV
+    return _spread_in_every_axis(np.hstack([plane, image]).astype(np.float32).astype(np.float64))
+
+
+@compiled
+def _spread_in_every_axis(points: np.ndarray) -> bool:
+    """Whether every column of ``points`` (N, 4) sums, sequentially in double, an absolute
+    deviation from its mean of at least ``DBL_EPSILON`` (a NaN deviation, from inf - inf,
+    passes, as in OpenCV)."""
+    count = points.shape[0]
+    for column in range(points.shape[1]):
+        total = 0.0
+        for row in range(count):
+            total += points[row, column]
+        mean = total / count
+        deviation = 0.0
+        for row in range(count):
+            deviation += abs(points[row, column] - mean)
+        if deviation < DBL_EPSILON:
+            return False
+    return True
 
 
 #: The last image detected and what was found in it: an evaluation's floor recorder detects the
