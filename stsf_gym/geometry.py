@@ -64,8 +64,12 @@ def rot2(theta: ArrayLike) -> Array:
 def compose(a: ArrayLike, b: ArrayLike) -> Array:
     """``a (+) b``: pose ``b`` (given in frame ``a``) expressed in ``a``'s parent frame."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    xy = a[..., :2] + (rot2(a[..., 2]) @ b[..., :2, None])[..., 0]
-    return np.concatenate([xy, wrap_angle(a[..., 2] + b[..., 2])[..., None]], -1)
+    return _composed(a, b, (rot2(a[..., 2]) @ b[..., :2, None])[..., 0])
+
+
+def _composed(a: Array, b: Array, rb: Array) -> Array:
+    """:func:`compose` given ``rb``, b's offset rotated into a's parent frame."""
+    return np.concatenate([a[..., :2] + rb, wrap_angle(a[..., 2] + b[..., 2])[..., None]], -1)
 
 
 def inverse(a: ArrayLike) -> Array:
@@ -77,9 +81,19 @@ def inverse(a: ArrayLike) -> Array:
 
 def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[Array, Array]:
     """Jacobians ``(d(a (+) b)/da, d(a (+) b)/db)`` of :func:`compose`."""
+    return compose_with_jacobians(a, b)[1:]
+
+
+def compose_with_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[Array, Array, Array]:
+    """:func:`compose` and :func:`compose_jacobians` at once: ``a (+) b``, ``d/da``, ``d/db``."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     rot = rot2(a[..., 2])
     rb = (rot @ b[..., :2, None])[..., 0]  # b's offset, rotated into the parent
+    return (_composed(a, b, rb), *_compose_jacobians(rot, rb))
+
+
+def _compose_jacobians(rot: Array, rb: Array) -> tuple[Array, Array]:
+    """:func:`compose_jacobians` given a's rotation and b's rotated offset ``rb``."""
     shape = rb.shape[:-1]  # a's and b's leading axes, broadcast
     ja = np.zeros((*shape, 3, 3))
     ja.reshape(*shape, 9)[..., ::4] = 1.0  # the identity: every fourth of the nine entries
@@ -134,8 +148,8 @@ def to_se3(a: ArrayLike) -> Array:
 def compose_gaussian(a: ArrayLike, cov_a: ArrayLike, b: ArrayLike, cov_b: ArrayLike):
     """``a (+) b`` with first-order covariance ``J_a C_a J_a^T + J_b C_b J_b^T``
     (independent ``a`` and ``b``): e.g. an odometry increment added to a motion."""
-    j_a, j_b = compose_jacobians(a, b)
-    return compose(a, b), j_a @ np.asarray(cov_a) @ j_a.T + j_b @ np.asarray(cov_b) @ j_b.T
+    composed, j_a, j_b = compose_with_jacobians(a, b)
+    return composed, j_a @ np.asarray(cov_a) @ j_a.T + j_b @ np.asarray(cov_b) @ j_b.T
 
 
 @dataclass(frozen=True)

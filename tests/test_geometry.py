@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 from stsf_gym.geometry import (
     compose,
     compose_jacobians,
+    compose_with_jacobians,
     from_homogeneous,
     inverse,
     inverse_jacobian,
@@ -90,3 +91,14 @@ def test_functions_broadcast_over_stacks():
         np.testing.assert_allclose(j_b[i], compose_jacobians(a[i], b[i])[1])
         np.testing.assert_allclose(inverse_jacobian(a)[i], inverse_jacobian(a[i]))
     np.testing.assert_allclose(compose(a[0], b)[2], compose(a[0], b[2]))
+
+
+@given(SEEDS)
+@FAST
+def test_compose_with_jacobians_is_compose_and_its_jacobians_to_the_bit(seed):
+    rng = np.random.default_rng(seed)
+    for a, b in [(_poses(rng, 1)[0], _poses(rng, 1)[0]), (_poses(rng, 4), _poses(rng, 1)[0])]:
+        composed, j_a, j_b = compose_with_jacobians(a, b)
+        np.testing.assert_array_equal(composed, compose(a, b))
+        for joint, alone in zip((j_a, j_b), compose_jacobians(a, b), strict=True):
+            np.testing.assert_array_equal(joint, alone)

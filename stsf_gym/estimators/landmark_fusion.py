@@ -59,7 +59,7 @@ from stsf_gym.estimators.pair_range import matched_rays, pair_range, pair_ranges
 from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import ConventionalSettings, STSFSettings
 from stsf_gym.fusion import STSFTrack
-from stsf_gym.geometry import compose, compose_jacobians, to_se3, wrap_angle
+from stsf_gym.geometry import compose_with_jacobians, to_se3, wrap_angle
 from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
 
 
@@ -81,8 +81,7 @@ class _Seen:
     def move(self, u: np.ndarray, q_slip: np.ndarray, g_c: np.ndarray) -> None:
         """Compose one step's odometry increment ``u`` (slip covariance ``q_slip``, Jacobian
         ``g_c`` by ``c``) onto the motion."""
-        j_a, j_b = compose_jacobians(self.motion, u)
-        self.motion = compose(self.motion, u)
+        self.motion, j_a, j_b = compose_with_jacobians(self.motion, u)
         self.slip_cov = j_a @ self.slip_cov @ j_a.T + j_b @ q_slip @ j_b.T
         self.by_calibration = j_a @ self.by_calibration + j_b @ g_c
 

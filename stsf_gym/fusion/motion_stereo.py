@@ -30,6 +30,8 @@ which for one point is ``D = (ac + bd) / (a^2 + b^2)`` (eq. 20).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -86,46 +88,59 @@ def _validated_motion(R: ArrayLike, t: ArrayLike) -> tuple[Array, Array]:
 
 def _linear_system(
     qp: Array, qc: Array, R: Array, t: Array, n: Array
-) -> tuple[Array, Array, Array, Array, Array]:
-    """Rows ``(a, b)`` and ``(c, d)`` of eq. 16-18 per point, and the pieces they are built of.
+) -> tuple[Array, Array, _View, Array]:
+    """Rows ``(a, b)`` and ``(c, d)`` of eq. 16-18 per point, and the pieces they are built of
+    (the views' terms and ``r = R q_k``).
 
     With ``M = [[f', 0, -u'], [0, f', -v']]`` per point: ``(a, b) = M R q_k`` and
     ``(c, d) = -(n.q_k) M t``.
     """
-    M, nq = _view_terms(qp, qc, n)
+    view = _view_terms(qp, qc, n)
     r = qc @ R.T
-    A = np.einsum("iab,ib->ia", M, r)
-    B = -nq[:, None] * (M @ t)
-    return A, B, M, r, nq
+    A = np.einsum("iab,ib->ia", view.M, r)
+    B = -view.nq[:, None] * (view.M @ t)
+    return A, B, view, r
 
 
-def _view_terms(qp: Array, qc: Array, n: Array) -> tuple[Array, Array]:
-    """The parts of eq. 16-18 the motion does not enter: ``M`` per point and ``n.q_k``."""
+class _View(NamedTuple):
+    """The parts of eq. 16-20 the motion does not enter."""
+
+    M: Array  # (N, 2, 3): [[f', 0, -u'], [0, f', -v']] per point
+    nq: Array  # (N,): n.q_k
+    scale: float  # sqrt(sum |q_prev|^2 |q_k|^2), the parallax's normaliser
+    ray_in_plane: bool  # a viewing ray of frame k parallel to the plane (n.q_k = 0)
+
+
+def _view_terms(qp: Array, qc: Array, n: Array) -> _View:
+    """:class:`_View` of the two views' points and the plane normal."""
     f, u, v = qp[:, 2], qp[:, 0], qp[:, 1]
     zero = np.zeros_like(f)
     M = np.stack([np.stack([f, zero, -u], -1), np.stack([zero, f, -v], -1)], -2)
-    return M, qc @ n
+    nq = qc @ n
+    return _View(
+        M,
+        nq,
+        np.sqrt(np.sum(np.sum(qp**2, axis=1) * np.sum(qc**2, axis=1))),
+        bool((np.abs(nq) <= 1e-12 * np.linalg.norm(qc, axis=1)).any()),
+    )
 
 
-def _solve(
-    A: Array, B: Array, qp: Array, qc: Array, t: Array, nq: Array, min_parallax: float
-) -> float:
+def _solve(A: Array, B: Array, t: Array, view: _View, min_parallax: float) -> float:
     """Least-squares ``D`` of eq. 19, refusing degenerate geometry."""
     if not np.any(t):
         raise DegenerateGeometryError(
             "zero baseline (t = 0): a pure rotation shows no parallax, the range is unobservable"
         )
-    if (np.abs(nq) <= 1e-12 * np.linalg.norm(qc, axis=1)).any():
+    if view.ray_in_plane:
         raise DegenerateGeometryError("a viewing ray is parallel to the reference plane (n.q = 0)")
-    scale = np.sqrt(np.sum(np.sum(qp**2, axis=1) * np.sum(qc**2, axis=1)))
-    parallax = np.linalg.norm(A) / scale  # sine of the angle between the two rays
+    parallax = np.linalg.norm(A) / view.scale  # sine of the angle between the two rays
     if parallax < min_parallax:
         raise DegenerateGeometryError(
             f"the two viewing rays are parallel (parallax {parallax:.2e} < {min_parallax:.0e}): "
             "the baseline is zero or lies along the line of sight"
         )
     D = float(np.sum(A * B) / np.sum(A * A))
-    if (D / nq <= 0).any():
+    if (D / view.nq <= 0).any():
         raise DegenerateGeometryError(
             f"D = {D:.6g} puts a point at or behind camera k: the views are inconsistent "
             "or too close to degenerate"
@@ -157,8 +172,8 @@ def motion_stereo_range(
         ValueError: malformed inputs.
     """
     qp, qc, R, t, n = _validated(q_prev, q_curr, R, t, n)
-    A, B, _, _, nq = _linear_system(qp, qc, R, t, n)
-    return _solve(A.ravel(), B.ravel(), qp, qc, t, nq, min_parallax)
+    A, B, view, _ = _linear_system(qp, qc, R, t, n)
+    return _solve(A.ravel(), B.ravel(), t, view, min_parallax)
 
 
 def motion_stereo_ranges(
@@ -173,16 +188,16 @@ def motion_stereo_ranges(
     ``None`` where the geometry is degenerate, with the views checked and the terms of eq.
     16-18 that the motion does not enter built once (``R q_k`` too, while ``R`` repeats)."""
     qp, qc, n = _validated_rays(q_prev, q_curr, n)
-    M, nq = _view_terms(qp, qc, n)
+    view = _view_terms(qp, qc, n)
     ranges: list[float | None] = []
     rotated: tuple[Array, Array] | None = None  # the last R and its (a, b) rows
     for motion in motions:
         R, t = _validated_motion(*motion)
         if rotated is None or not np.array_equal(rotated[0], R):
-            rotated = R, np.einsum("iab,ib->ia", M, qc @ R.T)
-        B = -nq[:, None] * (M @ t)
+            rotated = R, np.einsum("iab,ib->ia", view.M, qc @ R.T)
+        B = -view.nq[:, None] * (view.M @ t)
         try:
-            ranges.append(_solve(rotated[1].ravel(), B.ravel(), qp, qc, t, nq, min_parallax))
+            ranges.append(_solve(rotated[1].ravel(), B.ravel(), t, view, min_parallax))
         except DegenerateGeometryError:
             ranges.append(None)
     return ranges
@@ -236,8 +251,9 @@ def motion_stereo_estimate(
     """:func:`motion_stereo_range`'s ``D`` and :func:`motion_stereo_variance`'s variance of it,
     from one solution of eq. 19 (the same numbers as the two calls, at half the cost)."""
     qp, qc, R, t, n = _validated(q_prev, q_curr, R, t, n)
-    A, B, M, r, nq = _linear_system(qp, qc, R, t, n)
-    D = _solve(A.ravel(), B.ravel(), qp, qc, t, nq, MIN_PARALLAX)
+    A, B, view, r = _linear_system(qp, qc, R, t, n)
+    D = _solve(A.ravel(), B.ravel(), t, view, MIN_PARALLAX)
+    M, nq = view.M, view.nq
     norm2 = np.sum(A * A)
     g_A = (B - 2.0 * D * A) / norm2  # dD/dA per point, (N, 2)
     g_B = A / norm2  # dD/dB per point, (N, 2)
