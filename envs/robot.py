@@ -184,6 +184,9 @@ class DiffDriveRobot:
         for wheel in self.wheels:
             c.changeDynamics(self.body, wheel, lateralFriction=cfg.wheel_friction)
         self.pan_tilt_limits = np.radians([cfg.pan_limit_deg, cfg.tilt_limit_deg])
+        # the motors' last targets: PyBullet keeps a target until told another, so the same
+        # one again (most of a step's six substeps, the ramp over) need not be sent
+        self._sent: dict[str, list[float]] = {}
 
     def reset(self, pose: tuple[float, float, float], pan: float, tilt: float) -> None:
         """Place the robot at floor pose (x, y, yaw), at rest, with the mount at (pan, tilt)."""
@@ -197,6 +200,7 @@ class DiffDriveRobot:
             c.resetJointState(self.body, joint, 0.0, 0.0)
         for joint, angle in zip(self.pan_tilt, (pan, tilt), strict=True):
             c.resetJointState(self.body, joint, angle, 0.0)
+        self._sent.clear()
         self.drive(0.0, 0.0)
         self.point_camera(pan, tilt)
 
@@ -219,6 +223,9 @@ class DiffDriveRobot:
         """Command forward speed ``v`` (m/s) and yaw rate ``w`` (rad/s) to the wheel motors."""
         half_b, r = self.cfg.wheelbase / 2, self.cfg.wheel_radius
         targets = [(v - w * half_b) / r, (v + w * half_b) / r]
+        if self._sent.get("wheels") == targets:
+            return
+        self._sent["wheels"] = targets
         self.sim.client.setJointMotorControlArray(
             self.body,
             self.wheels,
@@ -229,12 +236,15 @@ class DiffDriveRobot:
 
     def point_camera(self, pan: float, tilt: float) -> None:
         """Servo the mount to (pan, tilt) radians, clipped to its limits."""
-        targets = bounded([pan, tilt], -self.pan_tilt_limits, self.pan_tilt_limits)
+        targets = bounded([pan, tilt], -self.pan_tilt_limits, self.pan_tilt_limits).tolist()
+        if self._sent.get("mount") == targets:
+            return
+        self._sent["mount"] = targets
         self.sim.client.setJointMotorControlArray(
             self.body,
             self.pan_tilt,
             self.sim.client.POSITION_CONTROL,
-            targetPositions=targets.tolist(),
+            targetPositions=targets,
             forces=[50.0, 50.0],
         )
 
