@@ -61,6 +61,7 @@ class SonarAvoidance:
     ) -> None:
         self.cfg = cfg
         self.axes = np.arange(sonar_count) * math.tau / sonar_count
+        self._axis_units = np.column_stack([np.cos(self.axes), np.sin(self.axes)])
         self.body_radius, self.max_range = body_radius, max_range
         self.lane_half_width = body_radius + cfg.margin
         step = math.radians(cfg.step_deg)
@@ -74,7 +75,7 @@ class SonarAvoidance:
             raise ValueError(f"expected {len(self.axes)} sonar ranges, got shape {ranges.shape}")
         hit = ranges < self.max_range
         distance = ranges[hit] + self.body_radius
-        return distance[:, None] * np.column_stack([np.cos(self.axes[hit]), np.sin(self.axes[hit])])
+        return distance[:, None] * self._axis_units[hit]
 
     def free_distance(self, points: np.ndarray, headings: float | np.ndarray) -> np.ndarray:
         """Distance (m, capped at ``horizon``) the widened robot drives along each heading."""

@@ -3,6 +3,7 @@ and the two success protocols (``task.protocol``: ``reach``, the paper's, or ``d
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 
@@ -23,6 +24,7 @@ class Polyline:
         if np.any(self.lengths <= 0):
             raise ValueError(f"path has repeated points: {points!r}")
         self.offsets = np.concatenate([[0.0], np.cumsum(self.lengths)])
+        self._offsets = self.offsets.tolist()  # for bisect: np.searchsorted's answers, cheaper
         self._segments = [  # start, vector, length, its square, arc length at the start
             (tuple(start), tuple(vector), length, length * length, offset)
             for start, vector, length, offset in zip(
@@ -64,8 +66,8 @@ class Polyline:
         return float(np.arctan2(dy, dx))
 
     def _segment(self, s: float) -> tuple[float, int]:
-        s = float(np.clip(s, 0.0, self.length))
-        i = min(int(np.searchsorted(self.offsets, s, side="right")) - 1, len(self.lengths) - 1)
+        s = float(min(max(s, 0.0), self._offsets[-1]))  # np.clip's result, NaN kept
+        i = min(bisect.bisect_right(self._offsets, s) - 1, len(self.lengths) - 1)
         return s, i
 
 
