@@ -10,7 +10,7 @@ from stsf_gym.envs.config import ConfigError, SonarConfig
 from stsf_gym.envs.sensors.plane_cast import PlaneCaster
 from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
-from stsf_gym.geometry import bounded
+from stsf_gym.geometry import bounded, compiled
 
 
 class SonarRing:
@@ -97,12 +97,38 @@ class SonarRing:
             ranges = corrupt(ranges, which, cfg.count, limits, cfg.beam, simultaneous, rng)
         else:
             ranges = self.true_ranges(sim, pose, transducers)
-        count = len(ranges)
-        hit = ranges < cfg.max_range
-        noisy = ranges + rng.normal(size=count) * (cfg.noise_std + cfg.noise_std_per_m * ranges)
-        noisy = np.where(hit, noisy, cfg.max_range)
-        noisy[rng.random(count) < cfg.dropout_prob] = cfg.max_range
-        return bounded(noisy, cfg.min_range, cfg.max_range).astype(np.float32)
+        normal = rng.normal(size=len(ranges))
+        dropped = rng.random(len(ranges)) < cfg.dropout_prob
+        noise = (cfg.noise_std, cfg.noise_std_per_m)
+        return _readings(ranges, normal, dropped, *noise, cfg.min_range, cfg.max_range)
+
+
+@compiled
+def _readings(
+    ranges: np.ndarray,
+    normal: np.ndarray,
+    dropped: np.ndarray,
+    noise_std: float,
+    noise_std_per_m: float,
+    min_range: float,
+    max_range: float,
+) -> np.ndarray:
+    """Float32 readings of ``ranges``: a hit (nearer than ``max_range``) plus ``normal`` times
+    the noise at its range, a miss or a ``dropped`` reading ``max_range``, then clipped to
+    [min_range, max_range] (a NaN kept): the numpy ``where``, ``bounded`` and ``astype``'s
+    answers."""
+    readings = np.empty(len(ranges), np.float32)
+    for i in range(len(ranges)):
+        r = ranges[i]
+        value = r + normal[i] * (noise_std + noise_std_per_m * r) if r < max_range else max_range
+        if dropped[i]:
+            value = max_range
+        if value < min_range:
+            value = min_range
+        if value > max_range:
+            value = max_range
+        readings[i] = value
+    return readings
 
 
 def _bullet_cast(

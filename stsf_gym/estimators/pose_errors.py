@@ -60,6 +60,7 @@ class PoseErrors:
         self.joint = np.zeros((3 + k, 3 + k))
         self.joint[self.considered, self.considered] = considered_cov
         self.keys: list[Hashable] = []
+        self._predictions: dict[int, tuple[np.ndarray, ...]] = {}  # by size, :meth:`_prediction`
         #: ``(nu^T S^-1 nu, len(nu))`` of every innovation tested, gated out or not (NIS).
         self.nis: list[tuple[float, int]] = []
         self.restart(cov)
@@ -88,16 +89,25 @@ class PoseErrors:
 
     def predict(self, F: np.ndarray, Q: np.ndarray, G_c: np.ndarray) -> None:
         """One odometry step: ``F``, slip noise ``Q = G N G^T`` and calibration Jacobian ``G_c``."""
-        size, G_c = len(self.joint), self._considered(G_c)
-        # the rows of e and of every eps_j, as (pose, 3, 1) index blocks
-        starts = np.array([0, *range(self.first_pose, size, 3)])
-        rows = starts[:, None, None] + AXES[:, None]
-        T, B = np.eye(size), np.zeros((size, 3))
+        T, B, rows, by_calibration = self._prediction(len(self.joint))
         T[rows, rows.transpose(0, 2, 1)] = F
-        T[rows, np.arange(self.considered.start, self.considered.stop)] = G_c
-        B[rows, AXES] = np.eye(3)
+        T[rows, by_calibration[: G_c.shape[1]]] = G_c
         joint = T @ self.joint @ T.T + B @ Q @ B.T
         self.joint = 0.5 * (joint + joint.T)
+
+    def _prediction(self, size: int) -> tuple[np.ndarray, ...]:
+        """For a joint of ``size``: ``T`` (the identity, its ``F`` and ``G_c`` blocks rewritten
+        by every prediction, the zero padding of ``G_c`` to all considered parameters kept),
+        ``B`` (the identity in the rows of ``e`` and of every ``eps_j``), those rows as
+        (pose, 3, 1) index blocks, and the considered parameters' columns; made once a size."""
+        if size not in self._predictions:
+            starts = np.array([0, *range(self.first_pose, size, 3)])
+            rows = starts[:, None, None] + AXES[:, None]
+            B = np.zeros((size, 3))
+            B[rows, AXES] = np.eye(3)
+            by_calibration = np.arange(self.considered.start, self.considered.stop)
+            self._predictions[size] = (np.eye(size), B, rows, by_calibration)
+        return self._predictions[size]
 
     def add(self, key: Hashable, cov: np.ndarray, by_considered: np.ndarray) -> None:
         """A carried pose whose error is independent noise (``cov``) plus
