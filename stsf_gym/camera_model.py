@@ -107,9 +107,14 @@ class CameraCalibration:
         d = distort(xy, self.dist) if self.distorted else xy
         return d @ self.K[:2, :2].T + self.K[:2, 2]
 
+    @functools.cached_property
+    def _pixels_to_normalised(self) -> np.ndarray:
+        """The transpose of ``K[:2, :2]``'s inverse (pixels to normalised), computed once."""
+        return np.linalg.inv(self.K[:2, :2]).T
+
     def to_normalised(self, uv: np.ndarray) -> np.ndarray:
         """Undistorted normalised coordinates of pixels (..., 2)."""
-        d = (np.asarray(uv, float) - self.K[:2, 2]) @ np.linalg.inv(self.K[:2, :2]).T
+        d = (np.asarray(uv, float) - self.K[:2, 2]) @ self._pixels_to_normalised
         return undistort(d, self.dist) if self.distorted else d
 
     def undistort_pixels(self, uv: np.ndarray) -> np.ndarray:

@@ -48,12 +48,17 @@ def bounded(values: ArrayLike, low: ArrayLike, high: ArrayLike) -> NDArray:
 
 def wrap_angle(angle: ArrayLike) -> Array:
     """Wrap angles (radians) to the half-open interval ``(-pi, pi]``."""
+    if isinstance(angle, float):  # one angle: Python's float modulo is np.mod's, to the bit
+        return np.float64(math.pi - (math.pi - angle) % math.tau)
     angle = np.asarray(angle, dtype=float)
     return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
 
 
 def rot2(theta: ArrayLike) -> Array:
     """Rotation matrix ``R(theta) = [[c, -s], [s, c]]``, shape ``(..., 2, 2)``."""
+    if isinstance(theta, float):  # one angle: the same ufuncs, the matrix written out
+        c, s = np.cos(theta), np.sin(theta)
+        return np.array([[c, -s], [s, c]])
     theta = np.asarray(theta, dtype=float)
     c, s = np.cos(theta), np.sin(theta)
     rot = np.empty((*theta.shape, 2, 2))
@@ -69,6 +74,11 @@ def compose(a: ArrayLike, b: ArrayLike) -> Array:
 
 def _composed(a: Array, b: Array, rb: Array) -> Array:
     """:func:`compose` given ``rb``, b's offset rotated into a's parent frame."""
+    if a.ndim == b.ndim == 1:  # one pose each: filled, not concatenated
+        composed = np.empty(3)
+        composed[:2] = a[:2] + rb
+        composed[2] = wrap_angle(float(a[2] + b[2]))
+        return composed
     return np.concatenate([a[..., :2] + rb, wrap_angle(a[..., 2] + b[..., 2])[..., None]], -1)
 
 
@@ -94,6 +104,10 @@ def compose_with_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[Array, Array, Ar
 
 def _compose_jacobians(rot: Array, rb: Array) -> tuple[Array, Array]:
     """:func:`compose_jacobians` given a's rotation and b's rotated offset ``rb``."""
+    if rb.ndim == 1:  # one pose: written out
+        ja = np.array([[1.0, 0.0, -rb[1]], [0.0, 1.0, rb[0]], [0.0, 0.0, 1.0]])
+        jb = np.array([[rot[0, 0], rot[0, 1], 0.0], [rot[1, 0], rot[1, 1], 0.0], [0.0, 0.0, 1.0]])
+        return ja, jb
     shape = rb.shape[:-1]  # a's and b's leading axes, broadcast
     ja = np.zeros((*shape, 3, 3))
     ja.reshape(*shape, 9)[..., ::4] = 1.0  # the identity: every fourth of the nine entries

@@ -102,3 +102,23 @@ def test_compose_with_jacobians_is_compose_and_its_jacobians_to_the_bit(seed):
         np.testing.assert_array_equal(composed, compose(a, b))
         for joint, alone in zip((j_a, j_b), compose_jacobians(a, b), strict=True):
             np.testing.assert_array_equal(joint, alone)
+
+
+@given(SEEDS)
+@FAST
+def test_one_pose_gives_its_row_of_a_stack_to_the_bit(seed):
+    """The single-pose paths (a float angle, one pose each) written out for speed give what the
+    stacked numpy path gives each row, to the last bit, edge angles included."""
+    rng = np.random.default_rng(seed)
+    a, b = _poses(rng, 8), _poses(rng, 8)
+    a[:4, 2] = [np.pi, -np.pi, 0.0, -0.0]
+    b[:4, 2] = [np.pi, np.pi, -0.0, 3 * np.pi]
+    composed, j_a, j_b = compose_with_jacobians(a, b)
+    angles = a[:, 2] + b[:, 2]
+    for i in range(len(a)):
+        one, one_a, one_b = compose_with_jacobians(a[i], b[i])
+        for row, single in ((composed, one), (j_a, one_a), (j_b, one_b)):
+            assert row[i].tobytes() == single.tobytes()
+        assert rot2(a[:, 2])[i].tobytes() == rot2(float(a[i, 2])).tobytes()
+        assert wrap_angle(angles)[i].tobytes() == wrap_angle(float(angles[i])).tobytes()
+    assert np.isnan(wrap_angle(float("nan"))) and np.isnan(wrap_angle(float("inf")))
