@@ -62,3 +62,27 @@ def test_tick_deltas_are_quantised_and_sum_exactly(make_env):
     angles = env.unwrapped.robot.wheel_angles()
     expected = np.floor(angles * env.unwrapped.odometry_calibration.ticks_per_rev / (2 * math.pi))
     np.testing.assert_array_equal(total, expected)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_tick_kernel_is_the_numpy_expressions_of_both_wheels(seed):
+    """The compiled tick count gives, to the bit, the array expressions it replaced: rotation,
+    slip, counts and the whole ticks crossed, over many reads of rotations either way."""
+    from stsf_gym.envs.sensors.encoders import _ticks
+
+    rng = np.random.default_rng(seed)
+    slip_std, ticks_per_rev = 0.01, 360
+    counts, last = rng.uniform(-50, 50, 2), rng.uniform(-3, 3, 2)
+    expected_counts = counts.copy()
+    for _ in range(50):
+        angles, normal = last + rng.normal(0, 0.3, 2), rng.normal(size=2)
+        rotation = angles - last
+        slip = normal * slip_std * np.sqrt(np.abs(rotation))
+        before = np.floor(expected_counts)
+        expected_counts += (rotation + slip) * ticks_per_rev / (2 * math.pi)
+        expected = (np.floor(expected_counts) - before).astype(np.int64)
+        got = _ticks(angles, last, counts, normal, slip_std, ticks_per_rev)
+        assert got.dtype == np.int64
+        np.testing.assert_array_equal(got, expected)
+        np.testing.assert_array_equal(counts, expected_counts)
+        last = angles

@@ -1,10 +1,12 @@
-"""The sonar's compiled kernels give, to the bit, the numpy expressions their docstrings name,
-on random readings with misses, NaNs, readings below the minimum range and partial rings."""
+"""The compiled kernels of the sonar and its plane cast give, to the bit, the numpy
+expressions their docstrings name, on random readings with misses, NaNs, readings below the
+minimum range and partial rings."""
 
 import numpy as np
 import pytest
 
-from stsf_gym.envs.sensors.sonar import _readings
+from stsf_gym.envs.sensors.plane_cast import _hit_fractions
+from stsf_gym.envs.sensors.sonar import _incidence_cosines, _readings
 from stsf_gym.envs.sensors.sonar_beam import (
     NEIGHBOUR_SIDES,
     NO_DRAWS,
@@ -64,3 +66,22 @@ def test_readings_are_noise_where_clip_and_float32(seed):
     got = _readings(ranges, normal, dropped, 0.02, 0.01, MIN_RANGE, MAX_RANGE)
     assert got.dtype == np.float32
     np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_hit_fractions_and_incidence_cosines_are_their_numpy_expressions(seed):
+    rng = np.random.default_rng(seed)
+    t = rng.uniform(0.0, 2 * MAX_RANGE, 40)
+    t[rng.random(40) < 0.2] = np.inf
+    t[rng.random(40) < 0.05] = np.nan
+    normals = rng.normal(size=(40, 2))
+    normals /= np.hypot(*normals.T)[:, None]
+    expected_normals = np.where((t <= MAX_RANGE)[:, None], normals, 0.0)
+    expected = np.where(t <= MAX_RANGE, t / MAX_RANGE, 1.0)
+    got = _hit_fractions(t, normals, MAX_RANGE)
+    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(normals, expected_normals)
+    directions = 1.0000001 * rng.normal(size=(40, 2))  # products a little past +-1 are clipped
+    expected_angles = np.arccos(bounded(-np.sum(normals * directions, axis=1), -1.0, 1.0))
+    angles = np.arccos(_incidence_cosines(normals, directions))
+    np.testing.assert_array_equal(angles, expected_angles)

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from stsf_gym.envs.config import ConfigError, EncoderConfig
-from stsf_gym.geometry import OdometryCalibration
+from stsf_gym.geometry import OdometryCalibration, compiled
 
 
 class WheelEncoders:
@@ -47,9 +47,38 @@ class WheelEncoders:
 
     def read(self, wheel_angles: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Tick deltas (int64 [left, right]) since the previous read."""
-        rotation = np.asarray(wheel_angles, dtype=float) - self._last_angles
-        self._last_angles = np.array(wheel_angles, dtype=float)
-        slip = rng.normal(size=2) * self.cfg.slip_std * np.sqrt(np.abs(rotation))
-        before = np.floor(self._counts)
-        self._counts += (rotation + slip) * self.cfg.ticks_per_rev / (2 * math.pi)
-        return (np.floor(self._counts) - before).astype(np.int64)
+        angles = np.array(wheel_angles, dtype=float)
+        cfg = self.cfg
+        ticks = _ticks(
+            angles,
+            self._last_angles,
+            self._counts,
+            rng.normal(size=2),
+            cfg.slip_std,
+            cfg.ticks_per_rev,
+        )
+        self._last_angles = angles
+        return ticks
+
+
+@compiled
+def _ticks(
+    angles: np.ndarray,
+    last_angles: np.ndarray,
+    counts: np.ndarray,
+    normal: np.ndarray,
+    slip_std: float,
+    ticks_per_rev: int,
+) -> np.ndarray:
+    """Each wheel's rotation since ``last_angles``, plus slip (``normal`` times ``slip_std``
+    times the square root of the rotation's size), counted onto ``counts`` (in place) in
+    ticks; the whole ticks crossed, as int64: the numpy expressions of one wheel each, in the
+    same order."""
+    ticks = np.empty(len(angles), np.int64)
+    for i in range(len(angles)):
+        rotation = angles[i] - last_angles[i]
+        slip = normal[i] * slip_std * np.sqrt(np.abs(rotation))
+        before = np.floor(counts[i])
+        counts[i] += (rotation + slip) * ticks_per_rev / (2 * math.pi)
+        ticks[i] = np.int64(np.floor(counts[i]) - before)
+    return ticks

@@ -59,9 +59,7 @@ class PlaneCaster:
             _edge_hits(edges, starts, directions, t, normals)
         if len(self._circles):
             _circle_hits(self._circles, starts, directions, t, normals)
-        hit = t <= length
-        fractions = np.where(hit, t / length, 1.0)
-        return fractions, np.where(hit[:, None], normals, 0.0)
+        return _hit_fractions(t, normals, length), normals
 
     def _reachable(self, centre: np.ndarray, reach: float) -> np.ndarray:
         """Edges, in their order, among which are all a ray from within ``reach`` of
@@ -105,6 +103,19 @@ class PlaneCaster:
         self._selection = None
         self._circles = np.array(circles, dtype=float).reshape(-1, 3)
         self._built = (id(scene), scene.version)
+
+
+@compiled
+def _hit_fractions(t: np.ndarray, normals: np.ndarray, length: float) -> np.ndarray:
+    """Each ray's hit as a fraction of ``length``, 1 where it met nothing within it (its normal
+    then zeroed in place): ``np.where(t <= length, t / length, 1.0)``."""
+    fractions = np.ones(len(t))
+    for i in range(len(t)):
+        if t[i] <= length:
+            fractions[i] = t[i] / length
+        else:
+            normals[i, 0], normals[i, 1] = 0.0, 0.0
+    return fractions
 
 
 @compiled

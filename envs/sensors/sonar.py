@@ -10,7 +10,7 @@ from stsf_gym.envs.config import ConfigError, SonarConfig
 from stsf_gym.envs.sensors.plane_cast import PlaneCaster
 from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
-from stsf_gym.geometry import bounded, compiled
+from stsf_gym.geometry import compiled
 
 
 class SonarRing:
@@ -68,7 +68,7 @@ class SonarRing:
         else:
             ends = starts + self.cfg.max_range * self._directions[rays] @ rotation.T
             fractions, normals = _bullet_cast(sim, starts, ends, self.cfg.height)
-        incidence = np.arccos(bounded(-np.sum(normals * directions, axis=1), -1.0, 1.0))
+        incidence = np.arccos(_incidence_cosines(normals, directions))
         shape = (-1, self.cfg.rays_per_beam)
         return fractions.reshape(shape), incidence.reshape(shape)
 
@@ -101,6 +101,18 @@ class SonarRing:
         dropped = rng.random(len(ranges)) < cfg.dropout_prob
         noise = (cfg.noise_std, cfg.noise_std_per_m)
         return _readings(ranges, normal, dropped, *noise, cfg.min_range, cfg.max_range)
+
+
+@compiled
+def _incidence_cosines(normals: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Cosine of each ray's angle to the normal of the surface it hit (0 without a hit),
+    within [-1, 1] (a NaN kept): ``bounded(-np.sum(normals * directions, axis=1), -1, 1)``, up
+    to the sign of a zero, which ``arccos`` does not see."""
+    cosines = np.empty(len(normals))
+    for i in range(len(normals)):
+        cosine = -(normals[i, 0] * directions[i, 0] + normals[i, 1] * directions[i, 1])
+        cosines[i] = min(max(cosine, -1.0), 1.0) if cosine == cosine else cosine
+    return cosines
 
 
 @compiled
