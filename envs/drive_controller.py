@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from stsf_gym.envs.config import RobotConfig
+from stsf_gym.geometry import clamp
 
 
 class VelocityController:
@@ -38,12 +39,7 @@ class VelocityController:
             self.max_acceleration,
         )
         self._command = (
-            v + _clip(_clip(float(target[0]), v_max) - v, a_v * dt),
-            w + _clip(_clip(float(target[1]), w_max) - w, a_w * dt),
+            v + clamp(clamp(float(target[0]), v_max) - v, a_v * dt),
+            w + clamp(clamp(float(target[1]), w_max) - w, a_w * dt),
         )
         return self._command
-
-
-def _clip(value: float, bound: float) -> float:
-    """``value`` within ``[-bound, bound]``: ``np.clip``'s result to the bit, NaN kept."""
-    return min(max(value, -bound), bound)

@@ -19,7 +19,7 @@ import numpy as np
 from stsf_gym.camera_model import LINK_FROM_OPTICAL, PanTiltMount, pose_matrix, rot_z
 from stsf_gym.envs.config import RobotConfig
 from stsf_gym.envs.simulator import Simulator, cache_file
-from stsf_gym.geometry import bounded
+from stsf_gym.geometry import clamp
 
 CASTER_FRACTION = 0.45  # caster sphere radius as a fraction of the wheel radius
 BODY_CLEARANCE = 0.05  # floor to body bottom (m)
@@ -236,7 +236,8 @@ class DiffDriveRobot:
 
     def point_camera(self, pan: float, tilt: float) -> None:
         """Servo the mount to (pan, tilt) radians, clipped to its limits."""
-        targets = bounded([pan, tilt], -self.pan_tilt_limits, self.pan_tilt_limits).tolist()
+        pan_limit, tilt_limit = self.pan_tilt_limits.tolist()
+        targets = [clamp(float(pan), pan_limit), clamp(float(tilt), tilt_limit)]
         if self._sent.get("mount") == targets:
             return
         self._sent["mount"] = targets

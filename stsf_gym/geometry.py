@@ -46,6 +46,12 @@ def bounded(values: ArrayLike, low: ArrayLike, high: ArrayLike) -> NDArray:
     return np.minimum(np.maximum(values, low), high)
 
 
+def clamp(value: float, bound: float) -> float:
+    """One float within ``[-bound, bound]``: ``np.clip``'s result to the bit, NaN kept, without
+    an array's call overhead."""
+    return min(max(value, -bound), bound)
+
+
 def wrap_angle(angle: ArrayLike) -> Array:
     """Wrap angles (radians) to the half-open interval ``(-pi, pi]``."""
     if isinstance(angle, float):  # one angle: Python's float modulo is np.mod's, to the bit

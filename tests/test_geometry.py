@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from stsf_gym.geometry import (
+    clamp,
     compose,
     compose_jacobians,
     compose_with_jacobians,
@@ -122,3 +123,10 @@ def test_one_pose_gives_its_row_of_a_stack_to_the_bit(seed):
         assert rot2(a[:, 2])[i].tobytes() == rot2(float(a[i, 2])).tobytes()
         assert wrap_angle(angles)[i].tobytes() == wrap_angle(float(angles[i])).tobytes()
     assert np.isnan(wrap_angle(float("nan"))) and np.isnan(wrap_angle(float("inf")))
+
+
+@given(st.floats(allow_nan=True, allow_infinity=True), st.floats(0.0, 1e3))
+@FAST
+def test_clamp_is_np_clip_to_the_bit(value, bound):
+    expected = np.clip(np.float64(value), -bound, bound)
+    assert np.float64(clamp(value, bound)).tobytes() == expected.tobytes()

@@ -77,14 +77,15 @@ def odometry_step(
     c, s = math.cos(mid), math.sin(mid)
     F = np.array([[1.0, 0.0, -distance * s], [0.0, 1.0, distance * c], [0.0, 0.0, 1.0]])
     k = distance / (2 * wheelbase)
-    G = np.array(
-        [
-            [c / 2 + k * s, c / 2 - k * s],
-            [s / 2 - k * c, s / 2 + k * c],
-            [-1 / wheelbase, 1 / wheelbase],
-        ]
+    by_travel = (
+        (c / 2 + k * s, c / 2 - k * s),
+        (s / 2 - k * c, s / 2 + k * c),
+        (-1 / wheelbase, 1 / wheelbase),
     )
-    by_turn = np.array([-distance * s / 2, distance * c / 2, 1.0])
-    G_c = np.empty((3, 3))
-    G_c[:, 0], G_c[:, 1], G_c[:, 2] = G[:, 0] * d_left, G[:, 1] * d_right, -turn * by_turn
-    return integrate_wheel_travel(pose, d_left, d_right, wheelbase), F, G, G_c
+    by_turn = (-distance * s / 2, distance * c / 2, 1.0)
+    G_c = [
+        (left * d_left, right * d_right, -turn * along)
+        for (left, right), along in zip(by_travel, by_turn, strict=True)
+    ]
+    pose_after = integrate_wheel_travel(pose, d_left, d_right, wheelbase)
+    return pose_after, F, np.array(by_travel), np.array(G_c)
