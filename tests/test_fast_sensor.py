@@ -8,7 +8,11 @@ import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-from stsf_gym.envs.sensors.fast_camera import apparent_size_px, detection_probability
+from stsf_gym.envs.sensors.fast_camera import (
+    apparent_size_px,
+    board_sizes_px,
+    detection_probability,
+)
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.detector_views import detection_records, room_world, summarise_records
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
@@ -137,3 +141,25 @@ def test_stsf_in_fast_mode_matches_the_paper_target_on_the_straight_run():
     assert max(after_5m) < 0.10
     assert result.frames_matched > 0.9 * result.frames
     assert math.isfinite(result.nees)
+
+
+def test_boards_in_view_give_each_boards_own_projection_to_the_bit(make_env):
+    """The corners the view test projects together are reused for the boards' sizes: each
+    board's pixels must be what projecting it alone gives, to the bit, along a drive."""
+    env = make_env("stsf_gym/Corridor-v0", camera__mode="fast")
+    _, info = env.reset(seed=1)
+    u = env.unwrapped
+    seen = 0
+    for _ in range(40):
+        pose = info["camera_pose"]
+        ids, corners_uv = u.world.boards_in_view(u.camera, pose)
+        assert ids == u.landmarks_in_view(pose) and corners_uv.shape == (len(ids), 4, 2)
+        for landmark_id, uv in zip(ids, corners_uv, strict=True):
+            landmark = next(lm for lm in u.landmarks if lm.id == landmark_id)
+            alone = u.camera.project(pose, landmark.board_corners)
+            assert uv.tobytes() == alone.tobytes()
+            size = apparent_size_px(u.camera, pose, landmark.board_corners)
+            assert board_sizes_px(uv[None])[0] == size
+        seen += len(ids)
+        *_, info = env.step(np.array([0.6, 0.1], np.float32))
+    assert seen > 0

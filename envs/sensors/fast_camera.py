@@ -53,9 +53,15 @@ def apparent_size_px(camera: PinholeCamera, world_from_camera: np.ndarray, corne
     board's corners (4, 3), an array (N,) for N boards' (N, 4, 3), projected at once."""
     corners = np.asarray(corners, float)
     uv = camera.project(world_from_camera, corners.reshape(-1, 3)).reshape(-1, 4, 2)
-    sides = np.linalg.norm(uv - uv[:, NEXT_CORNER], axis=2)  # top, right, bottom, left
-    sizes = np.minimum(sides[:, 0] + sides[:, 2], sides[:, 1] + sides[:, 3]) / 2
+    sizes = board_sizes_px(uv)
     return float(sizes[0]) if corners.ndim == 2 else sizes
+
+
+def board_sizes_px(corners_uv: np.ndarray) -> np.ndarray:
+    """The shorter of each board's mean width and height (pixels), (N,), from its corners in
+    the image (N, 4, 2)."""
+    sides = np.linalg.norm(corners_uv - corners_uv[:, NEXT_CORNER], axis=2)  # t, r, b, l
+    return np.minimum(sides[:, 0] + sides[:, 2], sides[:, 1] + sides[:, 3]) / 2
 
 
 def detection_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.ndarray:
@@ -114,10 +120,12 @@ class SimulatedDetector:
         """Detect the boards in view from the camera pose ``pose`` (4x4), and the ones the
         track-aided matcher could find.
         """
-        visible = self.world.landmarks_in_view(self.camera, pose)
-        self.frame = self.detect(pose, visible, rng)
+        visible, corners_uv = self.world.boards_in_view(self.camera, pose)
+        sizes = dict(zip(visible, board_sizes_px(corners_uv).tolist(), strict=True))
+        self.frame = self.detect(pose, sizes, rng)
         found = set(self.frame[0].tolist())
-        self.aided = self.findable(pose, [i for i in visible if i not in found], self.aided_rng)
+        missed = {i: size for i, size in sizes.items() if i not in found}
+        self.aided = self.findable(pose, missed, self.aided_rng)
 
     def observe(self) -> dict[str, np.ndarray]:
         """The last frame's observation keys."""
@@ -130,12 +138,12 @@ class SimulatedDetector:
         }
 
     def findable(
-        self, world_from_camera: np.ndarray, missed_ids: list[int], rng: np.random.Generator
+        self, world_from_camera: np.ndarray, missed: dict[int, float], rng: np.random.Generator
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The boards in view the detector missed that a track-aided search would find."""
+        """The boards in view the detector missed (id: apparent size in pixels, in view order)
+        that a track-aided search would find."""
         found = []
-        sizes = self._sizes(world_from_camera, missed_ids)
-        for landmark_id, size in zip(missed_ids, sizes, strict=True):
+        for landmark_id, size in missed.items():
             landmark = self.landmarks[landmark_id]
             if rng.random() < aided_probability(size, self.cfg):
                 found.append(
@@ -151,12 +159,12 @@ class SimulatedDetector:
         )
 
     def detect(
-        self, world_from_camera: np.ndarray, visible_ids: list[int], rng: np.random.Generator
+        self, world_from_camera: np.ndarray, visible: dict[int, float], rng: np.random.Generator
     ) -> tuple[np.ndarray, np.ndarray]:
-        """``(landmark_ids, landmark_points)`` of one frame; ``visible_ids`` from ray tests."""
+        """``(landmark_ids, landmark_points)`` of one frame; ``visible`` from ray tests (id:
+        apparent size in pixels, in view order)."""
         found = []
-        sizes = self._sizes(world_from_camera, visible_ids)
-        for landmark_id, size in zip(visible_ids, sizes, strict=True):
+        for landmark_id, size in visible.items():
             landmark = self.landmarks[landmark_id]
             if rng.random() < detection_probability(size, self.cfg):
                 found.append(
@@ -165,13 +173,6 @@ class SimulatedDetector:
         for _ in range(rng.poisson(self.cfg.false_detection_rate)):
             found.append(self._phantom(rng))
         return self._slots(found, rng)
-
-    def _sizes(self, world_from_camera: np.ndarray, landmark_ids: list[int]) -> list[float]:
-        """The apparent sizes (pixels) of these landmarks' boards, projected at once."""
-        if not landmark_ids:
-            return []
-        corners = np.array([self.landmarks[i].board_corners for i in landmark_ids])
-        return apparent_size_px(self.camera, world_from_camera, corners).tolist()
 
     def _slots(self, found: list, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """Slots of ``(id, true pixels)`` pairs, the pixels with the detector's noise."""

@@ -25,6 +25,9 @@ from stsf_gym.vision.landmarks import (
 WALL_RGBA = (0.78, 0.76, 0.72, 1.0)
 FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
 OBSTACLE_RGBA = (0.55, 0.35, 0.2, 1.0)
+#: no board's corners (0 boards, 4 corners, 2 pixel coordinates)
+NO_CORNERS = np.zeros((0, 4, 2))
+NO_CORNERS.setflags(write=False)
 RAY_CLEARANCE = 0.1  # m
 BOARD_OFFSET = 0.02  # landmark board in front of the wall face (m), clear of depth fighting
 
@@ -108,6 +111,14 @@ class CorridorWorld:
     def landmarks_in_view(self, camera: PinholeCamera, pose: np.ndarray) -> list[int]:
         """Ids of landmarks wholly inside the frame of ``camera`` at world-from-camera
         ``pose``, facing it, present (a fault may remove one) and not occluded."""
+        return self.boards_in_view(camera, pose)[0]
+
+    def boards_in_view(
+        self, camera: PinholeCamera, pose: np.ndarray
+    ) -> tuple[list[int], np.ndarray]:
+        """:meth:`landmarks_in_view`'s ids, and their boards' corners in the image (N, 4, 2) as
+        ``camera.project`` gives them (a point's pixels do not depend on the others projected
+        with it)."""
         eye = pose[:3, 3]
         facing = np.einsum("ij,ij->i", self._normals, eye - self._centres) > 0
         near = np.linalg.norm(self._centres - eye, axis=1) < camera.far
@@ -117,20 +128,22 @@ class CorridorWorld:
             if self.board_visible(self.boards[self.landmarks[k].id])
         ]
         if not shown:
-            return []
+            return [], NO_CORNERS
         # every shown board's corners projected at once
         uv = camera.project(pose, self._corners[shown].reshape(-1, 3)).reshape(-1, 4, 2)
         limit = (camera.width - 0.5, camera.height - 0.5)
-        inside = np.all((uv >= -0.5) & (uv <= limit), axis=(1, 2))
-        candidates = [self.landmarks[k] for k, ok in zip(shown, inside.tolist(), strict=True) if ok]
-        if not candidates:
-            return []
+        inside = np.all((uv >= -0.5) & (uv <= limit), axis=(1, 2)).tolist()
+        rows = [row for row, ok in enumerate(inside) if ok]
+        if not rows:
+            return [], NO_CORNERS
+        candidates = [self.landmarks[shown[row]] for row in rows]
         # rays start a little ahead of the optical centre, which sits on the robot's own mast
         starts = [eye + RAY_CLEARANCE * _unit(lm.centre - eye) for lm in candidates]
         hits = self.sim.client.rayTestBatch(
             [p.tolist() for p in starts], [lm.centre.tolist() for lm in candidates]
         )
-        return [lm.id for lm, hit in zip(candidates, hits, strict=True) if hit[0] < 0]
+        clear = [k for k, hit in enumerate(hits) if hit[0] < 0]
+        return [candidates[k].id for k in clear], uv[[rows[k] for k in clear]]
 
     def board_visible(self, body: int) -> bool:
         """Whether the board of body ``body`` is in the world (not removed by a fault)."""
