@@ -84,7 +84,7 @@ class SonarAvoidance:
         along = directions @ points.T  # (headings, points)
         lateral = np.abs(directions[:, 0:1] * points[:, 1] - directions[:, 1:2] * points[:, 0])
         in_lane = (along > 0) & (lateral < self.lane_half_width)
-        reach = along - np.sqrt(np.clip(self.lane_half_width**2 - lateral**2, 0.0, None))
+        reach = along - np.sqrt(np.maximum(self.lane_half_width**2 - lateral**2, 0.0))  # np.clip
         reach = np.where(in_lane, np.maximum(reach, 0.0), self.cfg.horizon)
         return np.minimum(reach.min(axis=1, initial=self.cfg.horizon), self.cfg.horizon)
 

@@ -12,6 +12,7 @@ from stsf_gym.envs.sensors.fast_camera import (
     apparent_size_px,
     board_sizes_px,
     detection_probability,
+    logistic,
 )
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.detector_views import detection_records, room_world, summarise_records
@@ -163,3 +164,11 @@ def test_boards_in_view_give_each_boards_own_projection_to_the_bit(make_env):
         seen += len(ids)
         *_, info = env.step(np.array([0.6, 0.1], np.float32))
     assert seen > 0
+
+
+def test_logistic_of_one_size_is_the_arrays_to_the_bit():
+    sizes = np.concatenate([np.linspace(-2000.0, 2000.0, 401), [np.nan, np.inf, -np.inf]])
+    stacked = logistic(sizes, 25.0, 4.0)
+    for size, expected in zip(sizes.tolist(), stacked.tolist(), strict=True):
+        one = logistic(size, 25.0, 4.0)
+        assert np.float64(one).tobytes() == np.float64(expected).tobytes()

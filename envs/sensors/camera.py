@@ -92,10 +92,11 @@ class PinholeCamera:
     def _camera_from_world(self, world_from_camera: np.ndarray) -> np.ndarray:
         """The pose's inverse, kept for the next call from the same pose (a frame projects
         several sets of points from one)."""
-        if self._inverse is None or not np.array_equal(self._inverse[0], world_from_camera):
-            pose = np.array(world_from_camera, dtype=float)
-            self._inverse = (pose, np.linalg.inv(pose))
-        return self._inverse[1]
+        pose = np.asarray(world_from_camera, dtype=float)
+        last = self._inverse
+        if last is None or last[0].shape != pose.shape or not (last[0] == pose).all():
+            self._inverse = last = (pose.copy(), np.linalg.inv(pose))
+        return last[1]
 
 
 def believed_calibration(

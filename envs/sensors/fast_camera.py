@@ -42,6 +42,7 @@ from gymnasium import spaces
 from stsf_gym.envs.config import FastCameraConfig
 from stsf_gym.envs.sensors.camera import PinholeCamera
 from stsf_gym.envs.worlds.corridor import CorridorWorld
+from stsf_gym.geometry import clamp
 from stsf_gym.vision.landmarks import square_centres
 
 PHANTOM_DEPTH = (2.0, 6.0)  # m, range of a false detection's depth
@@ -76,6 +77,8 @@ def aided_probability(size_px: np.ndarray | float, cfg: FastCameraConfig) -> np.
 
 def logistic(size_px: np.ndarray | float, centre: float, width: float) -> np.ndarray:
     """The logistic function of ``size_px`` with its ``centre`` and ``width`` (px)."""
+    if isinstance(size_px, float):  # one board: the same operations on one float
+        return 1.0 / (1.0 + np.exp(-clamp((size_px - centre) / width, 50.0)))
     z = (np.asarray(size_px, dtype=float) - centre) / width
     return 1.0 / (1.0 + np.exp(-np.clip(z, -50, 50)))
 
