@@ -408,7 +408,7 @@ class CorridorEnv(gym.Env):
             self._fire_sonars(self._time + substep * self.sim.time_step)
         self._time += self.dt
         pose = self.robot.floor_pose()
-        self._distance += float(np.hypot(*(pose[:2] - self._pose[:2])))
+        self._distance += float(np.hypot(pose[0] - self._pose[0], pose[1] - self._pose[1]))
         self._pose = pose
         ticks = self.encoders.read(self.robot.wheel_angles(), self.streams.encoders)
         collision = self.robot.in_collision(ignore={self.world.floor})

@@ -64,3 +64,13 @@ def integrate_wheel_travel_all(ticks, calibration: OdometryCalibration) -> np.nd
     for step in ticks:
         pose = integrate_wheel_travel(pose, *calibration.wheel_travel(step), calibration.wheelbase)
     return pose
+
+
+def test_slip_cov_is_the_diagonal_of_the_slip_variances_to_the_bit():
+    noise = OdometryNoise.from_encoders(0.02, 0.003, 0.004, 0.05)
+    rng = np.random.default_rng(0)
+    for d_left, d_right in [*rng.normal(0, 0.05, (50, 2)).tolist(), (0.0, -0.0)]:
+        expected = np.diag(noise.slip_variances(d_left, d_right))
+        assert noise.slip_cov(d_left, d_right).tobytes() == expected.tobytes()
+    with pytest.raises(ValueError):  # made once and shared: nobody may write into it
+        noise.calibration_cov[0, 0] = 1.0

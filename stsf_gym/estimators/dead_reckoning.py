@@ -52,7 +52,7 @@ class OdometryEstimator(PoseEstimator):
         calibration = self.model.calibration
         d_left, d_right = calibration.wheel_travel(obs["encoders"])
         self.mean, F, G, G_c = odometry_step(self.mean, d_left, d_right, calibration.wheelbase)
-        slip = np.diag(self.model.odometry_noise.slip_variances(d_left, d_right))
+        slip = self.model.odometry_noise.slip_cov(d_left, d_right)
         self.errors.predict(F, G @ slip @ G.T, G_c)
         self.cov = self.errors.P
         return d_left, d_right

@@ -129,7 +129,7 @@ class LandmarkFusionEstimator(OdometryEstimator):
             travel = self.predict(obs)
             noise = self.model.odometry_noise
             u, _, G, G_c = odometry_step(np.zeros(3), *travel, self.model.calibration.wheelbase)
-            q_slip = G @ np.diag(noise.slip_variances(*travel)) @ G.T
+            q_slip = G @ noise.slip_cov(*travel) @ G.T
             for seen in self.seen.values():
                 seen.move(u, q_slip, G_c)
             q_track = q_slip + G_c @ noise.calibration_cov @ G_c.T  # for the weights (eq. 4-5)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -39,14 +40,23 @@ class OdometryNoise:
         ``wheelbase_error_std`` that the robot cannot know."""
         return cls(slip_std**2 * wheel_radius, radius_error_std**2, wheelbase_error_std**2)
 
-    @property
+    @functools.cached_property
     def calibration_cov(self) -> np.ndarray:
-        """Covariance of ``c`` = relative errors of left radius, right radius, wheelbase."""
-        return np.diag([self.radius_var, self.radius_var, self.wheelbase_var])
+        """Covariance of ``c`` = relative errors of left radius, right radius, wheelbase (made
+        once, read-only)."""
+        cov = np.diag([self.radius_var, self.radius_var, self.wheelbase_var])
+        cov.setflags(write=False)
+        return cov
 
     def slip_variances(self, d_left: float, d_right: float) -> np.ndarray:
         """Slip variances (m^2) of the wheel travels ``d_left``, ``d_right`` (m)."""
         return self.slip_var_per_m * np.abs(np.array([d_left, d_right]))
+
+    def slip_cov(self, d_left: float, d_right: float) -> np.ndarray:
+        """The two wheel travels' slip covariance, ``np.diag(slip_variances(...))``, written
+        out (the same products on floats)."""
+        left, right = self.slip_var_per_m * abs(d_left), self.slip_var_per_m * abs(d_right)
+        return np.array([[left, 0.0], [0.0, right]])
 
 
 def integrate_wheel_travel(

@@ -66,7 +66,7 @@ class OdometryLeg:
     def add(self, model: SensorModel, d_left: float, d_right: float) -> None:
         """Compose one step's wheel travels (m) onto the leg."""
         step, _, G, G_c = odometry_step(np.zeros(3), d_left, d_right, model.calibration.wheelbase)
-        slip = np.diag(model.odometry_noise.slip_variances(d_left, d_right))
+        slip = model.odometry_noise.slip_cov(d_left, d_right)
         A, B = compose_jacobians(self.delta, step)
         self.delta = compose(self.delta, step)
         self.cov = A @ self.cov @ A.T + B @ G @ slip @ G.T @ B.T
