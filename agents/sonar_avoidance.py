@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from stsf_gym.geometry import compiled
+
 
 @dataclass(frozen=True)
 class AvoidanceConfig:
@@ -67,6 +69,9 @@ class SonarAvoidance:
         step = math.radians(cfg.step_deg)
         count = math.floor(math.radians(cfg.sector_deg) / step + 1e-9)
         self.candidates = step * np.arange(-count, count + 1)
+        self._candidate_directions = np.column_stack(
+            [np.cos(self.candidates), np.sin(self.candidates)]
+        )
 
     def obstacle_points(self, ranges: np.ndarray) -> np.ndarray:
         """Robot-frame (x forward, y left) points of the readings that hit something, (n, 2)."""
@@ -80,13 +85,13 @@ class SonarAvoidance:
     def free_distance(self, points: np.ndarray, headings: float | np.ndarray) -> np.ndarray:
         """Distance (m, capped at ``horizon``) the widened robot drives along each heading."""
         headings = np.atleast_1d(np.asarray(headings, dtype=float))
-        directions = np.column_stack([np.cos(headings), np.sin(headings)])
+        return self._free(points, np.column_stack([np.cos(headings), np.sin(headings)]))
+
+    def _free(self, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        """:meth:`free_distance` along unit ``directions`` (headings, 2)."""
         along = directions @ points.T  # (headings, points)
-        lateral = np.abs(directions[:, 0:1] * points[:, 1] - directions[:, 1:2] * points[:, 0])
-        in_lane = (along > 0) & (lateral < self.lane_half_width)
-        reach = along - np.sqrt(np.maximum(self.lane_half_width**2 - lateral**2, 0.0))  # np.clip
-        reach = np.where(in_lane, np.maximum(reach, 0.0), self.cfg.horizon)
-        return np.minimum(reach.min(axis=1, initial=self.cfg.horizon), self.cfg.horizon)
+        half_width, horizon = self.lane_half_width, self.cfg.horizon
+        return _free_reach(along, directions, points, half_width, half_width**2, horizon)
 
     def adjust(
         self, ranges: np.ndarray, bearing: float, v: float, w: float, max_yaw_rate: float
@@ -97,7 +102,7 @@ class SonarAvoidance:
             return v, w
         if self.free_distance(points, bearing)[0] >= self.cfg.horizon:
             return v, w
-        free = self.free_distance(points, self.candidates)
+        free = self._free(points, self._candidate_directions)
         clear = free >= self.cfg.horizon
         if clear.any():
             options = np.flatnonzero(clear)
@@ -109,3 +114,38 @@ class SonarAvoidance:
         ahead = self.free_distance(points, 0.0)[0]
         scale = np.clip((ahead - cfg.stop_distance) / (cfg.slow_distance - cfg.stop_distance), 0, 1)
         return float(v * scale), float(np.clip(cfg.gain * heading, -max_yaw_rate, max_yaw_rate))
+
+
+@compiled
+def _free_reach(
+    along: np.ndarray,
+    directions: np.ndarray,
+    points: np.ndarray,
+    half_width: float,
+    half_width_squared: float,
+    horizon: float,
+) -> np.ndarray:
+    """Per heading, the nearest reach over the points (``along`` each, from the matrix product):
+    a point in the lane (ahead, nearer its centre line than ``half_width``) stops the robot's
+    front arc ``along - sqrt(half_width^2 - lateral^2)`` (at least 0) ahead; capped at
+    ``horizon``. numpy's elementwise answers (np.maximum, np.where, min with ``initial``,
+    np.minimum), NaN kept."""
+    free = np.empty(along.shape[0])
+    for h in range(along.shape[0]):
+        dx, dy = directions[h, 0], directions[h, 1]
+        nearest = horizon
+        for k in range(points.shape[0]):
+            ahead = along[h, k]
+            lateral = abs(dx * points[k, 1] - dy * points[k, 0])
+            reach = horizon
+            if ahead > 0 and lateral < half_width:
+                chord = half_width_squared - lateral * lateral
+                if not (chord >= 0.0 or chord != chord):
+                    chord = 0.0
+                reach = ahead - np.sqrt(chord)
+                if not (reach >= 0.0 or reach != reach):
+                    reach = 0.0
+            if not (nearest <= reach or nearest != nearest):
+                nearest = reach
+        free[h] = nearest if (nearest <= horizon or nearest != nearest) else horizon
+    return free

@@ -118,3 +118,26 @@ def test_exploring_without_a_pose_drives_ahead_and_turns_from_a_wall(make_env):
     assert v == pytest.approx(0.122 / env.unwrapped.config.robot.max_speed) and w == 0.0
     v, w = follower.explore(readings(t0=0.15))  # a wall right ahead: stop and turn
     assert v == 0.0 and abs(w) > 0
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_free_reach_kernel_is_the_numpy_expressions(seed):
+    """The avoidance's compiled reach gives, to the bit, the array expressions it replaced:
+    lateral offsets, the lane test, the front arc's chord, np.where and the capped minimum."""
+    from stsf_gym.agents.sonar_avoidance import _free_reach
+
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-2.0, 2.0, (int(rng.integers(0, 16)), 2))
+    if len(points) > 2:
+        points[0] = np.nan
+    headings = rng.uniform(-np.pi, np.pi, 9)
+    directions = np.column_stack([np.cos(headings), np.sin(headings)])
+    half_width, horizon = 0.3, 1.5
+    along = directions @ points.T
+    lateral = np.abs(directions[:, 0:1] * points[:, 1] - directions[:, 1:2] * points[:, 0])
+    in_lane = (along > 0) & (lateral < half_width)
+    reach = along - np.sqrt(np.clip(half_width**2 - lateral**2, 0.0, None))
+    reach = np.where(in_lane, np.maximum(reach, 0.0), horizon)
+    expected = np.minimum(reach.min(axis=1, initial=horizon), horizon)
+    got = _free_reach(along, directions, points, half_width, half_width**2, horizon)
+    assert got.tobytes() == expected.tobytes()
