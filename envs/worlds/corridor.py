@@ -15,6 +15,7 @@ from stsf_gym.envs.config import ConfigError, LandmarkSpec, WorldConfig
 from stsf_gym.envs.rendering.scene import Board, Box, Cylinder
 from stsf_gym.envs.sensors.camera import PinholeCamera
 from stsf_gym.envs.simulator import Simulator
+from stsf_gym.geometry import compiled
 from stsf_gym.vision.landmarks import (
     board_corners,
     landmark_image,
@@ -57,6 +58,36 @@ class Landmark:
 
 def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
+
+
+@compiled
+def _facing_and_near(
+    normals: np.ndarray, centres: np.ndarray, eye: np.ndarray, far: float
+) -> np.ndarray:
+    """Whether each board faces ``eye`` (``n . (eye - c) > 0``) and lies nearer than ``far``
+    (``|c - eye| < far``): ``np.einsum("ij,ij->i", ...)`` and ``np.linalg.norm(axis=1)``'s
+    sums, term by term in their order (einsum adds x and z, then y; the norm x, y, z)."""
+    shown = np.empty(len(normals), np.bool_)
+    for i in range(len(normals)):
+        tx, ty, tz = eye[0] - centres[i, 0], eye[1] - centres[i, 1], eye[2] - centres[i, 2]
+        facing = (normals[i, 0] * tx + normals[i, 2] * tz) + normals[i, 1] * ty > 0
+        dx, dy, dz = centres[i, 0] - eye[0], centres[i, 1] - eye[1], centres[i, 2] - eye[2]
+        shown[i] = facing and np.sqrt(dx * dx + dy * dy + dz * dz) < far
+    return shown
+
+
+@compiled
+def _inside_frame(uv: np.ndarray, right: float, bottom: float) -> np.ndarray:
+    """Whether every corner (N, 4, 2) of each board lies within ``[-0.5, right] x [-0.5,
+    bottom]`` pixels (a NaN corner is outside)."""
+    inside = np.empty(uv.shape[0], np.bool_)
+    for i in range(uv.shape[0]):
+        inside[i] = True
+        for k in range(uv.shape[1]):
+            u, v = uv[i, k, 0], uv[i, k, 1]
+            if not (u >= -0.5 and v >= -0.5 and u <= right and v <= bottom):
+                inside[i] = False
+    return inside
 
 
 def plane_to_world(centre, right, up, plane_xy: np.ndarray) -> np.ndarray:
@@ -120,20 +151,19 @@ class CorridorWorld:
         ``camera.project`` gives them (a point's pixels do not depend on the others projected
         with it)."""
         eye = pose[:3, 3]
-        facing = np.einsum("ij,ij->i", self._normals, eye - self._centres) > 0
-        near = np.linalg.norm(self._centres - eye, axis=1) < camera.far
         shown = [
             k
-            for k in np.flatnonzero(facing & near).tolist()
+            for k in np.flatnonzero(
+                _facing_and_near(self._normals, self._centres, eye, camera.far)
+            ).tolist()
             if self.board_visible(self.boards[self.landmarks[k].id])
         ]
         if not shown:
             return [], NO_CORNERS
         # every shown board's corners projected at once
         uv = camera.project(pose, self._corners[shown].reshape(-1, 3)).reshape(-1, 4, 2)
-        limit = (camera.width - 0.5, camera.height - 0.5)
-        inside = np.all((uv >= -0.5) & (uv <= limit), axis=(1, 2)).tolist()
-        rows = [row for row, ok in enumerate(inside) if ok]
+        inside = _inside_frame(uv, camera.width - 0.5, camera.height - 0.5)
+        rows = [row for row, ok in enumerate(inside.tolist()) if ok]
         if not rows:
             return [], NO_CORNERS
         candidates = [self.landmarks[shown[row]] for row in rows]
