@@ -1,6 +1,5 @@
 """The camera view test's compiled kernels give the numpy expressions they replaced, to the
-bit: boards seen edge-on (where the facing test's sign is rounding noise and only the same
-order of additions agrees) and corners on, past and NaN at the frame's edges."""
+bit: distances at the range limit, and corners on, past and NaN at the frame's edges."""
 
 import numpy as np
 import pytest
@@ -9,18 +8,14 @@ from stsf_gym.envs.worlds.corridor import _facing_and_near, _inside_frame
 
 
 @pytest.mark.parametrize("seed", range(10))
-def test_facing_and_near_is_einsum_and_norm_even_edge_on(seed):
+def test_facing_and_near_is_the_dots_sign_and_the_norm(seed):
     rng = np.random.default_rng(seed)
-    normals = rng.normal(size=(36, 3))
-    normals /= np.linalg.norm(normals, axis=1)[:, None]
-    eye, to_eye = rng.normal(0, 10, 3), rng.normal(0, 10, (36, 3))
-    edge_on = rng.random(36) < 0.7  # the way to the eye made perpendicular to the normal
-    to_eye[edge_on] -= np.sum(to_eye * normals, axis=1)[edge_on, None] * normals[edge_on]
-    centres = eye - to_eye
-    far = float(np.median(np.linalg.norm(to_eye, axis=1)))
-    facing = np.einsum("ij,ij->i", normals, eye - centres) > 0
-    near = np.linalg.norm(centres - eye, axis=1) < far
-    np.testing.assert_array_equal(_facing_and_near(normals, centres, eye, far), facing & near)
+    dots, eye, centres = rng.normal(size=36), rng.normal(0, 10, 3), rng.normal(0, 10, (36, 3))
+    dots[:3] = (0.0, -0.0, np.nan)
+    distances = np.linalg.norm(centres - eye, axis=1)
+    far = float(distances[5])  # one board exactly at the limit: not near
+    expected = (dots > 0) & (distances < far)
+    np.testing.assert_array_equal(_facing_and_near(dots, centres, eye, far), expected)
 
 
 @pytest.mark.parametrize("seed", range(10))

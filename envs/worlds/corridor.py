@@ -62,17 +62,14 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 @compiled
 def _facing_and_near(
-    normals: np.ndarray, centres: np.ndarray, eye: np.ndarray, far: float
+    facing_dots: np.ndarray, centres: np.ndarray, eye: np.ndarray, far: float
 ) -> np.ndarray:
-    """Whether each board faces ``eye`` (``n . (eye - c) > 0``) and lies nearer than ``far``
-    (``|c - eye| < far``): ``np.einsum("ij,ij->i", ...)`` and ``np.linalg.norm(axis=1)``'s
-    sums, term by term in their order (einsum adds x and z, then y; the norm x, y, z)."""
-    shown = np.empty(len(normals), np.bool_)
-    for i in range(len(normals)):
-        tx, ty, tz = eye[0] - centres[i, 0], eye[1] - centres[i, 1], eye[2] - centres[i, 2]
-        facing = (normals[i, 0] * tx + normals[i, 2] * tz) + normals[i, 1] * ty > 0
+    """Whether each board faces ``eye`` (``facing_dots``, ``n . (eye - c)``, positive) and lies
+    nearer than ``far``: ``np.linalg.norm(c - eye, axis=1) < far``, its sum in its order."""
+    shown = np.empty(len(centres), np.bool_)
+    for i in range(len(centres)):
         dx, dy, dz = centres[i, 0] - eye[0], centres[i, 1] - eye[1], centres[i, 2] - eye[2]
-        shown[i] = facing and np.sqrt(dx * dx + dy * dy + dz * dz) < far
+        shown[i] = facing_dots[i] > 0 and np.sqrt(dx * dx + dy * dy + dz * dz) < far
     return shown
 
 
@@ -151,11 +148,11 @@ class CorridorWorld:
         ``camera.project`` gives them (a point's pixels do not depend on the others projected
         with it)."""
         eye = pose[:3, 3]
+        facing = np.einsum("ij,ij->i", self._normals, eye - self._centres)
+        in_range = _facing_and_near(facing, self._centres, eye, camera.far)
         shown = [
             k
-            for k in np.flatnonzero(
-                _facing_and_near(self._normals, self._centres, eye, camera.far)
-            ).tolist()
+            for k in np.flatnonzero(in_range).tolist()
             if self.board_visible(self.boards[self.landmarks[k].id])
         ]
         if not shown:
