@@ -11,7 +11,7 @@ from rich.console import Console
 
 from stsf_gym.agents import pretrained
 from stsf_gym.envs.suite import load_suite
-from stsf_gym.experiments.benchmark.figure import paired_rows, plot_leaderboard
+from stsf_gym.experiments.benchmark.figure import paired_rows, plot_leaderboard, row_label
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired
 from stsf_gym.experiments.benchmark.names import agent_name
 from stsf_gym.experiments.benchmark.report import leaderboard_markdown
@@ -142,8 +142,14 @@ def test_the_paired_section_says_where_the_agents_drove(keys, title, pair):
     assert row[0] == pair
 
 
-def test_the_figure_names_the_agent_of_every_paired_row(tmp_path):
+def test_the_figure_names_the_agent_of_every_row(tmp_path):
     summary = _summary([*OWN, ("follower", "stsf")])
+    assert sorted(row_label(row) for row in summary["rows"]) == [
+        "follower / stsf",
+        "follower / truth",
+        "ppo-truth/seed-0 / truth",
+        "ppo-truth/seed-1 / truth",
+    ]
     labels = [label for label, _ in paired_rows(summary)]
     assert labels == [
         "follower: truth - stsf",

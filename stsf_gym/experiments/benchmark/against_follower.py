@@ -47,8 +47,8 @@ def follower_pairs(summary: dict) -> list[tuple[str, str, dict]]:
     return pairs
 
 
-def _seeds(count: int) -> str:
-    return "1 training seed" if count == 1 else f"{count} training seeds"
+def _count(count: int, noun: str) -> str:
+    return f"{count} {noun}" if count == 1 else f"{count} {noun}s"
 
 
 def _side(paired: dict) -> str:
@@ -74,8 +74,9 @@ def _sentence(summary: dict, entry: dict) -> str:
     trained = entry.get("trained_on")
     deployed = f" (trained on {trained})" if trained and trained != source else ""
     low, high = entry["success_iqm_ci95"]
+    seeds = _count(entry["runs"], "training seed")
     head = (
-        f"- **{name}**{deployed} on {source}, {_seeds(entry['runs'])}: success IQM "
+        f"- **{name}**{deployed} on {source}, {seeds}: success IQM "
         f"{entry['success_iqm']:.2f} (95 % CI {low:.2f}-{high:.2f})"
     )
     follower = _follower_row(summary, source)
@@ -92,7 +93,8 @@ def _sentence(summary: dict, entry: dict) -> str:
     sides = [_side(p) for p in entry["paired_vs_follower"]]
     return (
         f"{head} against the follower's {rate:.2f} ({f_low:.2f}-{f_high:.2f}) on the same "
-        f"{entry['worlds']} worlds, {ratio_text}; paired world by world (the table below), "
+        f"{_count(entry['worlds'], 'world')}, {ratio_text}; paired world by world (the table "
+        "below), "
         f"{sides.count('below')} of {len(sides)} below the follower, {sides.count('above')} "
         f"above, {sides.count('level')} not told apart."
     )

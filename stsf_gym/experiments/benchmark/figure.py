@@ -13,9 +13,7 @@ from stsf_gym.io import save_figure
 
 
 def row_label(row: dict) -> str:
-    """``<agent> / <pose source>`` (the follower's rows by their pose source alone)."""
-    if row["agent"] == "follower":
-        return row["estimator"]
+    """``<agent> / <pose source>``: ``follower / stsf``, ``ppo-truth/seed-0 / truth``."""
     return f"{agent_name(row['agent'])} / {row['estimator']}"
 
 
