@@ -2,7 +2,7 @@
 estimator (odometry, conventional fusion as the paper has it and as a filter, STSF, EKF) on its
 own pose estimate, without sonar avoidance as in the paper's Fig. 11; a short table, the
 trajectories over the map and a video of each episode's whole route, ten times faster than
-simulated time (``videos/<estimator>.mp4``), in about a minute on two cores.
+simulated time (``videos/<estimator>.mp4``; each video drives its episode again, to its end).
 """
 
 from __future__ import annotations
