@@ -66,7 +66,7 @@ def run_step_bench(
     summary = {
         "machine": {**machine(), "load_average": [load_start, os.getloadavg()]},
         "step": step,
-        "provenance": provenance({"steps": steps, "baseline": step["baseline"]}),
+        "provenance": provenance({"steps": steps, "baseline": step["baseline"]}, timed=True),
     }
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "bench.json", summary)
@@ -103,7 +103,8 @@ def run_bench(
         summary["recording"] = recording_costs(seed)
     summary["targets"] = targets(summary)
     summary["provenance"] = provenance(
-        {"sim_seconds": sim_seconds, "vector_steps": vector_steps, "baseline": step["baseline"]}
+        {"sim_seconds": sim_seconds, "vector_steps": vector_steps, "baseline": step["baseline"]},
+        timed=True,
     )
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "bench.json", summary)
