@@ -148,6 +148,7 @@ def test_recording_targets_are_judged(fast_row):
     assert "## Recording" in text and "mcap_writer 0.30, rerun_writer 0.50" in text
 
 
+@pytest.mark.slow
 def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
     """The step cases on this code and on a checkout (this one, laid out as installed): both
     measured in fresh processes, the ratio of this code over it, the section in bench.md."""
