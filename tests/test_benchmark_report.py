@@ -13,9 +13,9 @@ from stsf_gym.agents import pretrained
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.experiments.benchmark.figure import paired_rows, plot_leaderboard, row_label
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired
-from stsf_gym.experiments.benchmark.names import agent_name
 from stsf_gym.experiments.benchmark.report import leaderboard_markdown
 from stsf_gym.experiments.benchmark.run import summarise_benchmark
+from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.terminal_table import NAME_WIDTH, print_markdown
 
 WORLDS = 12

@@ -10,7 +10,7 @@ Newcombe's 95 % interval; a seed whose interval excludes 0 is above or below the
 from __future__ import annotations
 
 from stsf_gym.agents.registry import FOLLOWER
-from stsf_gym.experiments.benchmark.names import agent_name
+from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.io import markdown_table
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.experiments.benchmark.against_follower import follower_pairs
-from stsf_gym.experiments.benchmark.names import agent_name
+from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.io import save_figure
 
 

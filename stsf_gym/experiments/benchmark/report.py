@@ -5,7 +5,7 @@ paired differences."""
 from __future__ import annotations
 
 from stsf_gym.experiments.benchmark.against_follower import against_follower_markdown
-from stsf_gym.experiments.benchmark.names import agent_name
+from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.io import markdown_table
 
 

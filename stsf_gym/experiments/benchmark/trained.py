@@ -56,6 +56,23 @@ def expand_agents(agents: list[str]) -> list[str]:
     return expanded
 
 
+def agent_name(agent: str) -> str:
+    """The short name the report gives an agent: ``follower``; a training folder by its name
+    (``ppo-stsf``); a shipped agent without its prefix and suite (``ppo-truth``); a model by
+    its training folder's or shipped agent's name with its seed (``ppo-stsf/seed-0``,
+    ``ppo-truth/seed-0``), or by its file's stem when it is neither. The JSON keeps the whole
+    path."""
+    path = Path(agent)
+    if path.suffix != ".zip":
+        return path.name
+    folder = path.parent
+    if folder.parent.parent.name == pretrained.MODELS.name:  # <models>/<suite>/<agent>/seed-S.zip
+        return f"{folder.name}/{path.stem}"
+    if path.name != "model.zip":
+        return path.stem
+    return f"{folder.parent.name}/{folder.name}" if folder.match(SEED_FOLDERS) else folder.name
+
+
 def agent_pose_sources(
     agent: str, estimators: list[str] | None, learnt_sources: list[str] = ()
 ) -> list[str]:
