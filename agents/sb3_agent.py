@@ -3,7 +3,7 @@
 ``stsf-gym train`` stores a ``stsf_meta`` mapping in every saved model (algorithm,
 estimator, world, env overrides, policy-input settings, wall time so far); it travels inside
 the ``.zip`` with the model, so a model file alone is enough to evaluate it
-(:class:`~stsf_gym.agents.registry.SB3Agent`).
+(:class:`~stsf_gym.agents.trained_agent.SB3Agent`).
 """
 
 from __future__ import annotations
