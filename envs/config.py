@@ -363,19 +363,20 @@ class TaskConfig:
     def __post_init__(self) -> None:
         require(
             self.leg_min <= self.leg_max,
-            "task.leg_min",
+            "leg_min",
             f"must not exceed task.leg_max ({self.leg_max:g}), got {self.leg_min:g}",
         )
         require(
             self.leg_max == 0 or self.leg_min >= self.goal_radius,
-            "task.leg_min",
+            "leg_min",
             f"a leg's goal lies ahead of its start: at least task.goal_radius "
             f"({self.goal_radius:g} m), got {self.leg_min:g}",
         )
         require(
             not (self.stop_action or self.leg_max) or self.protocol == "declare",
-            "task.protocol",
-            "task.stop_action and training legs need the declare protocol, got 'reach'",
+            "protocol",
+            "is 'reach', but task.stop_action and training legs need the declare protocol: "
+            "set task.protocol: declare (--set task.protocol=declare, or task__protocol='declare')",
         )
 
 

@@ -218,6 +218,7 @@ def _agents(args: argparse.Namespace) -> dict | list:
                 "pose source": r["pose_source"],
                 "seeds": len(r["seeds"]),
                 "val success": ", ".join(f"{v:.2f}" for v in r["val_success"].values()),
+                "aliases": ", ".join(a.removeprefix(pretrained.PREFIX) for a in r["aliases"]),
             }
             for r in rows
         ]

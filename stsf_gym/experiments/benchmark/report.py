@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.agents import pretrained
 from stsf_gym.experiments.benchmark.trained import SEED_FOLDERS
 from stsf_gym.io import markdown_table, save_figure
 
@@ -20,13 +21,19 @@ def _label(row: dict) -> str:
 
 def agent_name(agent: str) -> str:
     """``follower``; a training folder by its name (``ppo-stsf``); a model by its training
-    folder's name, with its seed folder (``ppo-stsf/seed-0``), or by its file's stem when
-    it is no ``model.zip``. The JSON keeps the whole path."""
+    folder's name, with its seed folder (``ppo-stsf/seed-0``); a shipped agent's seed by its
+    suite, name and seed (``corridor/dagger-truth/seed-0``); any other file by its stem. The
+    JSON keeps the whole path."""
     path = Path(agent)
     if path.suffix != ".zip":
         return path.name
-    if path.name != "model.zip":
-        return path.stem
+    if path.name != "model.zip":  # a shipped agent's seed: its suite and name before the seed
+        shipped = pretrained.shipped_name(path)
+        return (
+            path.stem
+            if shipped is None
+            else f"{shipped.removeprefix(pretrained.PREFIX)}/{path.stem}"
+        )
     folder = path.parent
     return f"{folder.parent.name}/{folder.name}" if folder.match(SEED_FOLDERS) else folder.name
 
