@@ -85,7 +85,7 @@ class CautiousFollower(PathFollower):
         if self._waiting_for != self._goal:
             self._waiting_for, self._waited = self._goal, 0.0
             self._budget = min(MAX_WAIT_S, 0.5 * max(self.time_limit - self.time, 0.0))
-        return self._waited >= self._budget
+        return self._waited >= self._budget - 1e-9  # counted in control periods
 
     def _wait(self) -> np.ndarray:
         """Stand still (STOP off), or turn slowly on the spot without the STOP entry."""
