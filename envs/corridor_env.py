@@ -89,7 +89,7 @@ class CorridorEnv(gym.Env):
 
     ## Reward
     ``reward.progress`` per metre gained along the path (``declare``: up to the current goal;
-    past it nothing; a correct stop is paid its whole leg), ``reward.time`` per second,
+    past it nothing), ``reward.time`` per second,
     ``reward.goal`` on reaching each goal, ``reward.false_stop`` on a stop declared off its goal,
     ``reward.collision`` on a collision (each term: :meth:`stsf_gym.envs.task.PathTask.reward`),
     and
@@ -414,8 +414,8 @@ class CorridorEnv(gym.Env):
         self._pose = pose
         ticks = self.encoders.read(self.robot.wheel_angles(), self.streams.encoders)
         collision = self.robot.in_collision(ignore={self.world.floor})
+        progress = self.task.progress(pose)
         reached = self.task.update(pose, v, w, self.dt, self._time, layout.stops(a))
-        progress = self.task.progress(pose)  # after the stop: a reached goal's leg is paid whole
         steering_change = abs(a[layout.index("w")] - self._yaw_command)
         self._yaw_command = float(a[layout.index("w")])
         reward = self.task.reward(

@@ -142,10 +142,7 @@ class PathTask:
 
     def progress(self, xy: np.ndarray) -> float:
         """Arc length (m) of the path point nearest ``xy`` (``declare``: at most the current
-        goal's, and the last goal's once every goal is declared, so a correct stop short of the
-        goal is paid the whole route, as one past it is)."""
-        if self.protocol == "declare" and self.success:
-            return self.goal_arcs[-1]
+        goal's)."""
         s = self.path.project(xy)
         if self.protocol == "declare":
             return min(s, self.goal_arcs[min(self.goal_index, len(self.goals) - 1)])
@@ -210,8 +207,9 @@ class PathTask:
 
         - ``progress`` per metre ``gained`` of :meth:`progress`, a potential (Ng et al. 1999):
           the return's sum of it is the progress at the end minus at the start, so no metre of a
-          leg is paid twice (driving back and forth nets 0, past the goal earns 0) and a correct
-          stop anywhere in the radius is paid the whole leg;
+          leg is paid twice (driving back and forth nets 0, past the goal earns 0); correct stops
+          in the radius differ by their offset along the path (at most the radius, 0.25 m: a
+          fortieth of the goal bonus);
         - ``time`` (< 0 under ``declare``) per second ``dt``: dawdling to the time limit costs;
         - ``goal`` (> 0) once per goal ``reached``, judged at the TRUE position of the declared
           stop (what the task judges; the observation never sees it);
