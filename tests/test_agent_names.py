@@ -13,6 +13,7 @@ from stsf_gym.agents.decision_interval import DecisionInterval
 from stsf_gym.agents.observation import PolicyObservation, observation_config
 from stsf_gym.agents.registry import make_agent, make_agents
 from stsf_gym.agents.resolve import resolve_agent
+from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.agents.trained_agent import SB3Agent, wrap_for_model
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.benchmark.report import agent_name
@@ -30,6 +31,7 @@ def test_make_agent_takes_a_shipped_name_an_alias_a_folder_a_zip_and_a_scripted_
         agents = make_agents(name)
         assert [a.path for a in agents] == models
         assert make_agent(name).path == models[0]  # its first seed
+        assert make_agent(name).trained_on()["algo"] == "dagger"  # what ran, not the SB3 class
     run = tmp_path / "run"
     for seed, model in enumerate(models[:2]):
         (run / f"seed-{seed}").mkdir(parents=True)
@@ -66,7 +68,7 @@ def test_the_benchmark_expands_names_with_the_same_resolver():
     ],
 )
 def test_the_algorithm_is_read_as_what_ran(record, algo):
-    assert pretrained.trained_algo(record) == algo
+    assert trained_algo(record) == algo
 
 
 def test_a_shipped_agent_builds_the_env_it_was_trained_for():

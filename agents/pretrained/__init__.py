@@ -1,11 +1,11 @@
 """Agents shipped trained, with their settings and provenance (as rl-baselines3-zoo ships
 its agents): named ``pretrained:<suite>/<algo>-<pose source>`` wherever an agent is named.
 
-``<algo>`` says what ran (:func:`trained_algo`): ``dagger`` (behaviour cloning and DAgger rounds
-labelled by the follower, no reward), ``dagger+ppo`` (then PPO on the env's reward) or ``ppo``
-(reward only). Names shipped before an agent was renamed stay valid as **aliases**
-(``trained-models/aliases.json``, old name -> new): the agents shipped as ``ppo-*`` were trained
-with no PPO step (``n_timesteps: 0``), so they are ``dagger-*`` now.
+``<algo>`` says what ran (:func:`~stsf_gym.agents.sb3_agent.trained_algo`): ``dagger``
+(behaviour cloning and DAgger rounds labelled by the follower, no reward), ``dagger+ppo`` (then
+PPO on the env's reward) or ``ppo`` (reward only). Names shipped before an agent was renamed
+stay valid as **aliases** (``trained-models/aliases.json``, old name -> new): the agents shipped
+as ``ppo-*`` were trained with no PPO step (``n_timesteps: 0``), so they are ``dagger-*`` now.
 
 Each lives in ``trained-models/<suite>/<algo>-<pose source>/``: ``seed-S.zip`` per training
 seed (the model, its settings inside it), ``seed-S.json`` (its ``train.json``: code digest, config,
@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.io import write_json
 from stsf_gym.results.provenance import note_data_files
@@ -92,18 +93,6 @@ def listing() -> list[dict]:
         }
         for n in names()
     ]
-
-
-def trained_algo(record: dict) -> str:
-    """What ran to train a model, from its ``train.json`` (or ``stsf_meta``): the ``algo`` it
-    records when that says so (``dagger``, ``dagger+ppo``, ``ppo``, ...); a record written
-    before names said what ran holds the SB3 class there (``ppo``), read from its stages:
-    demonstrations and no reward step are ``dagger``, both are ``dagger+<class>``."""
-    algo = record["algo"]
-    if algo.startswith("dagger") or not record.get("demonstrations"):
-        return algo
-    reward_steps = (record.get("hyperparams") or {}).get("n_timesteps", 0)
-    return f"dagger+{algo}" if reward_steps else "dagger"
 
 
 def shipped_name(model: str | Path) -> str | None:
