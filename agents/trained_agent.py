@@ -27,12 +27,17 @@ def wrap_for_model(env: gym.Env, model: str | Path) -> gym.Env:
     and :class:`~stsf_gym.agents.decision_interval.DecisionInterval` with the settings saved in
     it. ``env`` already under the model's own stack is returned as it is. ConfigError when a
     setting of ``env`` differs from the model's (see :func:`check_env`)."""
+    from stsf_gym.agents.sb3_agent import model_metadata
+
+    return stack_for(env, model_metadata(model), model)
+
+
+def stack_for(env: gym.Env, meta: dict, model: str | Path) -> gym.Env:
+    """:func:`wrap_for_model` with the model's metadata ``meta`` given (``model`` names it)."""
     from stsf_gym.agents.decision_interval import DecisionInterval
     from stsf_gym.agents.observation import PolicyObservation, observation_config
     from stsf_gym.agents.policy_stack import policy_stack
-    from stsf_gym.agents.sb3_agent import model_metadata
 
-    meta = model_metadata(model)
     check_env(env, meta, model)
     observation, steps = observation_config(meta.get("observation")), meta["decision_steps"]
     wrapped = _wrapper(env, PolicyObservation)
@@ -66,8 +71,9 @@ def check_env(env: gym.Env, meta: dict, model: str | Path) -> None:
             f"an estimating id, stsf_gym/Suite-<Suite>-<Source>-v0); its observation has "
             f"{sorted(outer.spaces)}"
         )
-    trained_task = meta.get("env", {}).get("task", {})
-    stop = bool(trained_task.get("stop_action", False))
+    if "env" not in meta:  # no env settings recorded: nothing more to compare
+        return
+    stop = bool(meta["env"].get("task", {}).get("stop_action", False))
     has_stop = "stop" in env.get_wrapper_attr("action_layout")
     if stop != has_stop:
         fix = "task__stop_action=True" if stop else "task__stop_action=False"
@@ -76,7 +82,7 @@ def check_env(env: gym.Env, meta: dict, model: str | Path) -> None:
             f"(task.stop_action: {str(stop).lower()}); this env has "
             f"{'it' if has_stop else 'none'}: make the env with {fix}"
         )
-    trained_dt = meta.get("env", {}).get("sim", {}).get("control_dt")
+    trained_dt = meta["env"].get("sim", {}).get("control_dt")
     trained_dt = load_config().sim.control_dt if trained_dt is None else trained_dt
     if not np.isclose(env.unwrapped.dt, trained_dt):
         raise ConfigError(
@@ -119,10 +125,10 @@ class SB3Agent:
         return self.wrap(estimating)
 
     def wrap(self, env: gym.Env) -> gym.Env:
-        """``env`` under the model's policy stack (:func:`wrap_for_model`); shapes checked."""
+        """``env`` under the model's policy stack (:func:`stack_for`); shapes checked."""
         from stsf_gym.agents.sb3_agent import load_model
 
-        stack = wrap_for_model(env, self.path)
+        stack = stack_for(env, self.meta, self.path)
         self.model = load_model(self.path)
         for space in ("observation_space", "action_space"):
             theirs, ours = getattr(self.model, space), getattr(stack, space)
