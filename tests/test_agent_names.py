@@ -149,3 +149,13 @@ def test_evaluate_prints_a_row_per_model_and_the_seeds_together(tmp_path):
     assert agents == [*map(str, pretrained.models(SHIPPED)), "follower"]
     assert [a["agent"] for a in summary["aggregates"]] == [SHIPPED]
     assert "corridor/dagger-truth/seed-2" in (Path(tmp_path) / "comparison.md").read_text()
+
+
+def test_a_stop_entry_on_the_reach_protocol_names_its_key_once_with_what_to_set():
+    from stsf_gym.envs.config import load_config
+
+    with pytest.raises(ConfigError) as caught:
+        load_config(world="straight_10m", task={"stop_action": True})
+    message = str(caught.value)
+    assert "task.task." not in message and message.count("task.protocol is 'reach'") == 1
+    assert "--set task.protocol=declare" in message
