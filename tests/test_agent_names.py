@@ -93,6 +93,8 @@ def _estimating(make_env, **overrides):
 
 def test_an_env_unlike_the_models_settings_is_refused(make_env):
     model = pretrained.models(EKF_AGENT)[0]
+    with pytest.raises(ConfigError, match="drives on a pose estimate"):
+        wrap_for_model(make_env("stsf_gym/Straight10m-v0", camera__enabled=False), model)
     with pytest.raises(ConfigError, match="task__stop_action=True"):
         wrap_for_model(_estimating(make_env), model)
     with pytest.raises(ConfigError, match=r"sim\.control_dt"):
