@@ -16,8 +16,7 @@ from stsf_gym.agents.resolve import resolve_agent
 from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.agents.trained_agent import SB3Agent, wrap_for_model
 from stsf_gym.envs.config import ConfigError
-from stsf_gym.experiments.benchmark.report import agent_name
-from stsf_gym.experiments.benchmark.trained import expand_agents
+from stsf_gym.experiments.benchmark.trained import agent_name, expand_agents
 from stsf_gym.experiments.compare import judged_alike, seed_aggregates
 
 SHIPPED = "pretrained:corridor/dagger-truth"
@@ -119,7 +118,7 @@ def test_a_stop_agent_makes_every_row_judged_by_the_declare_protocol():
 
 def test_each_model_is_its_own_row_and_its_seeds_are_aggregated():
     models = [str(m) for m in pretrained.models(SHIPPED)]
-    assert [agent_name(m) for m in models] == [f"corridor/dagger-truth/seed-{s}" for s in (0, 1, 2)]
+    assert [agent_name(m) for m in models] == [f"dagger-truth/seed-{s}" for s in (0, 1, 2)]
 
     def episodes(successes):
         return [
@@ -150,7 +149,7 @@ def test_evaluate_prints_a_row_per_model_and_the_seeds_together(tmp_path):
     agents = [r["agent"] for r in summary["rows"]]
     assert agents == [*map(str, pretrained.models(SHIPPED)), "follower"]
     assert [a["agent"] for a in summary["aggregates"]] == [SHIPPED]
-    assert "corridor/dagger-truth/seed-2" in (Path(tmp_path) / "comparison.md").read_text()
+    assert "dagger-truth/seed-2" in (Path(tmp_path) / "comparison.md").read_text()
 
 
 def test_a_stop_entry_on_the_reach_protocol_names_its_key_once_with_what_to_set():

@@ -5,7 +5,7 @@ agent on each pose source; ``{estimator}`` in a model path is replaced by the po
 each source is driven by the agent trained on it. Every pair runs the same seeded episodes as
 :func:`stsf_gym.experiments.evaluate.evaluate` (same env, wrapper and scoring), in parallel,
 with resume. Every model is its own row, named as the benchmark names it (a shipped agent's seed
-``corridor/dagger-truth/seed-0``; the JSON keeps the whole path), and the seeds of one trained
+``dagger-truth/seed-0``; the JSON keeps the whole path), and the seeds of one trained
 agent are also aggregated as the benchmark aggregates them (IQM over seeds, two-level bootstrap
 interval). Writes ``comparison.json`` (the results schema: numbers), ``comparison.md`` (one row
 per pair: success rate, collisions, ATE, RPE, NEES, ...; then the seeds together) and
@@ -21,8 +21,7 @@ import numpy as np
 from stsf_gym.agents.registry import make_agent
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.benchmark.intervals import seed_iqm
-from stsf_gym.experiments.benchmark.report import agent_name
-from stsf_gym.experiments.benchmark.trained import training_groups
+from stsf_gym.experiments.benchmark.trained import agent_name, training_groups
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
