@@ -153,12 +153,15 @@ class PathFollower:
             arrival = self.cfg.arrival
             left = max(goal - along, 0.0)
             if left <= arrival.tolerance:
+                if not self._may_declare():
+                    return self._wait()
                 self._goal += 1
                 self._holding = max(self.hold_steps - 1, 0)
                 self._declared = True
                 return np.zeros(2, np.float32)
             ahead = min(ahead, goal)
             speed = min(max(arrival.approach_gain * left, arrival.min_speed), speed)  # np.clip
+            speed = self._approach_speed(left, speed)
         target = self.path.point_at(ahead)
         dx, dy = target - (x, y)
         c, s = math.cos(yaw), math.sin(yaw)
@@ -173,3 +176,16 @@ class PathFollower:
         if sonar is not None and self.avoidance is not None:
             v, w = self.avoidance.adjust(sonar, bearing, v, w, self.cfg.max_yaw_rate)
         return bounded(np.array([v, w]) / self.scale, -1.0, 1.0).astype(np.float32)
+
+    def _may_declare(self) -> bool:
+        """Whether to declare now that the estimate is at the goal (always, here; a cautious
+        follower may wait, :mod:`stsf_gym.agents.cautious_follower`)."""
+        return True
+
+    def _wait(self) -> np.ndarray:
+        """[v, w] while waiting at a goal instead of declaring (never called here)."""
+        raise NotImplementedError
+
+    def _approach_speed(self, left: float, speed: float) -> float:
+        """The speed ``left`` metres (estimated) before the goal: ``speed`` unchanged here."""
+        return speed

@@ -2,14 +2,25 @@
 
 An :class:`Agent` owns its policy stack: :meth:`~Agent.wrap` puts the wrappers it drives
 through (its observation, its decision interval) over the pose-estimating env, and the
-evaluation steps that stack, so an agent is evaluated exactly as it was trained. Names:
+evaluation steps that stack, so an agent is evaluated exactly as it was trained. Names, read by
+:func:`~stsf_gym.agents.resolve.resolve_agent` as every command reads them:
 
 - ``follower``: the scripted path follower (:mod:`stsf_gym.agents.follower`); options override
-  ``configs/agents/follower.yaml``;
-- a path ending in ``.zip``: a model saved by ``stsf-gym train`` (:class:`SB3Agent`);
+  ``configs/agents/follower.yaml``; ``cautious-follower``: the follower that waits near a goal
+  until its estimate is sure enough (:mod:`stsf_gym.agents.cautious_follower`);
+- ``pretrained:<suite>/<algo>-<pose source>``: a shipped agent; a training folder; a ``.zip``
+  model saved by ``stsf-gym train`` (:class:`~stsf_gym.agents.trained_agent.SB3Agent`). A name
+  of several training seeds gives its first seed's agent from :func:`make_agent`, every seed's
+  from :func:`make_agents`;
 - ``package.module:Class``: an agent of your own, a class with this interface, built with the
   options as keyword arguments;
 - any name given to :func:`register_agent`.
+
+Three lines drive a shipped agent on the worlds it was made for::
+
+    agent = make_agent("pretrained:sparse/dagger-mcl")
+    env = agent.make_env()  # its suite's test worlds, its pose source, STOP, 0.5 s decisions
+    obs, _ = env.reset(seed=0); agent.begin(env); obs, *_ = env.step(agent.act(obs))
 """
 
 from __future__ import annotations
@@ -21,9 +32,13 @@ from typing import Protocol
 import gymnasium as gym
 import numpy as np
 
+from stsf_gym.agents.cautious_follower import CautiousFollowerAgent
+from stsf_gym.agents.follower_agent import FOLLOWER, FollowerAgent
+from stsf_gym.agents.resolve import resolve_agent
+from stsf_gym.agents.trained_agent import SB3Agent
 from stsf_gym.validation import ConfigError
 
-FOLLOWER = "follower"
+CAUTIOUS_FOLLOWER = CautiousFollowerAgent.name
 
 
 class Agent(Protocol):
@@ -52,112 +67,11 @@ class Agent(Protocol):
         """A short name for file names and tables."""
 
 
-class FollowerAgent:
-    """The scripted path follower on the pose estimate: a decision every control step, or
-    every ``decision_steps`` (:class:`~stsf_gym.agents.decision_interval.DecisionInterval`, as
-    a learnt policy decides); other options override ``configs/agents/follower.yaml``."""
-
-    def __init__(self, decision_steps: int = 1, **options) -> None:
-        from stsf_gym.agents.follower import load_follower_config
-
-        self.decision_steps, self.options = decision_steps, options
-        self.settings = load_follower_config(**options)  # bad options fail here, early
-        self.follower = None
-
-    def wrap(self, env: gym.Env) -> gym.Env:
-        """The env itself, or held decisions with ``decision_steps`` above 1."""
-        from stsf_gym.agents.decision_interval import DecisionInterval
-
-        return env if self.decision_steps == 1 else DecisionInterval(env, self.decision_steps)
-
-    def begin(self, env: gym.Env) -> None:
-        """A follower of this episode's path and goals."""
-        from stsf_gym.agents.follower import PathFollower
-
-        self.follower = PathFollower.for_env(env, **self.options)
-
-    def act(self, obs) -> np.ndarray:
-        """Pure pursuit on ``obs["pose"]``, bent by the sonar."""
-        return self.follower.act(obs["pose"], obs["sonar"])
-
-    def env_overrides(self) -> dict:
-        """None needed."""
-        return {}  # any action layout: it stops by standing still, or by STOP if there is one
-
-    def trained_on(self) -> dict | None:
-        """Nothing: the follower is scripted."""
-        return None
-
-    def config(self) -> dict:
-        """The follower's resolved settings."""
-        from dataclasses import asdict
-
-        interval = {} if self.decision_steps == 1 else {"decision_steps": self.decision_steps}
-        return {FOLLOWER: asdict(self.settings), **interval}
-
-    def label(self) -> str:
-        """``follower``, or ``follower-k<steps>`` with a decision interval."""
-        return FOLLOWER if self.decision_steps == 1 else f"{FOLLOWER}-k{self.decision_steps}"
-
-
-class SB3Agent:
-    """A model saved by ``stsf-gym train``, behind the policy stack it was trained with
-    (:func:`~stsf_gym.agents.policy_stack.policy_stack`); its actions deterministic."""
-
-    def __init__(self, path: str) -> None:
-        from stsf_gym.agents.sb3_agent import check_model_file, model_digest, model_metadata
-
-        self.path = check_model_file(path)
-        self.meta, self.digest = model_metadata(self.path), model_digest(self.path)
-        self.model = None
-
-    def wrap(self, env: gym.Env) -> gym.Env:
-        """The policy stack of the model's record over ``env``; shapes checked."""
-        from stsf_gym.agents.policy_stack import policy_stack
-        from stsf_gym.agents.sb3_agent import load_model
-
-        stack = policy_stack(env, self.meta.get("observation"), self.meta.get("decision_steps", 1))
-        self.model = load_model(self.path)
-        for space in ("observation_space", "action_space"):
-            theirs, ours = getattr(self.model, space), getattr(stack, space)
-            if theirs.shape != ours.shape:
-                raise ConfigError(
-                    f"{self.path} expects an {space.split('_')[0]} of shape {theirs.shape}, "
-                    f"this env's is {ours.shape}"
-                )
-        return stack
-
-    def begin(self, env: gym.Env) -> None:
-        """Nothing: the policy keeps no state between steps."""
-        pass
-
-    def act(self, obs) -> np.ndarray:
-        """The model's deterministic action."""
-        action, _ = self.model.predict(obs, deterministic=True)
-        return action
-
-    def env_overrides(self) -> dict:
-        """The STOP entry, if the model was trained with one."""
-        stop = self.meta.get("env", {}).get("task", {}).get("stop_action", False)
-        return {"task": {"stop_action": True}} if stop else {}
-
-    def trained_on(self) -> dict:
-        """Algorithm, pose source, world, timesteps and digest of the model."""
-        from stsf_gym.agents.sb3_agent import training_record
-
-        return training_record(self.path)
-
-    def config(self) -> dict:
-        """The model's path and content digest."""
-        return {"model": str(self.path), "digest": self.digest}
-
-    def label(self) -> str:
-        """The model file's stem and digest."""
-        return f"{self.path.stem}-{self.digest}"
-
-
 #: Agents registered by name: name -> factory(**options).
-AGENTS: dict[str, Callable[..., Agent]] = {FOLLOWER: FollowerAgent}
+AGENTS: dict[str, Callable[..., Agent]] = {
+    FOLLOWER: FollowerAgent,
+    CAUTIOUS_FOLLOWER: CautiousFollowerAgent,
+}
 
 
 def register_agent(name: str, factory: Callable[..., Agent]) -> None:
@@ -175,14 +89,27 @@ def trained_on(name: str) -> dict | None:
 
 
 def make_agent(name: str, options: dict | None = None) -> Agent:
-    """The agent called ``name`` (see the module's docstring) with ``options``."""
+    """The agent called ``name`` (see the module's docstring) with ``options``; a name of
+    several training seeds (a shipped agent, a training folder) gives its first seed's."""
+    return make_agents(name, options)[0]
+
+
+def make_agents(name: str, options: dict | None = None) -> list[Agent]:
+    """One agent per model ``name`` stands for (:func:`~stsf_gym.agents.resolve.resolve_agent`:
+    each training seed of a shipped agent or a training folder), or the one agent by name."""
     options = options or {}
-    if name in AGENTS:
-        return AGENTS[name](**options)
-    if name.endswith(".zip"):
+    if name in AGENTS:  # before the resolver: a folder of that name is not read as a run
+        return [AGENTS[name](**options)]
+    singles = resolve_agent(name)
+    if singles[0].endswith(".zip"):
         if options:
             raise ConfigError(f"a saved model takes no agent options, got {sorted(options)}")
-        return SB3Agent(name)
+        return [SB3Agent(model) for model in singles]
+    return [_named_agent(name, options)]
+
+
+def _named_agent(name: str, options: dict) -> Agent:
+    """``package.module:Class`` with ``options``."""
     module, sep, attr = name.partition(":")
     if sep and module and attr:
         try:
@@ -191,6 +118,7 @@ def make_agent(name: str, options: dict | None = None) -> Agent:
             raise ConfigError(f"agent {name!r} not found: {err}") from None
         return cls(**options)
     raise ConfigError(
-        f"unknown agent {name!r}; known: {', '.join(AGENTS)}, a saved model (.zip) or "
-        "package.module:Class"
+        f"unknown agent {name!r}; known: {', '.join(AGENTS)}, a shipped agent "
+        "(pretrained:SUITE/ALGO-SOURCE, `stsf-gym agents`), a training folder, a saved model "
+        "(.zip) or package.module:Class"
     )

@@ -3,7 +3,7 @@
 ``stsf-gym train`` stores a ``stsf_meta`` mapping in every saved model (algorithm,
 estimator, world, env overrides, policy-input settings, wall time so far); it travels inside
 the ``.zip`` with the model, so a model file alone is enough to evaluate it
-(:class:`~stsf_gym.agents.registry.SB3Agent`).
+(:class:`~stsf_gym.agents.trained_agent.SB3Agent`).
 """
 
 from __future__ import annotations
@@ -50,12 +50,24 @@ def model_metadata(path: str | Path) -> dict:
     return _saved_data(path)[META_KEY]
 
 
+def trained_algo(record: dict) -> str:
+    """What ran to train a model, from its ``train.json`` (or ``stsf_meta``): the ``algo`` it
+    records when that says so (``dagger``, ``dagger+ppo``, ``ppo``, ...); a record written
+    before names said what ran holds the SB3 class there (``ppo``), read from its stages:
+    demonstrations and no reward step are ``dagger``, both are ``dagger+<class>``."""
+    algo = record["algo"]
+    if algo.startswith("dagger") or not record.get("demonstrations"):
+        return algo
+    reward_steps = (record.get("hyperparams") or {}).get("n_timesteps", 0)
+    return f"dagger+{algo}" if reward_steps else "dagger"
+
+
 def training_record(path: str | Path) -> dict:
     """What an evaluation records about a model: algorithm, pose source, world, timesteps."""
     data = _saved_data(path)
     meta = data[META_KEY]
     return {
-        "algo": meta["algo"],
+        "algo": trained_algo(meta),
         "estimator": meta["estimator"],
         "world": meta["world"],
         "timesteps": data["num_timesteps"],

@@ -41,7 +41,7 @@ from typing import Any
 
 import yaml
 
-from stsf_gym.agents.pretrained import MODELS, PREFIX
+from stsf_gym.agents.pretrained import ALIASES, MODELS, PREFIX
 from stsf_gym.results.behaviour import VERSIONS, code_digest
 from stsf_gym.results.provenance import file_digest
 
@@ -130,15 +130,39 @@ def moved_versions(recorded: Mapping[str, int]) -> list[str]:
     ]
 
 
-def unrecorded_agents(command: str, loaded: Mapping[str, str] | None) -> list[str]:
+def unrecorded_agents(
+    command: str, loaded: Mapping[str, str] | None, root: Path = ROOT
+) -> list[str]:
     """The shipped agents ``command`` names whose model files ``loaded`` does not list (a run
     made before it recorded them): whether the agent shipped now made its results is unknown."""
     names = dict.fromkeys(match["name"] for match in SHIPPED.finditer(command))
+    renamed = shipped_aliases(root)
+    paths = [shipped_now(path, renamed) for path in loaded or {}]
     return [
         PREFIX + name
         for name in names
-        if not any(path.startswith(SHIPPED_MODELS.format(name=name)) for path in loaded or {})
+        if not any(
+            path.startswith(SHIPPED_MODELS.format(name=renamed.get(name, name))) for path in paths
+        )
     ]
+
+
+def shipped_aliases(root: Path = ROOT) -> dict[str, str]:
+    """``{<suite>/<old name>: <suite>/<name now>}`` of the shipped agents renamed under ``root``
+    (``aliases.json`` beside them, :func:`stsf_gym.agents.pretrained.aliases`)."""
+    record = root / SHIPPED_ROOT / ALIASES.name
+    return json.loads(record.read_text()) if record.is_file() else {}
+
+
+def shipped_now(path: str, renamed: Mapping[str, str]) -> str:
+    """A shipped model's repository path under the name its agent is shipped under now: an agent
+    renamed (its old name an alias, ``renamed``) keeps its models, byte for byte."""
+    parts = path.removeprefix(SHIPPED_ROOT).split("/", 2)
+    if not path.startswith(SHIPPED_ROOT) or len(parts) != 3:
+        return path
+    suite, agent, file = parts
+    name = f"{suite}/{agent}"
+    return SHIPPED_MODELS.format(name=renamed.get(name, name)) + file
 
 
 def changed_files(digests: Mapping[str, str], digest_of, root: Path = ROOT) -> list[str]:
@@ -155,10 +179,13 @@ def staleness(code: Mapping[str, Any], command: str, root: Path = ROOT) -> str |
     """Why the numbers of a results file made by ``code`` (its provenance's ``stsf_gym``) with
     ``command`` may differ now, or None when they would not (see the module's docstring)."""
     loaded = code.get("loaded_code") or {}
-    unrecorded = unrecorded_agents(command, loaded)
+    unrecorded = unrecorded_agents(command, loaded, root)
+    renamed = shipped_aliases(root)
     if unrecorded:
         return f"it ran {_named(unrecorded)} without recording the models' digests"
-    models = {path: d for path, d in loaded.items() if path.startswith(SHIPPED_ROOT)}
+    models = {
+        shipped_now(path, renamed): d for path, d in loaded.items() if path.startswith(SHIPPED_ROOT)
+    }
     reshipped = changed_files(models, file_digest, root)
     if reshipped:
         return f"shipped again since: {_named(reshipped)}"

@@ -342,6 +342,32 @@ class RewardConfig:
     steering_change: Annotated[float, Range(le=0)] = 0.0  # per unit change of action[1]
 
 
+def check_declare_reward(reward: RewardConfig, time_limit: float) -> None:
+    """The reward's optimum is the declared-arrival task (:meth:`PathTask.reward`): time costs
+    (``reward.time`` < 0), a goal pays (``reward.goal`` > 0), and a false stop costs at least
+    as much as standing until the time limit (``reward.false_stop`` <= ``reward.time`` *
+    ``sim.max_episode_seconds``)."""
+    require(
+        reward.time < 0,
+        "reward.time",
+        f"must be < 0 under task.protocol: declare (dawdling "
+        f"to the time limit must not pay), got {reward.time:g}",
+    )
+    require(
+        reward.goal > 0,
+        "reward.goal",
+        f"must be > 0 under task.protocol: declare, got {reward.goal:g}",
+    )
+    waiting = reward.time * time_limit
+    require(
+        reward.false_stop <= waiting,
+        "reward.false_stop",
+        f"must be <= reward.time * sim.max_episode_seconds ({waiting:g}: waiting until the time "
+        f"limit) under task.protocol: declare, so a false stop never pays better than trying "
+        f"on, got {reward.false_stop:g}",
+    )
+
+
 @dataclass(frozen=True)
 class TaskConfig:
     """When an episode succeeds (:mod:`stsf_gym.envs.task`): ``reach`` (the paper's protocol) or
@@ -363,19 +389,20 @@ class TaskConfig:
     def __post_init__(self) -> None:
         require(
             self.leg_min <= self.leg_max,
-            "task.leg_min",
+            "leg_min",
             f"must not exceed task.leg_max ({self.leg_max:g}), got {self.leg_min:g}",
         )
         require(
             self.leg_max == 0 or self.leg_min >= self.goal_radius,
-            "task.leg_min",
+            "leg_min",
             f"a leg's goal lies ahead of its start: at least task.goal_radius "
             f"({self.goal_radius:g} m), got {self.leg_min:g}",
         )
         require(
             not (self.stop_action or self.leg_max) or self.protocol == "declare",
-            "task.protocol",
-            "task.stop_action and training legs need the declare protocol, got 'reach'",
+            "protocol",
+            "is 'reach', but task.stop_action and training legs need the declare protocol: "
+            "set task.protocol: declare (--set task.protocol=declare, or task__protocol='declare')",
         )
 
 
@@ -412,6 +439,8 @@ class EnvConfig:
             f"must be <= 1/camera.rate_hz ({frame_period:g} s: one frame per step at most), "
             f"got {self.sim.control_dt:g}",
         )
+        if self.task.protocol == "declare":
+            check_declare_reward(self.reward, self.sim.max_episode_seconds)
         map_ids = sorted(lm.id for lm in self.world.landmarks)
         for i, fault in enumerate(self.faults):
             require(

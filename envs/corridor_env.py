@@ -89,8 +89,10 @@ class CorridorEnv(gym.Env):
 
     ## Reward
     ``reward.progress`` per metre gained along the path (``declare``: up to the current goal;
-    past it nothing), ``reward.time`` per second, ``reward.goal`` on reaching each goal,
-    ``reward.collision`` on a collision, and
+    past it nothing), ``reward.time`` per second,
+    ``reward.goal`` on reaching each goal, ``reward.false_stop`` on a stop declared off its goal,
+    ``reward.collision`` on a collision (each term: :meth:`stsf_gym.envs.task.PathTask.reward`),
+    and
     ``reward.steering_change`` (<= 0, default 0) per unit change of the yaw command ``action[1]``.
 
     ## Episode end (``task.protocol``, :class:`stsf_gym.envs.task.PathTask`)

@@ -202,9 +202,22 @@ class PathTask:
     def reward(
         self, gained: float, dt: float, reached: bool, collided: bool, steering_change: float = 0.0
     ) -> float:
-        """The step's reward: progress ``gained`` (m), time ``dt`` (s), the goal bonus when
-        ``reached``, the collision penalty when ``collided``, the false-stop penalty once a
-        declared stop missed, and the steering-change penalty.
+        """The step's reward, its terms (``reward:``; signs checked by
+        :class:`~stsf_gym.envs.config.EnvConfig` under ``declare``):
+
+        - ``progress`` per metre ``gained`` of :meth:`progress`, a potential (Ng et al. 1999):
+          the return's sum of it is the progress at the end minus at the start, so no metre of a
+          leg is paid twice (driving back and forth nets 0, past the goal earns 0); correct stops
+          in the radius differ by their offset along the path (at most the radius, 0.25 m: a
+          fortieth of the goal bonus);
+        - ``time`` (< 0 under ``declare``) per second ``dt``: dawdling to the time limit costs;
+        - ``goal`` (> 0) once per goal ``reached``, judged at the TRUE position of the declared
+          stop (what the task judges; the observation never sees it);
+        - ``false_stop`` once, at the declared stop off its goal that ends the episode; at most
+          ``time * sim.max_episode_seconds``, so it never pays better than trying on (standing
+          until the time limit costs at most that, and keeps the progress made);
+        - ``collision`` once, at the collision that ends the episode;
+        - ``steering_change`` (<= 0) per unit change of the yaw command.
         """
         cfg = self.reward_cfg
         return (

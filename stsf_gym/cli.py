@@ -218,6 +218,7 @@ def _agents(args: argparse.Namespace) -> dict | list:
                 "pose source": r["pose_source"],
                 "seeds": len(r["seeds"]),
                 "val success": ", ".join(f"{v:.2f}" for v in r["val_success"].values()),
+                "aliases": ", ".join(a.removeprefix(pretrained.PREFIX) for a in r["aliases"]),
             }
             for r in rows
         ]
@@ -576,8 +577,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument(
         "--agent",
         default="follower",
-        help="follower, a model saved by train (DIR/model.zip), a train --seeds folder or a "
-        "shipped agent (pretrained:SUITE/ALGO-SOURCE); several, comma-separated, give one "
+        help="follower, cautious-follower, a model saved by train (DIR/model.zip), a train "
+        "--seeds folder or a shipped agent (pretrained:SUITE/ALGO-SOURCE); several, "
+        "comma-separated, give one "
         "comparison table; {estimator} in a path is replaced by each pose source",
     )
     evaluate.add_argument(
@@ -644,7 +646,8 @@ def build_parser() -> argparse.ArgumentParser:
     curve.add_argument(
         "--agent",
         default="follower",
-        help="follower, saved models, train --seeds folders and/or shipped agents "
+        help="follower, cautious-follower, saved models, train --seeds folders and/or shipped "
+        "agents "
         "(pretrained:SUITE/ALGO-SOURCE: one curve per training seed), comma-separated",
     )
     curve.add_argument(
@@ -683,8 +686,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench_suite.add_argument(
         "--agents",
         default="follower",
-        help="follower, saved models and/or training folders (train --seeds N), comma-separated;"
-        " a model drives on the pose source it was trained on",
+        help="follower, cautious-follower, saved models, training folders (train --seeds N) "
+        "and/or shipped agents (pretrained:SUITE/ALGO-SOURCE), comma-separated; a model drives "
+        "on the pose source it was trained on",
     )
     bench_suite.add_argument(
         "--estimators",

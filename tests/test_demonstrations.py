@@ -97,7 +97,8 @@ def test_the_demonstration_stage_resumes_and_its_agent_drives_behind_its_stack(t
     assert again["demonstrations"] == summary["demonstrations"]
     _resumed_after_round_0_drives_the_same_round_1(out, log, tmp_path / "resumed")
     agent = make_agent(str(out / "model.zip"))
-    assert isinstance(agent, SB3Agent) and agent.env_overrides() == {"task": {"stop_action": True}}
+    stop_task = {"task": {"protocol": "declare", "stop_action": True}}  # its STOP and its task
+    assert isinstance(agent, SB3Agent) and agent.env_overrides() == stop_task
     env = {**load_suite("corridor").episode_env, "sim": {"max_episode_seconds": 3.0}}
     episode = run_episode(EpisodeSpec("generated:test", "truth", 0, str(out / "model.zip"), env))
     assert episode.steps <= 30 and len(episode.true_poses) == episode.steps + 1  # every step

@@ -162,3 +162,23 @@ def test_a_run_of_a_shipped_agent_is_current_only_with_its_models_recorded(tmp_p
     (models / "seed-0.zip").write_bytes(b"trained again")  # a new agent shipped under the name
     (block,), _ = measured.check(root)
     assert block.state == "stale"
+
+
+def test_a_shipped_agent_renamed_keeps_its_results_current_under_its_alias(tmp_path):
+    """Models moved to the agent's new name (``aliases.json``: old -> new) are the same models;
+    the run that loaded them under the old name stays current, until they are shipped again."""
+    command = "stsf-gym demo --seeds 1 --agents follower,pretrained:sparse/ppo-truth"
+    shipped = tmp_path / "agents" / "pretrained" / "trained-models"
+    (shipped / "sparse" / "ppo-truth").mkdir(parents=True)
+    (shipped / "sparse" / "ppo-truth" / "seed-0.zip").write_bytes(b"the policy")
+    old = "agents/pretrained/trained-models/sparse/ppo-truth/seed-0.zip"
+    root = _page_block(tmp_path, {"loaded_code": {old: file_digest(tmp_path / old)}}, command)
+    (shipped / "sparse" / "ppo-truth").rename(shipped / "sparse" / "dagger-truth")
+    (block,), _ = measured.check(root)
+    assert block.state == "stale"  # gone, and no alias says where
+    (shipped / "aliases.json").write_text(json.dumps({"sparse/ppo-truth": "sparse/dagger-truth"}))
+    (block,), _ = measured.check(root)
+    assert block.state == "current"
+    (shipped / "sparse" / "dagger-truth" / "seed-0.zip").write_bytes(b"trained again")
+    (block,), _ = measured.check(root)
+    assert block.state == "stale"

@@ -17,8 +17,13 @@ from stsf_gym.experiments.benchmark.trained import expand_agents, training_group
 SHIPPED = pretrained.names()
 
 
-def test_agents_are_shipped():
-    assert "pretrained:corridor/ppo-truth" in SHIPPED
+def test_agents_are_shipped_under_what_trained_them_and_old_names_are_aliases():
+    assert "pretrained:corridor/dagger-truth" in SHIPPED
+    assert all(pretrained.summary(n)["algo"] == "dagger" for n in SHIPPED)  # no reward stage
+    old, new = "pretrained:corridor/ppo-truth", "pretrained:corridor/dagger-truth"
+    assert pretrained.aliases()[old] == new and old not in SHIPPED
+    assert expand_agents([old]) == expand_agents([new])
+    assert pretrained.summary(old)["name"] == new
 
 
 @pytest.mark.slow
@@ -49,6 +54,8 @@ def test_stsf_gym_agents_lists_them_as_json():
     )
     rows = json.loads(done.stdout.strip().splitlines()[-1])
     assert [r["name"] for r in rows] == SHIPPED
+    aliases = {a: r["name"] for r in rows for a in r["aliases"]}
+    assert aliases == pretrained.aliases()
     for row in rows:
         assert {"algo", "suite", "pose_source", "seeds", "val_success", "provenance"} <= set(row)
         assert len(row["val_success"]) == len(row["seeds"]) >= 1
@@ -63,13 +70,13 @@ def test_none_is_stale_and_a_change_of_what_they_see_is_flagged(monkeypatch):
     monkeypatch.setattr(
         PolicyObservation, "observation", lambda self, obs: seen(self, obs) + np.float32(1e-3)
     )
-    assert pretrained.moved("pretrained:corridor/ppo-truth", 0)
+    assert pretrained.moved("pretrained:corridor/dagger-truth", 0)
 
 
 def test_a_shipped_name_expands_to_its_seeds_and_groups_under_its_name():
-    models = expand_agents(["pretrained:corridor/ppo-truth"])
-    assert len(models) == len(pretrained.summary("pretrained:corridor/ppo-truth")["seeds"])
-    assert {training_group(m) for m in models} == {"pretrained:corridor/ppo-truth"}
+    models = expand_agents(["pretrained:corridor/ppo-truth"])  # an alias: the same models
+    assert len(models) == len(pretrained.summary("pretrained:corridor/dagger-truth")["seeds"])
+    assert {training_group(m) for m in models} == {"pretrained:corridor/dagger-truth"}
     with pytest.raises(ConfigError, match="no shipped agent 'pretrained:corridor/ppo-nothing'"):
         expand_agents(["pretrained:corridor/ppo-nothing"])
 
@@ -81,7 +88,7 @@ def test_a_run_that_names_a_shipped_agent_counts_its_models_as_loaded_code():
     models = expand_agents(["pretrained:corridor/ppo-truth"])
     code = loaded_code()
     for model in map(Path, models):
-        path = f"agents/pretrained/trained-models/corridor/ppo-truth/{model.name}"
+        path = f"agents/pretrained/trained-models/corridor/dagger-truth/{model.name}"
         assert code[path] == file_digest(model)
 
 

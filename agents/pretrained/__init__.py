@@ -1,6 +1,12 @@
 """Agents shipped trained, with their settings and provenance (as rl-baselines3-zoo ships
 its agents): named ``pretrained:<suite>/<algo>-<pose source>`` wherever an agent is named.
 
+``<algo>`` says what ran (:func:`~stsf_gym.agents.sb3_agent.trained_algo`): ``dagger``
+(behaviour cloning and DAgger rounds labelled by the follower, no reward), ``dagger+ppo`` (then
+PPO on the env's reward) or ``ppo`` (reward only). Names shipped before an agent was renamed
+stay valid as **aliases** (``trained-models/aliases.json``, old name -> new): the agents shipped
+as ``ppo-*`` were trained with no PPO step (``n_timesteps: 0``), so they are ``dagger-*`` now.
+
 Each lives in ``trained-models/<suite>/<algo>-<pose source>/``: ``seed-S.zip`` per training
 seed (the model, its settings inside it), ``seed-S.json`` (its ``train.json``: code digest, config,
 machine, validation rounds) and ``agent.json`` (the summary ``stsf-gym agents`` lists, and
@@ -18,12 +24,14 @@ from pathlib import Path
 
 import numpy as np
 
+from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.io import write_json
 from stsf_gym.results.provenance import note_data_files
 
 PREFIX = "pretrained:"
 MODELS = Path(__file__).parent / "trained-models"  # not a package name: data, not code
+ALIASES = MODELS / "aliases.json"  # "<suite>/<old name>" -> "<suite>/<algo>-<pose source>"
 SEEN_STEPS = 40  # decisions of the fixed episode whose inputs are kept (20 s at 0.5 s)
 SEEN_WORLD_SEED = 0  # the test world of that episode
 SEEN_TOLERANCE = 1e-5  # inputs within this of the shipped ones are the same
@@ -34,9 +42,23 @@ def names() -> list[str]:
     return [PREFIX + f"{d.parent.name}/{d.name}" for d in sorted(MODELS.glob("*/*")) if d.is_dir()]
 
 
+def aliases() -> dict[str, str]:
+    """Every alias of a shipped agent: old name -> the name it is shipped under now."""
+    if not ALIASES.is_file():
+        return {}
+    renamed = json.loads(ALIASES.read_text())
+    return {PREFIX + old: PREFIX + new for old, new in sorted(renamed.items())}
+
+
+def canonical(name: str) -> str:
+    """The name shipped agent ``name`` is shipped under (``name`` itself unless an alias)."""
+    return aliases().get(name, name)
+
+
 def folder(name: str) -> Path:
-    """The folder of shipped agent ``name`` (``pretrained:<suite>/<algo>-<pose source>``)."""
-    key = name.removeprefix(PREFIX)
+    """The folder of shipped agent ``name`` (``pretrained:<suite>/<algo>-<pose source>``, or an
+    alias of one)."""
+    key = canonical(name).removeprefix(PREFIX)
     path = MODELS / key
     if not name.startswith(PREFIX) or key.count("/") != 1 or not (path / "agent.json").is_file():
         raise ConfigError(
@@ -61,8 +83,16 @@ def summary(name: str) -> dict:
 
 
 def listing() -> list[dict]:
-    """Every shipped agent's summary, without the inputs it saw."""
-    return [{k: v for k, v in summary(n).items() if k != "seen"} for n in names()]
+    """Every shipped agent's summary, without the inputs it saw, with its ``aliases`` (the old
+    names that still name it)."""
+    renamed = aliases()
+    return [
+        {
+            **{k: v for k, v in summary(n).items() if k != "seen"},
+            "aliases": [old for old, new in renamed.items() if new == n],
+        }
+        for n in names()
+    ]
 
 
 def shipped_name(model: str | Path) -> str | None:
@@ -95,7 +125,7 @@ def seen_inputs(
     of another CPU's floating point (numpy's and the BLAS's kernels are chosen per CPU) is not
     fed back through the policy and grown into another trajectory, while a change of what the
     agent sees shows at the decision it starts."""
-    from stsf_gym.agents.registry import SB3Agent
+    from stsf_gym.agents.trained_agent import SB3Agent
 
     agent = SB3Agent(str(model))
     env = suite_test_env(agent, suite, pose_source)
@@ -141,7 +171,7 @@ def ship(training: Path, suite: str) -> str:
     if not runs or not all((r / "model.zip").is_file() for r in runs):
         raise ConfigError(f"{training}: no seed-S/model.zip to ship (a `train --seeds N` folder)")
     records = [json.loads((r / "train.json").read_text()) for r in runs]
-    algo, pose_source = records[0]["algo"], records[0]["estimator"]
+    algo, pose_source = trained_algo(records[0]), records[0]["estimator"]
     target = MODELS / suite / f"{algo}-{pose_source}"
     target.mkdir(parents=True, exist_ok=True)
     seen, val = {}, {}

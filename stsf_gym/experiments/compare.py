@@ -4,9 +4,12 @@
 agent on each pose source; ``{estimator}`` in a model path is replaced by the pose source, so
 each source is driven by the agent trained on it. Every pair runs the same seeded episodes as
 :func:`stsf_gym.experiments.evaluate.evaluate` (same env, wrapper and scoring), in parallel,
-with resume. Writes ``comparison.json`` (the results schema: numbers), ``comparison.md`` (one
-row per pair: success rate, collisions, ATE, RPE, NEES, ...) and ``comparison.png`` (success
-rate and RMS position error per pair).
+with resume. Every model is its own row, named as the benchmark names it (a shipped agent's seed
+``dagger-truth/seed-0``; the JSON keeps the whole path), and the seeds of one trained
+agent are also aggregated as the benchmark aggregates them (IQM over seeds, two-level bootstrap
+interval). Writes ``comparison.json`` (the results schema: numbers), ``comparison.md`` (one row
+per pair: success rate, collisions, ATE, RPE, NEES, ...; then the seeds together) and
+``comparison.png`` (success rate and RMS position error per pair).
 """
 
 from __future__ import annotations
@@ -15,7 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from stsf_gym.agents.registry import make_agent
 from stsf_gym.episode_env import estimator_options
+from stsf_gym.experiments.benchmark.intervals import seed_iqm
+from stsf_gym.experiments.benchmark.trained import agent_name, training_groups
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
@@ -27,6 +33,8 @@ from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms, summarise
 from stsf_gym.io import markdown_table, save_figure
 from stsf_gym.results import SCHEMA_VERSION, rendered
+from stsf_gym.validation import ConfigError
+from stsf_gym.yaml_layers import deep_merge
 
 SUMMARY_COLUMNS = (
     "agent",
@@ -49,12 +57,77 @@ def agent_for(template: str, estimator: str) -> str:
     return template.replace("{estimator}", estimator)
 
 
-def agent_name(template: str, estimator: str) -> str:
-    """A short name for the table: ``follower``, or the algorithm of the saved model."""
-    from stsf_gym.agents.registry import trained_on
+def judged_alike(agents: list[str], estimators: list[str], env: dict) -> dict:
+    """The env settings every row runs with: where an agent declares arrival with its STOP entry
+    (its own task, :meth:`~stsf_gym.agents.registry.Agent.env_overrides`), its task protocol for
+    every row, so the follower beside it is judged by the same rule."""
+    protocols = {
+        make_agent(agent_for(a, e)).env_overrides().get("task", {}).get("protocol")
+        for a in agents
+        for e in estimators
+    } - {None}
+    if len(protocols) > 1:
+        raise ConfigError(f"the agents need different task protocols: {sorted(protocols)}")
+    return deep_merge(env, {"task": {"protocol": protocols.pop()}}) if protocols else env
 
-    record = trained_on(agent_for(template, estimator))
-    return template if record is None else record["algo"].upper()
+
+def seed_aggregates(by_pair: dict[tuple[str, str], list[EpisodeResult]]) -> list[dict]:
+    """Per training folder (or shipped agent) and pose source with several models: the IQM over
+    models of each model's success rate over the episodes, with its two-level bootstrap interval
+    (episodes and models resampled), as the benchmark aggregates training seeds over worlds."""
+    aggregates = []
+    for (group, estimator), models in training_groups(by_pair).items():
+        if len(models) < 2:
+            continue
+        seeds = sorted(
+            set.intersection(*({r.spec["seed"] for r in by_pair[m, estimator]} for m in models))
+        )
+        matrix = [
+            [
+                float(r.outcome == "goal")
+                for r in sorted(by_pair[m, estimator], key=_seed)
+                if r.spec["seed"] in seeds
+            ]
+            for m in models
+        ]
+        interval = seed_iqm(matrix)
+        aggregates.append(
+            {
+                "agent": group,
+                "estimator": estimator,
+                "runs": len(models),
+                "episodes": len(seeds),
+                "success_iqm": interval["estimate"],
+                "success_iqm_ci95": [interval["low"], interval["high"]],
+                "success_per_run": interval["per_run"],
+            }
+        )
+    return aggregates
+
+
+def _seed(result: EpisodeResult) -> int:
+    return result.spec["seed"]
+
+
+def _aggregates_markdown(aggregates: list[dict]) -> str:
+    """The seeds of each trained agent together, as a table (empty without any)."""
+    if not aggregates:
+        return ""
+    rows = [
+        {
+            "agent": agent_name(a["agent"]),
+            "pose source": a["estimator"],
+            "runs": a["runs"],
+            "success IQM (95 % CI)": f"{a['success_iqm']:.2f} "
+            f"({a['success_iqm_ci95'][0]:.2f}-{a['success_iqm_ci95'][1]:.2f})",
+        }
+        for a in aggregates
+    ]
+    return (
+        "\n\n## Training seeds together\n\nInterquartile mean over the seeds of each seed's "
+        "success rate, 95 % interval resampling episodes and seeds (as `stsf-gym benchmark`).\n\n"
+        + markdown_table(rows)
+    )
 
 
 def compare(
@@ -69,6 +142,7 @@ def compare(
 ) -> dict:
     """Run every agent on every pose source; write the table and the figure to ``out``."""
     out = Path(out)
+    env = judged_alike(agents, estimators, env or {})
     pairs = [(a, e) for a in agents for e in estimators]
     specs = [
         EpisodeSpec(world, e, s, agent_for(a, e), env or {}, estimator_options(e))
@@ -76,21 +150,25 @@ def compare(
         for s in range(seed, seed + seeds)
     ]
     results = run_episodes(specs, out / "episodes", workers, desc=f"compare {world}")
-    by_pair = {
-        (agent_name(a, e), e): [
+    by_pair = {  # each model its own row, under the name the benchmark gives it
+        (agent_for(a, e), e): [
             r for r in results if r.spec["agent"] == agent_for(a, e) and r.spec["estimator"] == e
         ]
         for a, e in pairs
     }
     rows = [summarise(e, episodes, a) for (a, e), episodes in by_pair.items()]
+    aggregates = seed_aggregates(by_pair)
     summary = {
         "schema_version": SCHEMA_VERSION,
         "world": world,
         "agents": agents,
         "seeds": [seed, seed + seeds - 1],
         "rows": rows,
+        "aggregates": aggregates,
     }
-    table = markdown_table([rendered(row, SUMMARY_COLUMNS) for row in rows])
+    named = [{**row, "agent": agent_name(row["agent"])} for row in rows]
+    table = markdown_table([rendered(row, SUMMARY_COLUMNS) for row in named])
+    table += _aggregates_markdown(aggregates)
     write_report(
         out,
         summary,
@@ -117,8 +195,10 @@ def plot_comparison(by_pair: dict[tuple[str, str], list[EpisodeResult]], path: P
         runs = [by_pair[agent, e] for e in estimators]
         success = [np.mean([r.outcome == "goal" for r in episodes]) for episodes in runs]
         errors = [np.mean([rms(r.errors) for r in episodes]) for episodes in runs]
-        ax_s.bar(x + i * width, success, width, label=agent)
-        ax_e.bar(x + i * width, np.maximum(errors, 1e-4), width, label=agent)  # truth: 0 on log
+        ax_s.bar(x + i * width, success, width, label=agent_name(agent))
+        ax_e.bar(
+            x + i * width, np.maximum(errors, 1e-4), width, label=agent_name(agent)
+        )  # truth: 0 on log
     for ax, label in ((ax_s, "success rate"), (ax_e, "RMS position error (m)")):
         ax.set_xticks(x + width * (len(agents) - 1) / 2, estimators)
         ax.set_ylabel(label)

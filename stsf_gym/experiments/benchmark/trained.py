@@ -1,9 +1,9 @@
 """Trained agents in the benchmark: each training seed's model, and the aggregate over seeds.
 
-An agent of ``stsf-gym benchmark --agents`` is ``follower``, a saved model (``.zip``) or a
-training folder (the ``OUT`` of ``stsf-gym train --seeds N``: its ``seed-*/model.zip``, or the
-``model.zip`` of a one-seed run). A model drives on the pose source it was trained on (its
-``stsf_meta``); the follower on each pose source asked for.
+An agent of ``stsf-gym benchmark --agents`` is any name :mod:`stsf_gym.agents.resolve` reads:
+``follower``, a shipped agent, a saved model (``.zip``) or a training folder (its models). A
+model drives on the pose source it was trained on (its ``stsf_meta``); the follower on each pose
+source asked for.
 
 The models of one training folder are one agent trained with several seeds: besides a row per
 model, the leaderboard aggregates them as rliable does (Agarwal et al. 2021, "Deep RL at the
@@ -22,10 +22,10 @@ import numpy as np
 
 from stsf_gym.agents import pretrained
 from stsf_gym.agents.registry import FOLLOWER, trained_on
-from stsf_gym.envs.config import ConfigError
+from stsf_gym.agents.resolve import SEED_FOLDERS, resolve_agent, training_group
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
 
-SEED_FOLDERS = "seed-*"
+__all__ = ["SEED_FOLDERS", "expand_agents", "training_group"]  # also read from here
 
 
 #: The pose sources of agents with none of their own when ``--estimators`` is not given.
@@ -33,27 +33,10 @@ DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf",
 
 
 def expand_agents(agents: list[str]) -> list[str]:
-    """``follower`` and model files as given (resolved), training folders and shipped agents
-    (``pretrained:<suite>/<algo>-<pose source>``) as their models, one per training seed."""
-    expanded = []
-    for agent in agents:
-        path = Path(agent)
-        if agent.startswith(pretrained.PREFIX):
-            expanded.extend(str(m) for m in pretrained.models(agent))
-        elif path.is_dir():
-            models = sorted(path.glob(f"{SEED_FOLDERS}/model.zip")) or [path / "model.zip"]
-            missing = [m for m in models if not m.is_file()]
-            if missing:
-                raise ConfigError(
-                    f"agent folder {path} holds no trained model: {missing[0]} not found "
-                    "(a folder of `stsf-gym train --seeds N`, or of one run)"
-                )
-            expanded.extend(str(m.resolve()) for m in models)
-        elif path.suffix == ".zip":
-            expanded.append(str(path.resolve()))
-        else:  # an agent by name (follower, a registered one, package.module:Class)
-            expanded.append(agent)
-    return expanded
+    """Each of ``agents`` as the single agents it stands for
+    (:func:`~stsf_gym.agents.resolve.resolve_agent`: shipped agents and training folders as
+    their models, one per training seed)."""
+    return [single for agent in agents for single in resolve_agent(agent)]
 
 
 def agent_name(agent: str) -> str:
@@ -87,17 +70,6 @@ def agent_pose_sources(
     if record is not None:
         return [record["estimator"]]
     return list(dict.fromkeys([*DEFAULT_ESTIMATORS, *learnt_sources]))
-
-
-def training_group(agent: str) -> str | None:
-    """The training folder a model file belongs to (None for an agent by name)."""
-    if not agent.endswith(".zip"):
-        return None
-    shipped = pretrained.shipped_name(agent)
-    if shipped is not None:
-        return shipped
-    folder = Path(agent).parent
-    return str(folder.parent if folder.match(SEED_FOLDERS) else folder)
 
 
 def training_groups(rows) -> dict[tuple[str, str], list[str]]:

@@ -1,0 +1,108 @@
+"""The declared-arrival reward's optimum is the task: on hand-built episodes of true positions
+along a straight 10 m path, a correct declaration has the best return, dawdling to the time limit
+is not paid, a false stop is never better than trying on, no metre of a leg is paid twice, and a
+reward config for which any of these fails is refused under the declare protocol."""
+
+import numpy as np
+import pytest
+
+from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.task import PathTask
+
+DT = 0.5  # s per hand-built step
+TIME_LIMIT = 150.0  # s: the training legs' limit (configs/agents/ppo.yaml)
+GOAL_ARC = 5.0  # m along the path (x, on straight_10m)
+TASK = {"protocol": "declare", "stop_action": True}
+
+
+def leg_task() -> tuple[PathTask, object]:
+    cfg = load_config(world="straight_10m", task=TASK, sim={"max_episode_seconds": TIME_LIMIT})
+    task = PathTask(cfg.world, cfg.reward, cfg.task)
+    task.set_goals([[GOAL_ARC, 0.0]])
+    return task, cfg
+
+
+def episode_return(xs: list[float], stop_at_end: bool) -> float:
+    """The return of the robot at true positions ``(x, 0)`` step by step (the env's order: the
+    task judges the step, then progress and reward), declaring at the last one if asked; the
+    episode is cut at the time limit as the env cuts it."""
+    task, _ = leg_task()
+    progress, total, time = task.progress(np.array([xs[0], 0.0])), 0.0, 0.0
+    for i, x in enumerate(xs[1:], 1):
+        time += DT
+        xy = np.array([x, 0.0])
+        reached = task.update(xy, 0.1, 0.0, DT, time, stop=stop_at_end and i == len(xs) - 1)
+        now = task.progress(xy)
+        total += task.reward(now - progress, DT, reached, False)
+        progress = now
+        if task.finished or time >= TIME_LIMIT - 1e-9:
+            break
+    return total
+
+
+def drive(start: float, end: float, speed: float = 0.122) -> list[float]:
+    steps = max(int(abs(end - start) / (speed * DT)), 1)
+    return list(np.linspace(start, end, steps + 1))
+
+
+def wait(x: float, seconds: float) -> list[float]:
+    return [x] * int(seconds / DT)
+
+
+def test_correct_stops_differ_by_their_offset_along_the_path_a_false_one_by_the_bonus():
+    short, exact, past = (episode_return(drive(1.0, GOAL_ARC + d), True) for d in (-0.2, 0, 0.2))
+    steps = len(drive(1.0, GOAL_ARC)) - 1
+    assert exact == pytest.approx(4.0 + 10.0 - 0.01 * DT * steps)
+    for correct in (short, past):  # within 0.2 m of progress and a step or so of time
+        assert abs(correct - exact) <= 0.2 + 4 * 0.01 * DT
+    missed = episode_return(drive(1.0, GOAL_ARC - 0.3), True)  # 0.3 m short: off the radius
+    assert missed < short - 10.0 + 0.2
+
+
+def test_a_correct_declaration_beats_dawdling_to_the_time_limit():
+    declared = episode_return(drive(1.0, GOAL_ARC), True)
+    dawdled = episode_return(drive(1.0, GOAL_ARC) + wait(GOAL_ARC, TIME_LIMIT), False)
+    late = episode_return(drive(1.0, GOAL_ARC) + wait(GOAL_ARC, 60.0), True)
+    assert dawdled < late < declared  # waiting costs, and not declaring forgoes the goal
+
+
+def test_a_false_stop_is_never_better_than_trying_on():
+    short = drive(1.0, GOAL_ARC - 1.0)  # 1 m short: outside the 0.25 m radius
+    false_stop = episode_return(short, True)
+    stand_to_the_limit = episode_return(short + wait(GOAL_ARC - 1.0, TIME_LIMIT), False)
+    go_on = episode_return(short + drive(GOAL_ARC - 1.0, GOAL_ARC)[1:], True)
+    assert false_stop < stand_to_the_limit < go_on
+
+
+def test_no_metre_of_a_leg_is_paid_twice():
+    straight = episode_return(drive(1.0, GOAL_ARC), True)
+    to_and_fro = drive(1.0, 3.0) + drive(3.0, 2.0)[1:] + drive(2.0, 4.0)[1:]
+    there_and_back = drive(1.0, 7.0) + drive(7.0, GOAL_ARC)[1:]  # past the goal and back
+    for xs in (to_and_fro + drive(4.0, GOAL_ARC)[1:], there_and_back):
+        detour = (len(xs) - len(drive(1.0, GOAL_ARC))) * DT * 0.01
+        assert episode_return(xs, True) == pytest.approx(straight - detour, abs=1e-9)
+
+
+def test_the_reward_never_reads_anything_but_the_true_stop():
+    """The goal is judged at the true position: a stop 0.3 m off fails, 0.2 m off succeeds,
+    whatever the agent believed (the task gets no estimate)."""
+    task, _ = leg_task()
+    assert not task.update(np.array([GOAL_ARC - 0.3, 0.0]), 0.0, 0.0, DT, 1.0, stop=True)
+    task, _ = leg_task()
+    assert task.update(np.array([GOAL_ARC - 0.2, 0.0]), 0.0, 0.0, DT, 1.0, stop=True)
+
+
+@pytest.mark.parametrize(
+    ("reward", "key"),
+    [
+        ({"time": 0.0}, "reward.time"),
+        ({"goal": 0.0}, "reward.goal"),
+        ({"false_stop": -1.0}, "reward.false_stop"),  # -1 > -0.01 * 150: a stop would pay
+    ],
+)
+def test_a_reward_whose_optimum_is_not_the_task_is_refused(reward, key):
+    with pytest.raises(ConfigError, match=key):
+        load_config(
+            world="straight_10m", task=TASK, reward=reward, sim={"max_episode_seconds": 150.0}
+        )
+    load_config(world="straight_10m", reward=reward)  # reach: the paper's protocol, unchanged
