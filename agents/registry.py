@@ -116,7 +116,7 @@ class SB3Agent:
         from stsf_gym.agents.policy_stack import policy_stack
         from stsf_gym.agents.sb3_agent import load_model
 
-        stack = policy_stack(env, self.meta.get("observation"), self.meta.get("decision_steps", 1))
+        stack = policy_stack(env, self.meta.get("observation"), self.meta["decision_steps"])
         self.model = load_model(self.path)
         for space in ("observation_space", "action_space"):
             theirs, ours = getattr(self.model, space), getattr(stack, space)
