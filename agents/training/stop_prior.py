@@ -30,7 +30,7 @@ def stop_mean(probability: float, std: float) -> float:
 def set_stop_prior(policy, stop_index: int, probability: float) -> float:
     """Set the bias of ``policy``'s (an SB3 Gaussian ``ActorCriticPolicy``) STOP output so a
     fresh policy declares with ``probability`` a decision; return the bias."""
-    std = math.exp(float(policy.log_std[stop_index]))
+    std = math.exp(float(policy.log_std[stop_index].detach()))
     bias = stop_mean(probability, std)
     with torch.no_grad():
         policy.action_net.bias[stop_index] = bias
