@@ -145,6 +145,7 @@ def run_demonstrations(
         )
     folder.mkdir(parents=True, exist_ok=True)
     history = _resume(model, folder, log)
+    progress(sum(cfg.episodes_per_round if r["round"] else cfg.expert_episodes for r in history))
     data = None
     if history:  # the logged rounds' samples (a kill between the two writes left more)
         saved, logged = np.load(folder / "data.npz"), history[-1]["samples"]

@@ -19,7 +19,12 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from stsf_gym.agents.sb3_agent import META_KEY, model_metadata
 from stsf_gym.agents.training.hyperparams import learner_of
-from stsf_gym.agents.training.training_log import EPISODES_CSV, EVAL_CSV, drop_rows_after
+from stsf_gym.agents.training.training_log import (
+    EPISODES_CSV,
+    EVAL_CSV,
+    EVALUATIONS_JSON,
+    drop_rows_after,
+)
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.io import write_atomic
 
@@ -133,7 +138,7 @@ def resume(cls: type, out: Path, meta: dict, env: VecEnv):
     buffer = path.with_name(f"{PREFIX}_replay_buffer_{steps}_steps.pkl")
     if buffer.is_file():
         model.load_replay_buffer(buffer)
-    for name in (EPISODES_CSV, EVAL_CSV):
+    for name in (EPISODES_CSV, EVAL_CSV, EVALUATIONS_JSON):
         drop_rows_after(out / name, steps)
     return model
 
@@ -145,7 +150,7 @@ def set_aside(out: Path) -> Path:
     stale.mkdir(exist_ok=True)
     target = stale / str(len(list(stale.iterdir())))
     (out / "checkpoints").rename(target)
-    for name in (EPISODES_CSV, EVAL_CSV):
+    for name in (EPISODES_CSV, EVAL_CSV, EVALUATIONS_JSON):
         drop_rows_after(out / name, 0)
     return target
 

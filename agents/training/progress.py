@@ -14,12 +14,12 @@ from tqdm import tqdm
 TB_DEMONSTRATIONS = "demonstrations"  # tb/<this>: the demonstration stage's scalars
 
 
-def stage_bar(stage: str, total: int, unit: str, enabled: bool, initial: int = 0) -> tqdm:
+def stage_bar(stage: str, total: int, unit: str, enabled: bool, position: int = 0) -> tqdm:
     """A bar on stderr over ``total`` ``unit`` of ``stage``, drawn at once (count, rate and
     ETA); ``enabled`` False: a bar that draws nothing."""
     return tqdm(
         total=total,
-        initial=initial,
+        position=position,
         desc=stage,
         unit=unit,
         disable=not enabled,
@@ -29,12 +29,31 @@ def stage_bar(stage: str, total: int, unit: str, enabled: bool, initial: int = 0
     )
 
 
+def stage_bars(demonstration_episodes: int, reward_steps: int, algo: str, enabled: bool):
+    """The bars of a run's stages, drawn before anything else starts (None: no such stage)."""
+    stages = [("demonstrations (episodes)", demonstration_episodes, "ep")]
+    stages.append((f"learning from reward ({algo})", reward_steps, "step"))
+    made = [None, None]
+    position = 0
+    for index, (stage, total, unit) in enumerate(stages):
+        if total:
+            made[index] = stage_bar(stage, total, unit, enabled, position)
+            position += 1
+    return tuple(made)
+
+
 class RewardProgress(BaseCallback):
-    """The reward stage's bar, in env steps (decisions summed over the envs)."""
+    """The reward stage's bar, in env steps (decisions summed over the envs); a resumed stage
+    starts it at its checkpoint, its rate from there."""
 
     def __init__(self, bar: tqdm) -> None:
         super().__init__()
         self.bar = bar
+
+    def _on_training_start(self) -> None:
+        self.bar.reset(self.bar.total)
+        self.bar.initial = self.bar.n = self.num_timesteps
+        self.bar.refresh()
 
     def _on_step(self) -> bool:
         self.bar.update(self.num_timesteps - self.bar.n)

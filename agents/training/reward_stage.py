@@ -12,6 +12,7 @@ from pathlib import Path
 from stable_baselines3.common.callbacks import CallbackList, EvalCallback
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
+from tqdm import tqdm
 
 from stsf_gym.agents.training.checkpoints import (
     AtomicCheckpoint,
@@ -20,8 +21,9 @@ from stsf_gym.agents.training.checkpoints import (
     save_checkpoint,
 )
 from stsf_gym.agents.training.finetune import FinetunePPO, FreshRollouts
-from stsf_gym.agents.training.progress import RewardProgress, stage_bar
+from stsf_gym.agents.training.progress import RewardProgress
 from stsf_gym.agents.training.settings import RunSettings
+from stsf_gym.agents.training.training_envs import EVAL_SEED_OFFSET
 from stsf_gym.agents.training.training_log import EpisodeLog, EvalLog
 
 CLONE = "finetune/clone.zip"  # the policy the fine-tuning starts from (and is pulled toward)
@@ -41,23 +43,31 @@ def guard_the_clone(model: FinetunePPO, run: RunSettings, out: Path) -> None:
     model.guard(clone, settings.value_warmup_steps, settings.clone_kl_coef)
 
 
-def callbacks(model, run: RunSettings, out: Path, eval_env: VecEnv, progress: bool) -> list:
-    """Logging, checkpoints, evaluation on the val worlds and the stage's progress bar; and
-    rollouts that start afresh when fine-tuning (:class:`FreshRollouts`)."""
+class SameWorldsEval(EvalCallback):
+    """``EvalCallback`` on the same val worlds each time (the env reseeded with ``seed``), as
+    each demonstration round is evaluated: the points of a learning curve are paired."""
+
+    def __init__(self, seed: int, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.seed = seed
+
+    def _on_step(self) -> bool:
+        if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
+            self.eval_env.seed(self.seed)
+        return super()._on_step()
+
+
+def callbacks(model, run: RunSettings, out: Path, eval_env: VecEnv, bar: tqdm) -> list:
+    """Logging, checkpoints, evaluation on the val worlds and the stage's progress ``bar``;
+    and rollouts that start afresh when fine-tuning (:class:`FreshRollouts`)."""
     cfg = run.hp.training
-    bar = stage_bar(
-        f"learning from reward ({run.algo})",
-        run.reward_steps,
-        "step",
-        progress,
-        model.num_timesteps,
-    )
-    listed = [
+    return [
         EpisodeLog(out, model.stsf_meta["wall_time_s"]),
         RewardProgress(bar),
         *([FreshRollouts(run.seed)] if run.finetuning else []),
         AtomicCheckpoint(cfg.checkpoint_freq, run.n_envs, out),
-        EvalCallback(
+        SameWorldsEval(
+            run.seed + EVAL_SEED_OFFSET,
             eval_env,
             n_eval_episodes=cfg.n_eval_episodes,
             eval_freq=max(cfg.eval_freq // run.n_envs, 1),
@@ -68,11 +78,10 @@ def callbacks(model, run: RunSettings, out: Path, eval_env: VecEnv, progress: bo
             verbose=0,
         ),
     ]
-    return listed
 
 
 def learn_from_reward(
-    model, run: RunSettings, out: Path, envs: tuple[VecEnv, VecEnv], progress: bool
+    model, run: RunSettings, out: Path, envs: tuple[VecEnv, VecEnv], bar: tqdm | None
 ) -> float:
     """Learn until the reward budget; return the session's seconds. Ctrl-C saves SAC's
     checkpoint (PPO's last update is saved already) and is raised again."""
@@ -89,7 +98,7 @@ def learn_from_reward(
                 warnings.filterwarnings("ignore", "Training and eval env are not of the same")
                 model.learn(
                     run.reward_steps - start,
-                    callback=CallbackList(callbacks(model, run, out, eval_env, progress)),
+                    callback=CallbackList(callbacks(model, run, out, eval_env, bar)),
                     reset_num_timesteps=False,
                     tb_log_name=run.algo,
                 )

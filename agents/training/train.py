@@ -26,6 +26,8 @@ import os
 from functools import partial
 from pathlib import Path
 
+from tqdm import tqdm
+
 from stsf_gym.agents.demonstrations.dagger import run_demonstrations, stage_episodes
 from stsf_gym.agents.sb3_agent import META_KEY
 from stsf_gym.agents.training.checkpoints import (
@@ -37,7 +39,7 @@ from stsf_gym.agents.training.checkpoints import (
 )
 from stsf_gym.agents.training.finetune import FinetunePPO
 from stsf_gym.agents.training.hyperparams import algorithm_class, policy_kwargs_for_sb3
-from stsf_gym.agents.training.progress import log_round, stage_bar
+from stsf_gym.agents.training.progress import log_round, stage_bars
 from stsf_gym.agents.training.reward_stage import learn_from_reward
 from stsf_gym.agents.training.settings import RunSettings, resolve_run
 from stsf_gym.agents.training.stop_prior import set_stop_prior
@@ -80,13 +82,12 @@ def create_model(run: RunSettings, out: Path, train_env):
     return model
 
 
-def demonstrate(model, run: RunSettings, out: Path, eval_env, progress: bool) -> None:
+def demonstrate(model, run: RunSettings, out: Path, eval_env, bar: tqdm) -> None:
     """The demonstration stage (:func:`run_demonstrations`) in envs whose states the expert
     labels; the learner evaluated after each round on the val worlds, each round drawn into
     the learning curve and TensorBoard."""
     cfg, title = run.hp.demonstrations, curve_title(run)
     venv = make_vec_env(run.n_envs, out, "demonstrations", expert=True, **run.env_spec(True))
-    bar = stage_bar("demonstrations (episodes)", stage_episodes(cfg), "ep", progress)
     layout = venv.get_attr("action_layout", [0])[0]
     evaluate = partial(
         val_outcomes, model, eval_env, run.hp.training.n_eval_episodes, run.seed + EVAL_SEED_OFFSET
@@ -159,27 +160,42 @@ def train(
     :mod:`~stsf_gym.agents.training.settings`) until its reward budget (``timesteps``, or the
     file's); return the summary in train.json. With ``suite`` the agent trains on the suite's
     train worlds under its task and is evaluated on its ``val`` worlds."""
-    import torch
-
     run = resolve_run(algo, estimator, timesteps, seed, world, config, overrides, n_envs, suite)
-    torch.set_num_threads(1)
-    check_training_env(run.world, estimator, run.train_env, seed)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     finished = finished_summary(out, run.meta["made_by"], run.reward_steps)
     if finished is not None:  # a campaign's rerun: this run is done, its files stay untouched
         return finished
+    episodes = stage_episodes(run.hp.demonstrations) if run.demonstrating else 0
+    bars = stage_bars(episodes, run.reward_steps, run.algo, progress_bar)  # drawn at once
+    try:
+        return run_stages(run, out, bars)
+    finally:
+        for bar in bars:
+            if bar is not None:
+                bar.close()
+
+
+def run_stages(run: RunSettings, out: Path, bars: tuple) -> dict:
+    """The stages after the settings: envs, resume or create, demonstrate, learn from reward,
+    save (see the module)."""
+    import torch
+
+    torch.set_num_threads(1)
+    check_training_env(run.world, run.estimator, run.train_env, run.seed)
+    out.mkdir(parents=True, exist_ok=True)
     machine = {"reference_ms_before": reference_ms(), "load_average_before": os.getloadavg()}
     train_env = make_vec_env(run.n_envs, out, "train", **run.env_spec(True))
     eval_env = make_vec_env(1, out, "eval", **run.env_spec(False))
-    eval_env.seed(seed + EVAL_SEED_OFFSET)
+    eval_env.seed(run.seed + EVAL_SEED_OFFSET)
     try:
         cls = FinetunePPO if run.finetuning else algorithm_class(run.algo)
         model = resume(cls, out, run.meta, train_env) or create_model(run, out, train_env)
         if run.demonstrating and model.num_timesteps == 0:
-            demonstrate(model, run, out, eval_env, progress_bar)
+            demonstrate(model, run, out, eval_env, bars[0])
+        elif run.demonstrating:  # resumed after the demonstrations
+            bars[0].update(bars[0].total - bars[0].n)
         start = model.num_timesteps
-        session = learn_from_reward(model, run, out, (train_env, eval_env), progress_bar)
+        session = learn_from_reward(model, run, out, (train_env, eval_env), bars[1])
         note_workers_code(train_env)
     finally:
         train_env.close()

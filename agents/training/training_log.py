@@ -6,6 +6,7 @@ steps (control steps, 0.1 s each, of every stage) and against wall time."""
 from __future__ import annotations
 
 import csv
+import json
 import time
 from pathlib import Path
 
@@ -13,10 +14,11 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from stsf_gym.agents.demonstrations.dagger import read_history
-from stsf_gym.io import save_figure
+from stsf_gym.io import save_figure, write_json
 
 EPISODES_CSV = "episodes.csv"  # timesteps, reward, length, success, control steps
 EVAL_CSV = "eval.csv"  # timesteps, mean reward, success rate, control steps, wall time (s)
+EVALUATIONS_JSON = "evaluations.json"  # each evaluation's episodes: successes and returns
 LEARNING_CURVE = "learning_curve.png"
 SMOOTHING = 20  # training episodes in the rolling mean of the curves
 
@@ -40,8 +42,18 @@ def read_rows(path: Path) -> np.ndarray:
     return np.array(rows, dtype=float).reshape(len(rows), -1)
 
 
+def read_evaluations(out: Path) -> list[dict]:
+    """The reward stage's evaluations in ``out`` (:class:`EvalLog`), oldest first."""
+    path = Path(out) / EVALUATIONS_JSON
+    return json.loads(path.read_text()) if path.is_file() else []
+
+
 def drop_rows_after(path: Path, timesteps: int) -> None:
-    """Forget episodes logged after the checkpoint a resumed run starts from."""
+    """Forget episodes (or evaluations) logged after the checkpoint a resumed run starts from."""
+    if path.name == EVALUATIONS_JSON:
+        kept = [e for e in read_evaluations(path.parent) if e["timesteps"] <= timesteps]
+        write_json(path, kept)
+        return
     if not path.is_file():
         return
     with path.open() as f:
@@ -82,7 +94,8 @@ class EpisodeLog(BaseCallback):
 
 
 class EvalLog(BaseCallback):
-    """Run by ``EvalCallback`` after each evaluation: appends its result to ``eval.csv``."""
+    """Run by ``EvalCallback`` after each evaluation: appends its means to ``eval.csv`` and its
+    episodes (success, return) to ``evaluations.json``, with the env steps and time so far."""
 
     def __init__(self, out: Path) -> None:
         super().__init__()
@@ -95,7 +108,16 @@ class EvalLog(BaseCallback):
         meta = self.model.stsf_meta
         row = [self.num_timesteps, float(np.mean(rewards)), float(np.mean(successes or [0.0]))]
         header = ["timesteps", "mean_reward", "success_rate", "control_steps", "wall_time_s"]
-        append_row(self.path, header, [*row, meta.get("control_steps", 0), meta["wall_time_s"]])
+        steps, wall = meta.get("control_steps", 0), meta["wall_time_s"]
+        append_row(self.path, header, [*row, steps, wall])
+        record = {"timesteps": self.num_timesteps, "control_steps": steps, "wall_time_s": wall}
+        record |= {
+            "val_episodes": [int(s) for s in successes],
+            "val_returns": [float(r) for r in rewards],
+        }
+        write_json(
+            self.path.with_name(EVALUATIONS_JSON), [*read_evaluations(self.path.parent), record]
+        )
         return True
 
 
@@ -117,23 +139,20 @@ def rolling_mean(values: np.ndarray, window: int) -> np.ndarray:
 
 
 def curve_points(out: Path) -> list[dict]:
-    """The run's evaluations on its val worlds, in order: each demonstration round's, then
-    the reward stage's (``stage``, ``control_steps``, ``wall_time_s``, ``val_success``,
-    ``val_return``)."""
-    out = Path(out)
-    points = [
-        {"stage": "demonstrations", **{k: r[k] for k in ("control_steps", "wall_time_s")}}
-        | {"val_success": r["val_success"], "val_return": r.get("val_return", np.nan)}
-        for r in read_history(out)
+    """The run's evaluations on its val worlds (the same worlds each time), in order: each
+    demonstration round's, then the reward stage's: ``stage``, ``control_steps``,
+    ``wall_time_s``, ``val_episodes`` (0/1 each), ``val_returns``, and their means."""
+    keys = ("control_steps", "wall_time_s", "val_episodes", "val_returns")
+    staged = [("demonstrations", r) for r in read_history(out) if "val_returns" in r]
+    staged += [("reward", e) for e in read_evaluations(out)]
+    return [
+        {"stage": stage, **{k: record[k] for k in keys}}
+        | {
+            "val_success": float(np.mean(record["val_episodes"])),
+            "val_return": float(np.mean(record["val_returns"])),
+        }
+        for stage, record in staged
     ]
-    for row in read_rows(out / EVAL_CSV):
-        if len(row) >= 5:  # written with the env steps and the time (older runs: without)
-            _, reward, success, steps, wall = row[:5]
-            points.append(
-                {"stage": "reward", "control_steps": steps, "wall_time_s": wall}
-                | {"val_success": success, "val_return": reward}
-            )
-    return points
 
 
 def plot_learning_curve(out: Path, title: str) -> Path:
