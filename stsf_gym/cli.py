@@ -322,7 +322,8 @@ def _train(args: argparse.Namespace) -> dict:
             )
         except KeyboardInterrupt:
             print(
-                f"interrupted: checkpoint saved in {out}/checkpoints; rerun to resume",
+                f"interrupted: rerun the same command to resume from the last round or update "
+                f"saved in {out}",
                 file=sys.stderr,
             )
             raise SystemExit(130) from None
