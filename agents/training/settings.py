@@ -66,7 +66,7 @@ class RunSettings:
             "world": self.world if training else evaluation_world(self.world),
             "estimator": self.estimator,
             "env": self.train_env if training else self.env,
-            "observation": self.meta["observation"],
+            "observation": self.hp.observation,  # typed: checked once, on load
             "decision_steps": self.meta["decision_steps"],
         }
 

@@ -16,6 +16,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 
 import stsf_gym
 from stsf_gym.agents.demonstrations.expert import ExpertLabel
+from stsf_gym.agents.observation import ObservationConfig
 from stsf_gym.agents.policy_stack import policy_stack
 from stsf_gym.agents.training.worker_envs import FailFastSubprocVecEnv
 from stsf_gym.envs.generated_env import generated_label, parse_world
@@ -55,7 +56,7 @@ def make_training_env(
     world: str,
     estimator: str,
     env: dict,
-    observation: dict,
+    observation: ObservationConfig,
     decision_steps: int,
     monitor_file: str,
     in_worker: bool,
