@@ -45,13 +45,16 @@ def guard_the_clone(model: FinetunePPO, run: RunSettings, out: Path) -> None:
 
 class SameWorldsEval(EvalCallback):
     """``EvalCallback`` on the same val worlds each time (the env reseeded with ``seed``), as
-    each demonstration round is evaluated: the points of a learning curve are paired."""
+    each demonstration round is evaluated, so a learning curve's points are paired; and at
+    the run's multiples of ``eval_freq`` steps, not the session's, so a resumed stage
+    evaluates where an uninterrupted one does."""
 
     def __init__(self, seed: int, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.seed = seed
 
     def _on_step(self) -> bool:
+        self.n_calls = self.num_timesteps // self.training_env.num_envs  # the run's count
         if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
             self.eval_env.seed(self.seed)
         return super()._on_step()
