@@ -77,7 +77,7 @@ def plot(curves: dict[str, dict], suite: str, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharey="row")
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex="col", sharey="row")
     for label, means in curves.items():
         if means["suite"] != suite:
             continue

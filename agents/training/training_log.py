@@ -165,7 +165,7 @@ def plot_learning_curve(out: Path, title: str) -> Path:
 
     out = Path(out)
     points, episodes = curve_points(out), read_rows(out / EPISODES_CSV)
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharey="row")
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex="col", sharey="row")
     styles = {"demonstrations": ("s--", "demonstration rounds"), "reward": ("o-", "from reward")}
     for stage, (style, label) in styles.items():
         mine = [p for p in points if p["stage"] == stage]
