@@ -9,8 +9,8 @@ rounds in ``demonstrations.json``, the reward stage's in ``evaluations.json``
 matrices ``seeds x val worlds`` (success 0/1, return) are aggregated as rliable does: the
 interquartile mean over seeds of each seed's mean, its 95 % interval from resampling worlds and
 seeds (:func:`~stsf_gym.experiments.benchmark.intervals.seed_iqm`, a seeded numpy bootstrap).
-rliable 1.2.0 itself requires arch, absl-py, seaborn, pandas and scipy (its setup.py), most of
-which the project does not otherwise need, for this one function. An evaluation's x position
+rliable 1.2.0 itself requires arch (with statsmodels), absl-py, seaborn, pandas and scipy (its
+setup.py); arch and statsmodels are in no environment of the project, for this one function. An evaluation's x position
 is its median over the seeds.
 
 Usage::
