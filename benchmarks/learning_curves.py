@@ -10,8 +10,8 @@ matrices ``seeds x val worlds`` (success 0/1, return) are aggregated as rliable 
 interquartile mean over seeds of each seed's mean, its 95 % interval from resampling worlds and
 seeds (:func:`~stsf_gym.experiments.benchmark.intervals.seed_iqm`, a seeded numpy bootstrap).
 rliable 1.2.0 itself requires arch (with statsmodels), absl-py, seaborn, pandas and scipy (its
-setup.py); arch and statsmodels are in no environment of the project, for this one function. An evaluation's x position
-is its median over the seeds.
+setup.py); arch and statsmodels are in no environment of the project, for this one function.
+An evaluation's x position is its median over the seeds.
 
 Usage::
 
