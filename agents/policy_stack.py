@@ -10,12 +10,17 @@ from __future__ import annotations
 import gymnasium as gym
 
 from stsf_gym.agents.decision_interval import DecisionInterval
-from stsf_gym.agents.observation import PolicyObservation, observation_config
+from stsf_gym.agents.observation import ObservationConfig, PolicyObservation, observation_config
 
 
-def policy_stack(env: gym.Env, observation: dict | None, decision_steps: int) -> gym.Env:
+def policy_stack(
+    env: gym.Env, observation: ObservationConfig | dict | None, decision_steps: int
+) -> gym.Env:
     """``env`` (a :class:`~stsf_gym.wrappers.PoseEstimateWrapper`) as the policy sees and
-    drives it: :class:`PolicyObservation` with ``observation``'s settings, then
-    :class:`DecisionInterval` of ``decision_steps`` (1: a decision every control step)."""
-    features = PolicyObservation(env, observation_config(observation))
+    drives it: :class:`PolicyObservation` with ``observation``'s settings (checked already,
+    or a saved model's mapping), then :class:`DecisionInterval` of ``decision_steps`` (1: a
+    decision every control step)."""
+    if not isinstance(observation, ObservationConfig):
+        observation = observation_config(observation)
+    features = PolicyObservation(env, observation)
     return features if decision_steps == 1 else DecisionInterval(features, decision_steps)

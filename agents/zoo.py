@@ -22,7 +22,6 @@ from __future__ import annotations
 import gymnasium as gym
 
 import stsf_gym  # noqa: F401 - registers the ids
-from stsf_gym.agents.observation import observation_config
 from stsf_gym.agents.training.hyperparams import load_hyperparams, policy_kwargs_for_sb3
 from stsf_gym.envs.config import deep_merge
 
@@ -52,7 +51,7 @@ def zoo_section(algo: str, env_id: str) -> dict:
     cfg = hp.training
     registered = dict(gym.spec(env_id).kwargs.get("env") or {})
     registered.pop("generator", None)  # stays in the registered kwargs
-    wrappers = [{WRAPPER: {"config": observation_config(cfg.observation)}}]
+    wrappers = [{WRAPPER: {"config": hp.observation}}]
     if cfg.decision_steps > 1:  # the learner's decision interval, outside the observation
         wrappers.append({INTERVAL: {"steps": cfg.decision_steps}})
     return {

@@ -1,31 +1,42 @@
-"""Learning curves of the demonstration stage: success on the validation worlds against control
-steps and against wall time, IQM over training seeds with a stratified bootstrap interval.
+"""Learning curves of training means (the clone, the fine-tuned agent, plain RL, ...): val
+success and val return against env steps and against wall time, IQM over training seeds with
+95 % bootstrap intervals, one figure per suite.
 
-Each ``FOLDER`` is one means tried (the ``OUT`` of ``stsf-gym train --seeds N``, or of one
-seed): its runs' ``demonstrations.json`` log every round (control steps, wall time, and the
-success of each validation episode, the same worlds every round). At each round the score
-matrix ``seeds x val worlds`` is aggregated as rliable does: the interquartile mean over seeds
-of each seed's success rate, its 95 % interval from resampling worlds and seeds
-(:func:`~stsf_gym.experiments.benchmark.intervals.seed_iqm`). The x position of a round is its
-median over the seeds.
+Each ``FOLDER`` is one means (the ``OUT`` of ``stsf-gym train --seeds N``, or of one seed).
+Every run logs its evaluations on the val worlds, the same worlds each time: the demonstration
+rounds in ``demonstrations.json``, the reward stage's in ``evaluations.json``
+(:func:`~stsf_gym.agents.training.training_log.curve_points`). At each evaluation the score
+matrices ``seeds x val worlds`` (success 0/1, return) are aggregated as rliable does: the
+interquartile mean over seeds of each seed's mean, its 95 % interval from resampling worlds and
+seeds (:func:`~stsf_gym.experiments.benchmark.intervals.seed_iqm`, a seeded numpy bootstrap).
+rliable 1.2.0 itself requires arch (with statsmodels), absl-py, seaborn, pandas and scipy (its
+setup.py); arch and statsmodels are in no environment of the project, for this one function.
+An evaluation's x position is its median over the seeds.
 
 Usage::
 
     python benchmarks/learning_curves.py FOLDER [FOLDER ...] [--labels a,b] --out DIR
 
-Writes ``curves.json`` (numbers only), ``curves.md`` and ``curves.png`` to ``DIR``.
+Writes ``curves.json`` (numbers only), ``curves.md`` and ``curves-<suite>.png`` to ``DIR``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 import numpy as np
 
-from stsf_gym.agents.demonstrations.dagger import read_history
+from stsf_gym.agents.training.training_log import curve_points
 from stsf_gym.experiments.benchmark.intervals import seed_iqm
 from stsf_gym.io import save_figure, write_atomic, write_json
+
+METRICS = {"success": ("val_episodes", "val success"), "return": ("val_returns", "val return")}
+AXES = {
+    "control_steps": ("env steps (thousands of 0.1 s steps)", 1e3),
+    "wall_time_s": ("wall time (min)", 60),
+}
 
 
 def runs_of(folder: Path) -> list[Path]:
@@ -33,69 +44,81 @@ def runs_of(folder: Path) -> list[Path]:
     return sorted(folder.glob("seed-*")) or [folder]
 
 
-def curve(folder: Path) -> list[dict]:
-    """Per round done by every run of ``folder``: the IQM of val success with its interval and
-    the median control steps and wall time."""
-    histories = [read_history(run) for run in runs_of(folder)]
-    histories = [h for h in histories if h]
-    if not histories:
-        raise SystemExit(f"{folder}: no demonstrations.json in it or its seed-* folders")
+def suite_of(run: Path) -> str:
+    """The suite a run trained on (``train.json``; a world's name when none)."""
+    record = json.loads((run / "train.json").read_text())
+    return record.get("suite") or record["world"]
+
+
+def curve(folder: Path) -> dict:
+    """The means' suite and, per evaluation every run made, the median x positions and the
+    IQM over seeds of val success and return with their 95 % intervals."""
+    runs = runs_of(folder)
+    logs = [points for points in map(curve_points, runs) if points]
+    if not logs:
+        raise SystemExit(f"{folder}: no evaluations logged in it or its seed-* folders")
     points = []
-    for round_ in range(min(len(h) for h in histories)):
-        rows = [h[round_] for h in histories]
-        interval = seed_iqm([row["val_episodes"] for row in rows])  # seeds x val worlds
-        points.append(
-            {
-                "round": round_,
-                "seeds": len(rows),
-                "val_worlds": len(rows[0]["val_episodes"]),
-                "control_steps": float(np.median([r["control_steps"] for r in rows])),
-                "wall_time_s": float(np.median([r["wall_time_s"] for r in rows])),
-                "success_iqm": interval["estimate"],
-                "success_iqm_ci95": [interval["low"], interval["high"]],
-                "success_per_seed": [r["val_success"] for r in rows],
-            }
-        )
-    return points
+    for index in range(min(map(len, logs))):
+        rows = [log[index] for log in logs]
+        point = {"stage": rows[0]["stage"], "seeds": len(rows)}
+        point |= {axis: float(np.median([r[axis] for r in rows])) for axis in AXES}
+        for name, (key, _) in METRICS.items():
+            interval = seed_iqm([r[key] for r in rows])  # seeds x val worlds
+            point[f"{name}_iqm"] = interval["estimate"]
+            point[f"{name}_ci95"] = [interval["low"], interval["high"]]
+            point[f"{name}_per_seed"] = interval["per_run"]
+        points.append(point)
+    return {"suite": suite_of(runs[0]), "points": points}
 
 
-def plot(curves: dict[str, list[dict]], path: Path) -> Path:
+def plot(curves: dict[str, dict], suite: str, path: Path) -> Path:
+    """Success and return (rows) against env steps and wall time (columns) for ``suite``."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    for label, points in curves.items():
-        success = np.array([p["success_iqm"] for p in points])
-        low, high = np.array([p["success_iqm_ci95"] for p in points]).T
-        for ax, key, scale in ((axes[0], "control_steps", 1e3), (axes[1], "wall_time_s", 60)):
-            x = np.array([p[key] for p in points]) / scale
-            ax.plot(x, success, "o-", label=f"{label} ({points[0]['seeds']} seeds)")
-            ax.fill_between(x, low, high, alpha=0.2)
-    axes[0].set(xlabel="control steps (thousands)", ylabel="val success (IQM, 95 % CI)")
-    axes[1].set(xlabel="wall time (min)", ylabel="val success (IQM, 95 % CI)")
-    for ax in axes:
-        ax.set_ylim(-0.05, 1.05)
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex="col", sharey="row")
+    for label, means in curves.items():
+        if means["suite"] != suite:
+            continue
+        points = means["points"]
+        for row, (name, (_, ylabel)) in enumerate(METRICS.items()):
+            y = np.array([p[f"{name}_iqm"] for p in points])
+            low, high = np.array([p[f"{name}_ci95"] for p in points]).T
+            for col, (axis, (xlabel, scale)) in enumerate(AXES.items()):
+                x = np.array([p[axis] for p in points]) / scale
+                ax = axes[row, col]
+                ax.plot(x, y, "o-", label=f"{label} ({points[0]['seeds']} seeds)")
+                ax.fill_between(x, low, high, alpha=0.2)
+                ax.set(xlabel=xlabel if row else "", ylabel=f"{ylabel} (IQM, 95 % CI)")
+    axes[0, 0].set(ylim=(-0.05, 1.05), title=f"{suite}: val worlds")
+    for ax in axes.flat:
         ax.grid(alpha=0.3)
-        ax.legend()
+        if ax.lines:
+            ax.legend(fontsize="small")
     try:
         return save_figure(fig, path)
     finally:
         plt.close(fig)
 
 
-def table(curves: dict[str, list[dict]]) -> str:
+def table(curves: dict[str, dict]) -> str:
+    """Every means' points as a Markdown table."""
     lines = [
-        "| means | round | seeds | control steps | wall time (s) | val success IQM (95 % CI) |",
-        "|---|---|---|---|---|---|",
+        "| means | suite | stage | seeds | env steps | wall time (s) "
+        "| val success IQM (95 % CI) | val return IQM (95 % CI) |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    for label, points in curves.items():
-        for p in points:
-            low, high = p["success_iqm_ci95"]
+    for label, means in curves.items():
+        for p in means["points"]:
+            cells = [
+                f"{p[f'{n}_iqm']:.2f} ({p[f'{n}_ci95'][0]:.2f} to {p[f'{n}_ci95'][1]:.2f})"
+                for n in METRICS
+            ]
             lines.append(
-                f"| {label} | {p['round']} | {p['seeds']} | {p['control_steps']:.0f} | "
-                f"{p['wall_time_s']:.0f} | {p['success_iqm']:.2f} ({low:.2f}-{high:.2f}) |"
+                f"| {label} | {means['suite']} | {p['stage']} | {p['seeds']} | "
+                f"{p['control_steps']:.0f} | {p['wall_time_s']:.0f} | {' | '.join(cells)} |"
             )
     return "\n".join(lines) + "\n"
 
@@ -112,7 +135,8 @@ def main() -> None:
     curves = {label: curve(folder) for label, folder in zip(labels, args.folders, strict=True)}
     write_json(args.out / "curves.json", curves)
     write_atomic(args.out / "curves.md", table(curves))
-    plot(curves, args.out / "curves.png")
+    for suite in sorted({means["suite"] for means in curves.values()}):
+        plot(curves, suite, args.out / f"curves-{suite}.png")
     print(table(curves))
 
 

@@ -323,7 +323,8 @@ def _train(args: argparse.Namespace) -> dict:
             )
         except KeyboardInterrupt:
             print(
-                f"interrupted: checkpoint saved in {out}/checkpoints; rerun to resume",
+                f"interrupted: rerun the same command to resume from the last round or update "
+                f"saved in {out}",
                 file=sys.stderr,
             )
             raise SystemExit(130) from None
@@ -363,7 +364,7 @@ def _campaign(args: argparse.Namespace, shared: dict, seeds: range) -> dict:
 def _run_line(estimator: str, seed: int, summary: dict, out: Path) -> str:
     """A finished training run in one line."""
     return (
-        f"{estimator} seed {seed}: {summary['timesteps']} RL timesteps, "
+        f"{estimator} seed {seed} ({summary['algo']}): {summary['timesteps']} reward timesteps, "
         f"{summary['wall_time_s']:.0f} s of training; {_evaluation_line(summary)}. "
         f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
     )
@@ -612,9 +613,17 @@ def build_parser() -> argparse.ArgumentParser:
         help="comma-separated pose sources (as evaluate's)",
     )
     replay.set_defaults(run=_replay)
-    train = commands.add_parser("train", help="a PPO or SAC agent on one pose source")
-    _common(train, "out/train", "hyper-parameter YAML (default configs/agents/ALGO.yaml)")
-    train.add_argument("--algo", choices=["ppo", "sac"], default="ppo", help="algorithm (ppo)")
+    from stsf_gym.agents.training.hyperparams import METHODS
+
+    train = commands.add_parser("train", help="a learnt agent on one pose source")
+    _common(train, "out/train", "hyper-parameter YAML (default configs/agents/<learner>.yaml)")
+    train.add_argument(
+        "--algo",
+        choices=list(METHODS),
+        default="ppo",
+        help="dagger: cloning + DAgger rounds; dagger+ppo: then PPO on the reward; ppo, sac: "
+        "reward (ppo: after the demonstrations if the settings enable them) (ppo)",
+    )
     train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
     train.add_argument(
         "--estimators",

@@ -44,6 +44,12 @@ TRAIN += " --set batch_size=32 --set checkpoint_freq=128 --set eval_freq=100000"
 CAMPAIGN = "train --suite corridor --estimators truth,odometry --seeds 1 --n-envs 1"
 CAMPAIGN += " --set demonstrations.expert_episodes=1 --set demonstrations.rounds=0"
 CAMPAIGN += " --set n_eval_episodes=1 --set env.sim.max_episode_seconds=10"
+FINETUNE = "train --suite corridor --estimator truth --algo dagger+ppo --n-envs 1"
+FINETUNE += " --set demonstrations.expert_episodes=1 --set demonstrations.rounds=0"
+FINETUNE += " --set demonstrations.cloning.epochs=2 --set n_eval_episodes=1 --set eval_freq=64"
+FINETUNE += " --set checkpoint_freq=32 --set n_steps=32 --set batch_size=32 --set n_epochs=2"
+FINETUNE += " --set env.sim.max_episode_seconds=6 --set train_env.sim.max_episode_seconds=6"
+FINETUNE += " --set finetune.timesteps=192 --set finetune.value_warmup_steps=32"
 #: command (after ``stsf-gym``), the units it saves as they finish (glob under --out)
 COMMANDS = {
     "fig10": ([*"reproduce fig10 --seeds 2 --workers 2".split(), *FAST], "fig10/episodes/*.json"),
@@ -65,6 +71,7 @@ COMMANDS = {
         [*TRAIN.split(), "--set", "env.sim.max_episode_seconds=3"],
         "checkpoints/model_*_steps.zip",
     ),
+    "finetune": (FINETUNE.split(), "checkpoints/model_*_steps.zip"),  # killed in the PPO stage
     "campaign": (  # two runs of the learner, tiny: one expert leg, no DAgger round, 1 val route
         [*CAMPAIGN.split(), "--set", "train_env.sim.max_episode_seconds=8"],
         "*/seed-0/train.json",
@@ -134,4 +141,6 @@ def test_a_killed_command_resumes_to_the_uninterrupted_result(name, tmp_path):
         assert resumed["timesteps"] == reference["timesteps"] == 640
         assert resumed["resumed_from"] > 0
         return
+    if name == "finetune":  # the same run (weights, evaluations), resumed from an update
+        assert resumed.pop("resumed_from") > 0 == reference.pop("resumed_from")
     assert _comparable(resumed, out) == _comparable(reference, tmp_path / "reference")

@@ -71,12 +71,17 @@ def demonstration_config(data: dict | None) -> DemonstrationConfig:
 
 
 def collect(
-    venv: VecEnv, episodes: int, policy=None, every_step: bool = True
+    venv: VecEnv,
+    episodes: int,
+    policy=None,
+    every_step: bool = True,
+    on_episodes: Callable[[int], object] = lambda ended: None,
 ) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Drive ``venv`` until ``episodes`` episodes have ended: the expert's actions, or
     ``policy``'s deterministic ones. Return the observations (the policy's features) and the
     expert's labels of every control step (:meth:`ExpertLabel.pop_samples`), or of every
-    decision only, the control steps taken and the decisions made."""
+    decision only, the control steps taken and the decisions made. ``on_episodes(n)`` hears
+    of every step that ended ``n`` episodes (a progress bar)."""
     obs = venv.reset()
     labels = np.array([info["expert_action"] for info in venv.reset_infos])
     observations, actions = [], []
@@ -88,7 +93,10 @@ def collect(
         obs, _, dones, infos = venv.step(chosen)
         decisions += len(infos)
         steps += sum(info.get("control_steps", 1) for info in infos)
-        ended += int(np.sum(dones))
+        finished = int(np.sum(dones))
+        if finished:
+            on_episodes(min(finished, episodes - ended))  # those past the count are not kept
+        ended += finished
         labels = np.array(
             [
                 (venv.reset_infos[i] if done else info)["expert_action"]
@@ -108,15 +116,19 @@ def run_demonstrations(
     cfg: DemonstrationConfig,
     stop_index: int | None,
     out: Path,
-    evaluate: Callable[[], list[bool]],
+    evaluate: Callable[[], tuple[list[bool], list[float]]],
     seed: int,
     made_by: str,
+    progress: Callable[[int], object] = lambda episodes: None,
+    on_round: Callable[[list[dict]], object] = lambda history: None,
 ) -> dict:
     """The demonstration stage on ``model``'s policy (resumed from ``out/demonstrations`` when
     the same code and settings, ``made_by``, logged it); each round is logged in
-    ``out/demonstrations.json`` (its totals and the success of each validation episode);
-    returns the last round's totals, ``kept_round``, the round whose policy ``model`` ends
-    with (``cfg.keep``), and that round's ``val_success``."""
+    ``out/demonstrations.json`` (its totals, the success and return of each validation
+    episode) and then passed, with those before it, to ``on_round``; ``progress(n)`` hears of
+    ``n`` more episodes driven (:func:`stage_episodes` in all). Returns the last round's
+    totals, ``kept_round``, the round whose policy ``model`` ends with (``cfg.keep``), and that
+    round's ``val_success``."""
     folder = out / "demonstrations"
     log = out / DEMONSTRATIONS_JSON
     if log.is_file() and json.loads(log.read_text()).get("made_by") != made_by:
@@ -133,6 +145,7 @@ def run_demonstrations(
         )
     folder.mkdir(parents=True, exist_ok=True)
     history = _resume(model, folder, log)
+    progress(sum(cfg.episodes_per_round if r["round"] else cfg.expert_episodes for r in history))
     data = None
     if history:  # the logged rounds' samples (a kill between the two writes left more)
         saved, logged = np.load(folder / "data.npz"), history[-1]["samples"]
@@ -144,7 +157,9 @@ def run_demonstrations(
         episodes = cfg.expert_episodes if round_ == 0 else cfg.episodes_per_round
         driver = None if round_ == 0 else model
         venv.seed(round_seed(seed, round_))
-        obs, actions, steps, decisions = collect(venv, episodes, driver, cfg.every_control_step)
+        obs, actions, steps, decisions = collect(
+            venv, episodes, driver, cfg.every_control_step, progress
+        )
         data = (
             (obs, actions)
             if data is None
@@ -153,7 +168,7 @@ def run_demonstrations(
             )
         )
         loss = clone(model.policy, *data, stop_index, settings, rng)
-        successes = evaluate()
+        successes, returns = evaluate()
         before = history[-1] if history else {"control_steps": 0, "decisions": 0, "wall_time_s": 0}
         history.append(
             {
@@ -165,22 +180,23 @@ def run_demonstrations(
                 "loss": loss,
                 "val_success": float(np.mean(successes)),
                 "val_episodes": [int(s) for s in successes],
+                "val_return": float(np.mean(returns)),
+                "val_returns": returns,
             }
         )
         _save_round(model, folder, round_, data, log, {"made_by": made_by, "rounds": history})
-        last = history[-1]
-        print(
-            f"demonstrations round {round_}/{cfg.rounds}: {last['samples']} samples, "
-            f"{last['control_steps']} control steps, {last['wall_time_s']:.0f} s, "
-            f"val success {last['val_success']:.2f}",
-            file=sys.stderr,
-            flush=True,
-        )
+        on_round(history)
     kept = kept_round(history, cfg.keep)
     if kept != history[-1]["round"]:
         _load_round(model, folder / f"round_{kept}.zip")
-    stage = {k: v for k, v in history[-1].items() if k != "val_episodes"}  # the stage's totals
+    per_episode = ("val_episodes", "val_returns")
+    stage = {k: v for k, v in history[-1].items() if k not in per_episode}  # the stage's totals
     return {**stage, "kept_round": kept, "val_success": history[kept]["val_success"]}
+
+
+def stage_episodes(cfg: DemonstrationConfig) -> int:
+    """The episodes the stage drives: the expert's, then each round's learner's."""
+    return cfg.expert_episodes + cfg.rounds * cfg.episodes_per_round
 
 
 def round_seed(seed: int, round_: int) -> int:

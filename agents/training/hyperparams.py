@@ -22,6 +22,9 @@ from typing import Annotated, Any
 import gymnasium as gym
 
 import stsf_gym  # noqa: F401 - registers the env ids that name sections
+from stsf_gym.agents.decision_interval import DEFAULT_DECISION_STEPS
+from stsf_gym.agents.demonstrations.dagger import DemonstrationConfig, demonstration_config
+from stsf_gym.agents.observation import ObservationConfig, observation_config
 from stsf_gym.envs.config import (
     CONFIG_DIR,
     ConfigError,
@@ -30,11 +33,22 @@ from stsf_gym.envs.config import (
     overrides_to_tree,
     read_yaml,
 )
-from stsf_gym.validation import Count, KeySources, Range, check_number, require
+from stsf_gym.validation import (
+    Count,
+    KeySources,
+    NonNegative,
+    Positive,
+    Range,
+    check_number,
+    require,
+)
 from stsf_gym.yaml_layers import shown
 
-#: Supported algorithms: name -> "module:class".
+#: Supported algorithms: name -> "module:class" of the stable-baselines3 learner.
 ALGORITHMS: dict[str, str] = {"ppo": "stable_baselines3:PPO", "sac": "stable_baselines3:SAC"}
+#: What ran, as ``algo`` records it, -> its learner: cloning and DAgger rounds without reward
+#: (``dagger``), then PPO on the env's reward (``dagger+ppo``); ``ppo`` and ``sac`` on reward alone.
+METHODS: dict[str, str] = {"dagger": "ppo", "dagger+ppo": "ppo", "ppo": "ppo", "sac": "sac"}
 #: Constructor arguments the trainer sets itself (or that name classes, not values).
 RESERVED = {
     "self", "policy", "env", "policy_kwargs", "tensorboard_log", "verbose", "seed", "device",
@@ -79,26 +93,57 @@ class TrainingConfig:
     policy_kwargs: dict = field(default_factory=dict)
     env: dict = field(default_factory=dict)  # env overrides, as gym.make keyword sections
     observation: dict = field(default_factory=dict)  # stsf_gym.agents.observation.ObservationConfig
-    decision_steps: Count = 1  # control steps per decision (agents/decision_interval.py)
+    decision_steps: Count = DEFAULT_DECISION_STEPS  # control steps per decision
     train_env: dict = field(default_factory=dict)  # over env, for the training envs only (legs)
     demonstrations: dict = field(default_factory=dict)  # agents/demonstrations/dagger.py
+    finetune: dict = field(default_factory=dict)  # FinetuneConfig: reward after demonstrations
+    #: Chance that a fresh policy's STOP entry declares at a decision (plain RL only; see
+    #: agents/training/stop_prior.py): 0.5 would end most legs within a few decisions.
+    initial_stop_probability: Annotated[float, Range(gt=0, lt=1)] = 0.0025
 
     def __post_init__(self) -> None:
-        for name in ("policy_kwargs", "env", "observation", "train_env", "demonstrations"):
+        dicts = ("policy_kwargs", "env", "observation", "train_env", "demonstrations", "finetune")
+        for name in dicts:
             value = getattr(self, name)
             require(isinstance(value, dict), name, f"must be a mapping, got {value!r}")
 
 
 @dataclass(frozen=True)
+class FinetuneConfig:
+    """Learning from reward after the demonstrations (``finetune:``), on the clone's weights:
+    ``timesteps`` of PPO (decisions summed over the envs; ``--timesteps`` overrides) whose
+    first ``value_warmup_steps`` train the value function alone, the actor frozen (a critic
+    fresh from cloning would otherwise steer the first updates with noise), at
+    ``learning_rate`` (None: the algorithm's), each update followed by a pull toward the
+    clone: ``clone_kl_coef`` times KL(clone || policy) on the rollout's states."""
+
+    timesteps: Annotated[int, Range(ge=0)] = 0
+    value_warmup_steps: Annotated[int, Range(ge=0)] = 0
+    learning_rate: Positive | None = None
+    clone_kl_coef: NonNegative = 0.0
+
+
+@dataclass(frozen=True)
 class Hyperparams:
     """An algorithm's hyper-parameters for one env id: the ``default`` section with the id's
-    section merged over it, split into training settings and the algorithm's own arguments.
+    section merged over it, split into training settings and the algorithm's own arguments;
+    the nested settings typed (checked once, here), with the layer that set each key.
     """
 
     algo: str
     section: str  # the env id section merged over ``default`` ("default" if none)
     training: TrainingConfig
     algo_kwargs: dict  # keyword arguments of the algorithm's constructor
+    observation: ObservationConfig
+    demonstrations: DemonstrationConfig
+    finetune: FinetuneConfig
+    sources: KeySources = field(compare=False, repr=False)
+    default_source: str = ""  # the file and section named when no layer set a key
+
+    def error(self, message: str, key: str) -> ConfigError:
+        """A ConfigError about ``key``, naming the layer (file and section, or --set) it came
+        from."""
+        return ConfigError(message, key, self.sources.file_of(key) or self.default_source)
 
 
 def update_size(hp: Hyperparams, n_envs: int) -> tuple[int, str]:
@@ -125,11 +170,16 @@ def check_timesteps(hp: Hyperparams, n_envs: int, total: int) -> None:
         )
 
 
+def learner_of(algo: str) -> str:
+    """The learner (``ppo`` or ``sac``) of ``algo`` (a method of :data:`METHODS`)."""
+    if algo not in METHODS:
+        raise ConfigError(f"unknown algorithm {algo!r}; known: {', '.join(METHODS)}")
+    return METHODS[algo]
+
+
 def algorithm_class(algo: str) -> type:
-    """The stable-baselines3 class of ``algo`` (``ppo`` or ``sac``); ConfigError otherwise."""
-    if algo not in ALGORITHMS:
-        raise ConfigError(f"unknown algorithm {algo!r}; known: {', '.join(ALGORITHMS)}")
-    module, _, name = ALGORITHMS[algo].partition(":")
+    """The stable-baselines3 class of ``algo`` (any of :data:`METHODS`); ConfigError otherwise."""
+    module, _, name = ALGORITHMS[learner_of(algo)].partition(":")
     return getattr(importlib.import_module(module), name)
 
 
@@ -142,9 +192,9 @@ def load_hyperparams(
 ) -> Hyperparams:
     """The ``default`` section of ``path`` (``configs/agents/<algo>.yaml``), with the ``suites``
     section when training on a suite, the ``env_id`` section and then ``overrides`` (flat
-    ``key.sub=value`` or nested) over it."""
+    ``key.sub=value`` or nested) over it. ``algo``'s learner names the file."""
     cls = algorithm_class(algo)
-    path = Path(path or CONFIG_DIR / "agents" / f"{algo}.yaml")
+    path = Path(path or CONFIG_DIR / "agents" / f"{learner_of(algo)}.yaml")
     data = read_yaml(path)
     for section, body in data.items():
         if section not in ("default", SUITES) and section not in gym.registry:
@@ -173,10 +223,17 @@ def load_hyperparams(
         algo_kwargs = {k: v for k, v in merged.items() if k not in training_keys}
         _check_algo_kwargs(cls, algo_kwargs)
         _check_policy_kwargs(training.policy_kwargs)
+        typed = (
+            observation_config(training.observation),
+            demonstration_config(training.demonstrations),
+            build(FinetuneConfig, training.finetune, "finetune"),
+        )
     except ConfigError as err:  # named by the layer that set the key (the file if none did)
         where = sources.file_of(err.key) or f"{shown(path)} [{chosen}]"
         raise ConfigError(err.message, err.key, where) from None
-    return Hyperparams(algo, chosen, training, algo_kwargs)
+    return Hyperparams(
+        algo, chosen, training, algo_kwargs, *typed, sources, f"{shown(path)} [{chosen}]"
+    )
 
 
 def _check_algo_kwargs(cls: type, kwargs: dict) -> None:
