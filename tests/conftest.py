@@ -85,3 +85,44 @@ def id_matrix(env_ids) -> list:
 def registered_ids() -> list[str]:
     """Every id the package registers."""
     return sorted(i for i in gym.registry if i.startswith("stsf_gym/"))
+
+
+#: The corridor suite's learner, tiny: one expert leg, no DAgger round, 1 val route, then three
+#: PPO updates on the reward from the clone (the first trains the critic alone).
+TINY_LEARNER = {
+    "demonstrations.expert_episodes": 1,
+    "demonstrations.rounds": 0,
+    "demonstrations.cloning.epochs": 2,
+    "n_eval_episodes": 1,
+    "eval_freq": 64,
+    "env.sim.max_episode_seconds": 6.0,
+    "train_env.sim.max_episode_seconds": 6.0,
+    "train_env.task.leg_min": 1.0,
+    "train_env.task.leg_max": 1.5,
+    "n_steps": 32,
+    "batch_size": 32,
+    "n_epochs": 2,
+    "finetune.timesteps": 96,
+    "finetune.value_warmup_steps": 32,
+    "finetune.clone_kl_coef": 0.5,
+    "finetune.learning_rate": 1.0e-4,
+}
+
+
+def train_tiny_learner(out, **extra) -> dict:
+    """``dagger+ppo`` on the corridor suite's true pose with :data:`TINY_LEARNER` into ``out``."""
+    from stsf_gym.agents.training.train import train
+
+    return train(
+        "dagger+ppo", "truth", out, n_envs=1, overrides=TINY_LEARNER, progress_bar=False,
+        suite="corridor", **extra,
+    )  # fmt: skip
+
+
+@pytest.fixture(scope="session")
+def tiny_learner(tmp_path_factory):
+    """One tiny trained model, made once per pytest run and shared by the agent tests: the
+    training folder (``model.zip``, ``train.json``, the clone in ``finetune/clone.zip``) and
+    its summary."""
+    out = tmp_path_factory.mktemp("tiny-learner")
+    return out, train_tiny_learner(out)

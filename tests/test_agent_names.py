@@ -45,6 +45,23 @@ def test_make_agent_takes_a_shipped_name_an_alias_a_folder_a_zip_and_a_scripted_
         make_agent("nobody")
 
 
+def test_a_training_folder_and_its_zip_resolve_to_the_model_that_ran(tiny_learner):
+    """The tiny learner of this pytest run, by its folder and by its file: one agent that
+    records what ran and drives behind the stack it was trained with."""
+    folder, summary = tiny_learner
+    by_folder, by_file = make_agent(str(folder)), make_agent(str(folder / "model.zip"))
+    assert by_folder.digest == by_file.digest
+    assert by_folder.trained_on()["algo"] == summary["algo"] == "dagger+ppo"
+    env = by_folder.make_env()
+    try:
+        obs, _ = env.reset(seed=0)
+        by_folder.begin(env)
+        action = by_folder.act(obs)
+        assert env.action_space.contains(action)
+    finally:
+        env.close()
+
+
 def test_the_benchmark_expands_names_with_the_same_resolver():
     names = [SHIPPED, "follower", str(pretrained.models(EKF_AGENT)[0])]
     assert expand_agents(names) == [m for n in names for m in resolve_agent(n)]

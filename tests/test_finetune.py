@@ -10,35 +10,15 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
+from conftest import TINY_LEARNER, train_tiny_learner
 from stable_baselines3 import PPO
 
 from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.training.finetune import FinetunePPO, actor_parameters
 from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.agents.training.stop_prior import declaring_share, set_stop_prior
-from stsf_gym.agents.training.train import train
 from stsf_gym.agents.training.training_log import EpisodeLog, curve_points
 from stsf_gym.envs.config import ConfigError
-
-#: The corridor suite's learner, tiny: one expert leg, no DAgger round, 1 val route, 2 updates.
-TINY = {
-    "demonstrations.expert_episodes": 1,
-    "demonstrations.rounds": 0,
-    "demonstrations.cloning.epochs": 2,
-    "n_eval_episodes": 1,
-    "eval_freq": 64,
-    "env.sim.max_episode_seconds": 6.0,
-    "train_env.sim.max_episode_seconds": 6.0,
-    "train_env.task.leg_min": 1.0,
-    "train_env.task.leg_max": 1.5,
-    "n_steps": 32,
-    "batch_size": 32,
-    "n_epochs": 2,
-    "finetune.timesteps": 96,
-    "finetune.value_warmup_steps": 32,
-    "finetune.clone_kl_coef": 0.5,
-    "finetune.learning_rate": 1.0e-4,
-}
 
 
 def _weights(path) -> dict:
@@ -49,17 +29,11 @@ def _same(a: dict, b: dict) -> bool:
     return a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
 
 
-def _run(out, **extra):
-    return train(
-        "dagger+ppo", "truth", out, n_envs=1, overrides=TINY, progress_bar=False,
-        suite="corridor", **extra,
-    )  # fmt: skip
-
-
 @pytest.mark.slow
-def test_finetuning_starts_from_the_clone_and_resumes_to_the_same_weights(tmp_path, monkeypatch):
-    whole = tmp_path / "whole"
-    summary = _run(whole)
+def test_finetuning_starts_from_the_clone_and_resumes_to_the_same_weights(
+    tiny_learner, tmp_path, monkeypatch
+):
+    whole, summary = tiny_learner
     assert summary["algo"] == "dagger+ppo" and summary["timesteps"] == 96
     assert json.loads((whole / "train.json").read_text())["algo"] == "dagger+ppo"
     assert model_metadata(whole / "model.zip")["algo"] == "dagger+ppo"
@@ -81,10 +55,10 @@ def test_finetuning_starts_from_the_clone_and_resumes_to_the_same_weights(tmp_pa
 
     monkeypatch.setattr(EpisodeLog, "_on_step", interrupt_in_the_third_rollout)
     with pytest.raises(KeyboardInterrupt):
-        _run(interrupted)
+        train_tiny_learner(interrupted)
     monkeypatch.setattr(EpisodeLog, "_on_step", original)
     assert not (interrupted / "model.zip").exists()
-    resumed = _run(interrupted)
+    resumed = train_tiny_learner(interrupted)
     assert resumed["resumed_from"] == 64 and resumed["timesteps"] == 96
     assert _same(_weights(interrupted / "model.zip"), _weights(whole / "model.zip"))
 
@@ -160,7 +134,7 @@ def test_plain_ppo_on_a_suite_starts_from_the_prior_and_records_ppo(tmp_path):
 
 def test_algo_records_what_the_stages_run():
     def algo(asked, **extra):
-        overrides = {**TINY, **extra}
+        overrides = {**TINY_LEARNER, **extra}
         return resolve_run(asked, "truth", None, 0, "irl_corridor", None, overrides, 1, "corridor")
 
     assert algo("dagger").algo == "dagger" and algo("dagger").reward_steps == 0
@@ -178,11 +152,11 @@ def test_settings_errors_name_the_key_and_its_file(tmp_path):
     with pytest.raises(ConfigError, match=r"bad\.yaml.*finetune\.clone_kl"):
         resolve_run("ppo", "truth", None, 0, "irl_corridor", bad, None, 1, None)
     with pytest.raises(ConfigError, match=r"--set.*demonstrations\.expert_episodes"):
-        overrides = {**TINY, "demonstrations.expert_episodes": 0}
+        overrides = {**TINY_LEARNER, "demonstrations.expert_episodes": 0}
         resolve_run("dagger+ppo", "truth", None, 0, "irl_corridor", None, overrides, 1, "corridor")
     with pytest.raises(ConfigError, match=r"--set.*finetune\.value_warmup_steps 40 must be"):
-        overrides = {**TINY, "finetune.value_warmup_steps": 40}
+        overrides = {**TINY_LEARNER, "finetune.value_warmup_steps": 40}
         resolve_run("dagger+ppo", "truth", None, 0, "irl_corridor", None, overrides, 1, "corridor")
     with pytest.raises(ConfigError, match=r"--set: observation\.far_goal must be one of"):
-        bad_suite = {**TINY, "observation.far_goal": "nowhere"}
+        bad_suite = {**TINY_LEARNER, "observation.far_goal": "nowhere"}
         resolve_run("ppo", "truth", None, 0, "irl_corridor", None, bad_suite, 1, "corridor")
