@@ -2,7 +2,7 @@
 (within a budget) until its estimate is sure enough, then declares arrival.
 
 The rule and its constants were chosen from the physics below before any comparison was run, and
-are kept whatever the results (issue 58: a learnt agent must beat the best script, not a naive one).
+are kept whatever the results: a learnt agent must beat the best script, not a naive one.
 
 - **When is an estimate sure enough?** A declaration succeeds when the TRUE position is within
   the goal radius R = 0.25 m. The follower stops where its estimate says the goal is (3 cm along

@@ -1,4 +1,4 @@
-"""Which frames each landmark estimator uses, and track-aided matching (issue 14, Fig. 11)."""
+"""Which frames each landmark estimator uses, and track-aided matching (Fig. 11)."""
 
 import cv2
 import gymnasium as gym
