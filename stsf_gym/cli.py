@@ -16,6 +16,7 @@ from stsf_gym.results.provenance import set_command
 from stsf_gym.validation import FieldError, Range, check_number
 
 DEFAULT_WORLD = "irl_corridor"  # --world when none is given
+DEFAULT_POSE_SOURCE = "truth"  # train --estimator when none is given
 
 
 def _common(
@@ -204,11 +205,13 @@ def _agents(args: argparse.Namespace) -> dict | list:
     if args.ship is not None:
         if args.suite is None:
             raise ConfigError("--ship needs --suite: the suite the runs were trained on")
-        name = pretrained.ship(args.ship, args.suite)
+        name = pretrained.ship(args.ship, args.suite, args.replace)
         if not args.json:
             print(f"Shipped {name}")
         return pretrained.summary(name)
-    rows = pretrained.listing()
+    if args.replace:
+        raise ConfigError("--replace replaces a shipped agent by --ship: add --ship and --suite")
+    rows = [r for r in pretrained.listing() if args.suite in (None, r["suite"])]
     if not args.json:
         table = [
             {
@@ -299,6 +302,12 @@ def _train(args: argparse.Namespace) -> dict:
     args.world = _world(args)
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+    if args.estimators is not None and args.estimator is not None:
+        raise ConfigError(
+            "--estimator names one run's pose source, --estimators a campaign's: give one"
+        )
+    args.estimator = args.estimator or DEFAULT_POSE_SOURCE
+    _check_training_runs(args)
     shared = {
         "algo": args.algo,
         "timesteps": args.timesteps,
@@ -330,6 +339,25 @@ def _train(args: argparse.Namespace) -> dict:
         if not args.json:
             print(_run_line(args.estimator, seed, summary, out))
     return runs[0] if len(runs) == 1 else {"runs": runs}
+
+
+def _check_training_runs(args: argparse.Namespace) -> None:
+    """Before any training: the seeds in range, and each run's folder free of another kind
+    of run's trained work (:mod:`stsf_gym.agents.training.preflight`)."""
+    from stsf_gym.agents.training.preflight import check_out, check_seeds, run_kind
+
+    check_seeds(args.seed, args.seeds)
+    seeds = range(args.seed, args.seed + args.seeds)
+    if args.estimators is not None:
+        runs = [
+            (e, args.out / e / f"seed-{s}") for e in _pose_sources(args.estimators) for s in seeds
+        ]
+    else:
+        runs = [
+            (args.estimator, args.out / f"seed-{s}" if args.seeds > 1 else args.out) for s in seeds
+        ]
+    for estimator, out in runs:
+        check_out(out, run_kind(args.algo, estimator, args.world, args.suite))
 
 
 def _campaign(args: argparse.Namespace, shared: dict, seeds: range) -> dict:
@@ -612,7 +640,9 @@ def build_parser() -> argparse.ArgumentParser:
     train = commands.add_parser("train", help="a PPO or SAC agent on one pose source")
     _common(train, "out/train", "hyper-parameter YAML (default configs/agents/ALGO.yaml)")
     train.add_argument("--algo", choices=["ppo", "sac"], default="ppo", help="algorithm (ppo)")
-    train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
+    train.add_argument(
+        "--estimator", help=f"pose source the agent drives on ({DEFAULT_POSE_SOURCE})"
+    )
     train.add_argument(
         "--estimators",
         help="a campaign: one run per pose source (comma-separated) and seed, each in "
@@ -708,7 +738,16 @@ def build_parser() -> argparse.ArgumentParser:
     shipped.add_argument(
         "--ship", type=Path, help="a `train --seeds N` folder to ship as a pretrained agent"
     )
-    shipped.add_argument("--suite", choices=suite_names(), help="the suite it was trained on")
+    shipped.add_argument(
+        "--suite",
+        choices=suite_names(),
+        help="with --ship: the suite it was trained on; alone: list this suite's agents only",
+    )
+    shipped.add_argument(
+        "--replace",
+        action="store_true",
+        help="with --ship: replace an agent already shipped under the same name, whole",
+    )
     shipped.add_argument("--verbose", action="store_true", help="show PyBullet's C banners")
     shipped.set_defaults(run=_agents)
     bench = commands.add_parser("bench", help="the speed figures beside their targets")

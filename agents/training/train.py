@@ -31,7 +31,7 @@ from functools import partial
 from pathlib import Path
 
 import gymnasium as gym
-from stable_baselines3.common.callbacks import BaseCallback, CallbackList, EvalCallback
+from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
@@ -48,6 +48,7 @@ from stsf_gym.agents.training.hyperparams import (
     load_hyperparams,
     policy_kwargs_for_sb3,
 )
+from stsf_gym.agents.training.resumed_eval import ResumableEvalCallback
 from stsf_gym.agents.training.training_log import (
     EPISODES_CSV,
     EVAL_CSV,
@@ -428,8 +429,9 @@ def train(
             [
                 EpisodeLog(out, model.stsf_meta["wall_time_s"]),
                 AtomicCheckpoint(cfg.checkpoint_freq, n_envs, out),
-                EvalCallback(
+                ResumableEvalCallback(  # the same timesteps when resumed (resumed_eval.py)
                     eval_env,
+                    out=out,
                     n_eval_episodes=cfg.n_eval_episodes,
                     eval_freq=max(cfg.eval_freq // n_envs, 1),
                     log_path=str(out / "eval"),

@@ -22,11 +22,8 @@ import numpy as np
 
 from stsf_gym.agents import pretrained
 from stsf_gym.agents.registry import FOLLOWER, trained_on
-from stsf_gym.envs.config import ConfigError
+from stsf_gym.agents.training_folder import SEED_FOLDERS, folder_models
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
-
-SEED_FOLDERS = "seed-*"
-
 
 #: The pose sources of agents with none of their own when ``--estimators`` is not given.
 DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf", "ekf")
@@ -40,15 +37,8 @@ def expand_agents(agents: list[str]) -> list[str]:
         path = Path(agent)
         if agent.startswith(pretrained.PREFIX):
             expanded.extend(str(m) for m in pretrained.models(agent))
-        elif path.is_dir():
-            models = sorted(path.glob(f"{SEED_FOLDERS}/model.zip")) or [path / "model.zip"]
-            missing = [m for m in models if not m.is_file()]
-            if missing:
-                raise ConfigError(
-                    f"agent folder {path} holds no trained model: {missing[0]} not found "
-                    "(a folder of `stsf-gym train --seeds N`, or of one run)"
-                )
-            expanded.extend(str(m.resolve()) for m in models)
+        elif path.is_dir():  # every seed, finished (an unfinished one is refused by name)
+            expanded.extend(str(m.resolve()) for m in folder_models(path))
         elif path.suffix == ".zip":
             expanded.append(str(path.resolve()))
         else:  # an agent by name (follower, a registered one, package.module:Class)
