@@ -420,9 +420,7 @@ def _sweep(args: argparse.Namespace) -> dict:
         args.file, out, args.backend, args.workers, args.address, args.seed, _env_overrides(args)
     )
     _print_markdown(args, out / "results.md")
-    for failed in summary["failed"]:
-        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
-    return summary
+    return _failed_cells(summary, finished=summary["finished"])
 
 
 def _accuracy_curve(args: argparse.Namespace) -> dict:
@@ -440,6 +438,11 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
     for level in levels:  # scales of the dial's errors
         check_number(level, "--levels", Range(ge=0))
     dial = parse_overrides(args.dial)
+    if "scale" in dial:  # each level sets it: a --dial scale would change nothing
+        raise ConfigError(
+            f"--dial scale={dial['scale']}: the dial's scale is what --levels lists "
+            f"(--levels {dial['scale']}); --dial sets the dial's other options"
+        )
     make_estimator("degraded-truth", **dial)  # a bad dial option fails before any work
     world = args.world or DEFAULT_WORLD
     env = _env_overrides(args, None if args.suite else world)
@@ -470,9 +473,8 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
         args.suite,
     )
     _print_markdown(args, args.out / "curve.md")
-    for failed in summary["failed"]:
-        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
-    return summary
+    finished = len(summary["estimators"]) + sum(len(c["levels"]) for c in summary["curves"])
+    return _failed_cells(summary, finished)
 
 
 def _benchmark(args: argparse.Namespace) -> dict:
@@ -501,8 +503,23 @@ def _benchmark(args: argparse.Namespace) -> dict:
         _recording(args, args.out / args.suite),
     )
     _print_markdown(args, args.out / args.suite / "leaderboard.md")
+    return _failed_cells(summary, finished=len(summary["rows"]))
+
+
+class NothingFinished(RuntimeError):
+    """Every cell of a command failed: its files are written, the command exits 1."""
+
+
+def _failed_cells(summary: dict, finished: int) -> dict:
+    """Name each failed cell of ``summary`` on stderr; with ``finished`` results none (every
+    cell failed), raise :class:`NothingFinished`."""
     for failed in summary["failed"]:
         print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
+    if summary["failed"] and not finished:
+        raise NothingFinished(
+            f"all {len(summary['failed'])} cell(s) failed (named above): nothing to score; "
+            "the report written says so, and a rerun retries them"
+        )
     return summary
 
 
@@ -822,6 +839,14 @@ def _preflight(args: argparse.Namespace) -> None:
 
     if getattr(args, "seed", 0) < 0:  # seeds seed a numpy SeedSequence: non-negative
         raise ConfigError(f"--seed must be at least 0, got {args.seed}")
+    if getattr(args, "config", None) is not None:
+        from stsf_gym.yaml_layers import read_yaml
+
+        if not read_yaml(args.config):  # missing, unreadable or malformed: named there
+            raise ConfigError(
+                f"--config {args.config}: the file is empty, it sets nothing; give the "
+                "settings it should hold, or leave --config out"
+            )
     for option, needed, reason in NEEDS:
         if given(option) and not given(needed):
             raise ConfigError(reason)
@@ -866,7 +891,7 @@ def main(argv: list[str] | None = None) -> int:
     ) as err:
         print(f"{error} {err}", file=sys.stderr)
         return 2
-    except JobsFailed as err:
+    except (JobsFailed, NothingFinished) as err:
         print(f"{error} {err}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
