@@ -344,7 +344,12 @@ def _train(args: argparse.Namespace) -> dict:
 def _check_training_runs(args: argparse.Namespace) -> None:
     """Before any training: the seeds in range, and each run's folder free of another kind
     of run's trained work (:mod:`stsf_gym.agents.training.preflight`)."""
-    from stsf_gym.agents.training.preflight import check_out, check_seeds, run_kind
+    from stsf_gym.agents.training.preflight import (
+        check_out,
+        check_policy_settings,
+        check_seeds,
+        run_kind,
+    )
 
     check_seeds(args.seed, args.seeds)
     seeds = range(args.seed, args.seed + args.seeds)
@@ -357,7 +362,9 @@ def _check_training_runs(args: argparse.Namespace) -> None:
             (args.estimator, args.out / f"seed-{s}" if args.seeds > 1 else args.out) for s in seeds
         ]
     for estimator, out in runs:
-        check_out(out, run_kind(args.algo, estimator, args.world, args.suite))
+        kind = run_kind(args.algo, estimator, args.world, args.suite)
+        check_policy_settings(kind, args.config, parse_overrides(args.overrides))
+        check_out(out, kind)
 
 
 def _campaign(args: argparse.Namespace, shared: dict, seeds: range) -> dict:

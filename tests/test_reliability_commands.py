@@ -172,3 +172,9 @@ def test_a_baseline_that_is_no_python_with_stsf_gym_is_refused(run_cli, tmp_path
         "bench", "--step-only", "--baseline", str(half), "--out", str(tmp_path / "o")
     )
     assert code == 2 and "it lacks envs, agents, configs" in err
+
+
+def test_an_observation_scale_of_zero_fails_before_the_training_folder_is_made(run_cli, tmp_path):
+    code, err = run_cli("train", "--set", "observation.scale=0", "--out", str(tmp_path / "o"))
+    assert code == 2 and "observation.scale must be > 0, got 0.0" in err
+    assert not (tmp_path / "o").exists()
