@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from gymnasium.envs.registration import EnvSpec
 from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import stsf_gym
 from stsf_gym.agents.observation import PolicyObservation, observation_config
@@ -61,13 +62,14 @@ def test_the_suites_follower_episodes_are_unchanged_by_the_stop_entry():
 @pytest.mark.parametrize(
     "env_id", ["stsf_gym/Suite-Corridor-MCL-v0", "stsf_gym/Corridor-Smoother-v0"]
 )
-def test_the_mcl_and_smoother_ids_pass_the_env_checker(env_id):
+def test_the_mcl_and_smoother_ids_pass_the_env_checkers(env_id):
     env = gym.make(env_id, camera={"mode": "fast"}, sim={"max_episode_seconds": 5.0})
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             warnings.filterwarnings("ignore", message=".*different from the unwrapped version")
             gym_check_env(env, skip_render_check=True)
+            sb3_check_env(env, warn=True)
     finally:
         env.close()
 
