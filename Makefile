@@ -14,7 +14,7 @@ BIN := $(VENV)/bin
 CORE_STAMP := $(VENV)/.core-installed
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-rllib lint bench docs clean
+.PHONY: demo test test-slow test-rllib lint bench docs clean
 
 define CUDA_CHECK
 import importlib.metadata as md, sys, torch
@@ -47,8 +47,14 @@ $(STAMP): $(CORE_STAMP)
 demo: $(CORE_STAMP)
 	$(BIN)/stsf-gym demo
 
+# The default tier (pyproject deselects the markers `slow` and `every_id`): minutes.
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
+
+# The second tier: subprocess runs, training, Ray, packaging, docs blocks, examples, and the
+# every-id matrices. CI runs it after `make test`.
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -m 'slow or every_id'
 
 # RLlib pins its own Gymnasium release, so it gets a venv of its own.
 test-rllib:

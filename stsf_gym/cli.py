@@ -612,7 +612,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument(
         "--video-seconds",
         type=float,
-        help="simulated seconds of each estimator's episode in its video (40; 0: no videos)",
+        help="simulated seconds of each estimator's episode in its video (default: the whole "
+        "route, ten times faster than simulated time; 0: no videos)",
     )
     _record_args(demo)
     demo.set_defaults(run=_demo)

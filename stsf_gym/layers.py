@@ -104,7 +104,7 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.io": (),
     # ranges of the camera mount; the undistortion's compiled loop
     "stsf_gym.camera_model": ("stsf_gym.validation", "stsf_gym.geometry"),
-    "stsf_gym.video": (),
+    "stsf_gym.video": ("stsf_gym.io",),  # written atomically with the umask's mode
     "stsf_gym.terminal_table": (),
     "stsf_gym.layers": (),
 }

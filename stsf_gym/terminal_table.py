@@ -1,5 +1,8 @@
 """Tables for the terminal: as many columns as the console is wide (80 when it is not a
-terminal), never a number broken across lines; the other columns are in the files.
+terminal), never a number broken across lines; the other columns are in the files. A column of
+names (agents, pose sources such as ``my_package.estimators:MyEstimator``) is at most
+:data:`NAME_WIDTH` wide, its long names wrapped onto several lines, so one long name does not
+push the numbers beside it off the screen.
 
 :func:`print_markdown` prints a Markdown report (``results.md``) with each of its tables
 fitted that way; :func:`fit_table` fits rows of values.
@@ -7,6 +10,7 @@ fitted that way; :func:`fit_table` fits rows of values.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 
 from rich import box
@@ -14,9 +18,17 @@ from rich.cells import cell_len
 from rich.console import Console
 from rich.table import Table
 
+NAME_WIDTH = 20  # characters of a column of names; longer names wrap
+_NUMBER = re.compile(r"[-+±]?\.?\d")  # a cell starting like a number is never wrapped
+
 
 def _cell(value) -> str:
     return f"{value:.3f}" if isinstance(value, float) else str(value)
+
+
+def _names_only(column: list[str]) -> bool:
+    """True for a column of names: no cell of it starts like a number."""
+    return not any(_NUMBER.match(cell) for cell in column)
 
 
 def fit_table(
@@ -28,14 +40,19 @@ def fit_table(
 ) -> Table:
     """A rich table of ``rows`` with the leading columns that fit in ``width`` characters.
 
-    The first column always stays; headers may wrap onto several lines, cells never do. When
-    columns are left out, the caption names them and ``rest_in`` (where they are).
+    The first column always stays; headers may wrap onto several lines, and so may the
+    cells of a column of names (at :data:`NAME_WIDTH`); numbers never do. When columns are
+    left out, the caption names them and ``rest_in`` (where they are).
     """
     cells = [[_cell(v) for v in row] for row in rows]
-    widths = [
-        max([cell_len(row[i]) for row in cells] + [cell_len(w) for w in name.split()] + [1])
-        for i, name in enumerate(header)
-    ]
+    widths = []
+    for i, name in enumerate(header):
+        column = [row[i] for row in cells]
+        header_width = max([cell_len(w) for w in name.split()] + [1])
+        widest = max([cell_len(cell) for cell in column] + [header_width])
+        if _names_only(column):
+            widest = min(widest, max(NAME_WIDTH, header_width))
+        widths.append(widest)
     keep = len(header)
     # the columns and, between two, a space of padding on each side of a blank separator
     while keep > 1 and sum(widths[:keep]) + 3 * (keep - 1) > width:

@@ -5,11 +5,12 @@ complete under its name or not at all."""
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from types import TracebackType
 
 import numpy as np
+
+from stsf_gym.io import create_temporary
 
 
 def mp4_available() -> bool:
@@ -36,12 +37,8 @@ class VideoWriter:
         self.frames = 0
 
     def __enter__(self) -> VideoWriter:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(
-            dir=self.path.parent, prefix=f".{self.path.stem}.", suffix=self.path.suffix
-        )
+        fd, self._tmp = create_temporary(self.path.with_suffix(""), self.path.suffix)
         os.close(fd)
-        self._tmp = Path(tmp)
         return self
 
     def append(self, frame: np.ndarray) -> None:

@@ -44,6 +44,7 @@ def test_curve_files_hold_numbers(tiny_run):
     assert summary["curves"] == on_disk["curves"]
 
 
+@pytest.mark.slow
 def test_ray_backend_gives_the_same_curve(tiny_run, tmp_path):
     ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'stsf-gym[ray]')")
     _, summary = tiny_run

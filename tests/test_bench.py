@@ -43,6 +43,14 @@ def _summary(row: dict, **changes) -> dict:
     rows[6]["estimator_ms_per_step"] = 1.0
     return {
         "machine": {"cpu": "test", "cores": 2, "python": "3", "reference_ms": 50.0},
+        "process": {
+            "import_env_s": 0.5,
+            "import_env_references": 10.0,
+            "import_training_s": 4.0,
+            "import_training_references": 80.0,
+            "first_step_s": 4.5,
+            "first_step_references": 90.0,
+        },
         "speed": rows,
         "render": [
             {
@@ -103,11 +111,16 @@ def test_targets_are_judged_against_their_bounds(fast_row):
     assert all(t["reason"] == "" for t in judged.values() if t["met"] and t["bound"] != "-")
     assert not met["smoother update, ms per camera frame"]  # 2.5 > 2
     assert met["MCL, ms per step (every stage)"]  # 1.0 <= 3
+    assert met["import stsf_gym, reference workloads"]  # 10 <= 20
+    assert not met["import the training stack, reference workloads"]  # 80 > 60
+    assert "torch" in judged["import the training stack, reference workloads"]["reason"]
+    assert met["first step of STSF (make, reset, step), reference workloads"]  # 90 <= 100
     summary["targets"] = targets(summary)
     text = to_markdown(summary)
     assert "ratios 1.50 and 2.00" in text
     assert "| 2 workers / 1 worker, SubprocVecEnv, rendered STSF |" in text
     assert "Reference workload (fixed Python + numpy work, best of 3): 50.0 ms" in text
+    assert "the first step of STSF (make, reset, step) 4.50 s" in text
 
 
 def test_recording_targets_are_judged(fast_row):
@@ -135,6 +148,7 @@ def test_recording_targets_are_judged(fast_row):
     assert "## Recording" in text and "mcap_writer 0.30, rerun_writer 0.50" in text
 
 
+@pytest.mark.slow
 def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
     """The step cases on this code and on a checkout (this one, laid out as installed): both
     measured in fresh processes, the ratio of this code over it, the section in bench.md."""
@@ -187,3 +201,13 @@ def test_a_measured_case_times_its_steps_in_segments():
     row = measure("truth, camera off, follower", steps=2 * SEGMENT_STEPS + 30, warmup=5)
     assert len(row["segment_s"]) == 3 and min(row["segment_s"]) > 0
     assert row["steps_per_s"] == pytest.approx(row["steps"] / sum(row["segment_s"]))
+
+
+@pytest.mark.slow
+def test_process_costs_are_measured_in_fresh_processes():
+    from stsf_gym.bench.process_cost import process_costs
+
+    costs = process_costs(reference_ms=50.0, rounds=1)
+    assert 0 < costs["import_env_s"] < costs["first_step_s"]
+    assert costs["import_training_s"] > 0
+    assert costs["first_step_references"] == 1e3 * costs["first_step_s"] / 50.0

@@ -32,6 +32,7 @@ def _policy(folder) -> bytes:
         return model.read("policy.pth")
 
 
+@pytest.mark.slow
 def test_a_campaign_on_ray_trains_what_it_trains_locally(tmp_path):
     ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'stsf-gym[ray]')")
     local = run_campaign(campaign_jobs(TINY, tmp_path / "local", ["truth"], [0]))

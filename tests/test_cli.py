@@ -9,6 +9,7 @@ from stsf_gym.results import check_rows
 CLI = [sys.executable, "-m", "stsf_gym.cli"]
 
 
+@pytest.mark.slow
 def test_demo_json_and_files(tmp_path):
     out = tmp_path / "demo"
     result = subprocess.run(

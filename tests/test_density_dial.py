@@ -23,6 +23,7 @@ SPARSE = {
 }
 
 
+@pytest.mark.slow
 def test_measured_coverage_lies_in_the_configured_range_over_100_worlds():
     gen = load_generator_config(SPARSE)
     measured = [

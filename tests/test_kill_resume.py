@@ -111,7 +111,13 @@ def _comparable(value, out: Path):
     return value
 
 
-@pytest.mark.parametrize("name", list(COMMANDS))
+#: The commands the default tier kills: training and the benchmark; the rest in `make test-slow`.
+DEFAULT_TIER = ("train", "benchmark")
+
+
+@pytest.mark.parametrize(
+    "name", [n if n in DEFAULT_TIER else pytest.param(n, marks=pytest.mark.slow) for n in COMMANDS]
+)
 def test_a_killed_command_resumes_to_the_uninterrupted_result(name, tmp_path):
     reference = _finish(_argv(name, tmp_path / "reference", tmp_path))
     out = tmp_path / "killed"

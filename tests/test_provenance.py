@@ -14,6 +14,7 @@ import yaml
 from worker_jobs import import_module
 
 import stsf_gym.envs.config as env_config
+import stsf_gym.results.behaviour as behaviour
 import stsf_gym.results.provenance as provenance
 from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.training.train import latest_checkpoint, train
@@ -73,7 +74,9 @@ def _episode_stamps(folder):
     return {f.name: f.stat().st_mtime_ns for f in sorted((folder / "episodes").glob("*.json"))}
 
 
-def test_an_edited_default_or_changed_code_recomputes_saved_episodes(tmp_path, monkeypatch, capsys):
+def test_an_edited_default_or_a_new_behaviour_version_recomputes_saved_episodes(
+    tmp_path, monkeypatch, capsys
+):
     run = lambda: evaluate(  # noqa: E731
         tmp_path, ["odometry"], seeds=1, world="straight_10m", workers=1, env=FAST
     )
@@ -95,8 +98,13 @@ def test_an_edited_default_or_changed_code_recomputes_saved_episodes(tmp_path, m
     assert second["rows"][0]["final_error_m"] != first["rows"][0]["final_error_m"]
 
     monkeypatch.setattr(env_config, "CONFIG_DIR", CONFIG_DIR)
+    run()
     stamps = _episode_stamps(tmp_path)
-    monkeypatch.setattr(provenance, "source_digest", lambda: "another-version")
+    monkeypatch.setattr(provenance, "source_digest", lambda: "edited-bytes")
+    run()  # a rewrite that keeps every number: reused
+    assert _episode_stamps(tmp_path) == stamps
+    capsys.readouterr()
+    monkeypatch.setitem(behaviour.VERSIONS, "estimation", behaviour.VERSIONS["estimation"] + 1)
     third, _ = run()
     assert "made by other code or settings" in capsys.readouterr().err
     assert _episode_stamps(tmp_path) != stamps
@@ -109,12 +117,13 @@ def test_a_checkpoint_of_other_code_is_set_aside_not_resumed(tmp_path, monkeypat
     assert latest_checkpoint(out)[1] == 64
     saved = model_metadata(out / "model.zip")
     assert saved["provenance"]["config"]["hyperparams"]["n_steps"] == 64
-    monkeypatch.setattr(provenance, "source_digest", lambda: "another-version")
+    monkeypatch.setitem(behaviour.VERSIONS, "learner", behaviour.VERSIONS["learner"] + 1)
     summary = train("ppo", "truth", out, 128, n_envs=1, overrides=TINY_PPO, progress_bar=False)
     assert "training starts afresh" in capsys.readouterr().err
     assert summary["resumed_from"] == 0 and summary["timesteps"] == 128
     assert (out / "stale-checkpoints" / "0").is_dir()
-    assert json.loads((out / "train.json").read_text())["made_by"]["code"] == "another-version"
+    made_by = json.loads((out / "train.json").read_text())["made_by"]
+    assert made_by["code"] == behaviour.versions_digest()
 
 
 @pytest.mark.parametrize("config", [{"a": 1, "b": [1, 2]}, {"b": [1, 2], "a": 1}])

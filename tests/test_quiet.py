@@ -9,7 +9,7 @@ import pytest
 from rich.console import Console
 
 from stsf_gym.envs.quiet import VERBOSE_ENV, quiet_c_output
-from stsf_gym.terminal_table import fit_table, print_markdown
+from stsf_gym.terminal_table import NAME_WIDTH, fit_table, print_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 BANNERS = ("pybullet build time", "argv[0]", "EGL", "GL_VENDOR", "ven = ", "Destroy")
@@ -79,6 +79,19 @@ def test_tables_fit_the_console_and_name_the_columns_left_out(width):
         assert name in words  # named in the caption
     assert (len(table.columns) == len(header)) == (width >= 80)
     assert "0.186" in text or len(table.columns) < 4
+
+
+def test_a_long_name_wraps_and_keeps_the_numbers_beside_it():
+    header = ["estimator", "success rate", "final error (m)", "RMS heading error (deg)", "NEES"]
+    name = "my_package.estimators:AVeryLongEstimatorName"
+    rows = [[name, 1.0, "0.003 ± 0.001", 0.186, 0.802], ["ekf", 0.5, "0.1", 0.05, 1.5]]
+    table = fit_table(header, rows, 80)
+    lines = _rendered(table, 80)
+    assert len(table.columns) == len(header)  # as with a short name
+    assert all(len(line.rstrip()) <= 80 for line in lines)
+    assert "0.003 ± 0.001" in "\n".join(lines)
+    body = next(i for i, line in enumerate(lines) if line.startswith("─")) + 1
+    assert "".join(line[:NAME_WIDTH].strip() for line in lines[body : body + 3]) == name
 
 
 def test_markdown_reports_keep_their_prose():

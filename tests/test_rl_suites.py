@@ -138,6 +138,10 @@ def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_
     rows = {(r["agent"], r["estimator"]) for r in deployed["rows"]}
     assert rows == {("follower", "stsf")} | {(m, "stsf") for m in models}
     (against,) = deployed["trained"]  # each run paired with the follower on the same world
+    assert against["trained_on"] == "odometry" and against["models"] == sorted(models)
+    report = (tmp_path / "deployed" / "leaderboard.md").read_text()
+    assert "**ppo-odometry** (trained on odometry) on stsf, 2 training seeds" in report
+    assert "| ppo-odometry/seed-1 | stsf |" in report
     assert [p["pairs"] for p in against["paired_vs_follower"]] == [1, 1]
     assert against["follower_success_rate"] in (0.0, 1.0)
     # protocol (b): no pose source named, each learnt agent drives on its own

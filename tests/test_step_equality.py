@@ -1,11 +1,13 @@
-"""The step's hot path, rewritten for speed, drives exactly as before: episodes recorded with
-the code before the rewrite (``tests/data/step_golden.npz``) are replayed to the last bit.
-
-Regenerate only on purpose, with the code whose behaviour is the reference::
+"""The proof that a change kept behaviour: episodes recorded with the reference code
+(``tests/data/step_golden.npz``) are replayed to the last bit, the world, the estimators and the
+follower driving. The goldens record the behaviour versions they were made under
+(:mod:`stsf_gym.results.behaviour`): a change that moves a number bumps a version, and only
+then can new goldens be written::
 
     python tests/test_step_equality.py --write
 """
 
+import json
 import sys
 from pathlib import Path
 
@@ -13,7 +15,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from stsf_gym.results.behaviour import VERSIONS
+
 GOLDEN = Path(__file__).parent / "data" / "step_golden.npz"
+#: The subsystems whose behaviour the goldens pin.
+PINNED = ("world", "estimation", "follower")
 #: (env id, overrides, steps): the true pose with the camera off, and STSF on the fast camera;
 #: each with the sonar cast through PyBullet, as the first recording was (the plane cast, a
 #: change of method, is compared with it in ``test_plane_cast.py``), and with the plane cast,
@@ -63,6 +69,21 @@ def record(case: str) -> dict[str, np.ndarray]:
     return {f"{case}/{key}": np.array(values) for key, values in rows.items()}
 
 
+def pinned_versions() -> dict[str, int]:
+    """The versions of the :data:`PINNED` subsystems now."""
+    return {name: VERSIONS[name] for name in PINNED}
+
+
+def golden_versions() -> dict[str, int]:
+    """The versions the goldens were recorded under."""
+    return json.loads(str(np.load(GOLDEN)["versions"]))
+
+
+def test_the_goldens_are_of_the_versions_now():
+    """A version bumped without new goldens (or goldens written without a bump) is caught."""
+    assert golden_versions() == pinned_versions()
+
+
 @pytest.mark.parametrize("case", list(CASES))
 def test_the_same_episode_to_the_last_bit(case):
     golden = np.load(GOLDEN)
@@ -72,7 +93,22 @@ def test_the_same_episode_to_the_last_bit(case):
         np.testing.assert_array_equal(values, golden[key], err_msg=key)
 
 
-if __name__ == "__main__" and "--write" in sys.argv:
+def write() -> None:
+    """New goldens, refused when they differ from the old under the same versions."""
+    traces = {k: v for case in CASES for k, v in record(case).items()}
+    if GOLDEN.is_file() and golden_versions() == pinned_versions():
+        old = np.load(GOLDEN)
+        moved = [k for k in traces if k not in old.files or not np.array_equal(traces[k], old[k])]
+        if moved:
+            raise SystemExit(
+                f"behaviour changed ({', '.join(moved[:3])}, ...) under the same versions "
+                f"{pinned_versions()}: bump the subsystem's version in "
+                "stsf_gym/results/behaviour.py, then write again"
+            )
     GOLDEN.parent.mkdir(exist_ok=True)
-    np.savez_compressed(GOLDEN, **{k: v for case in CASES for k, v in record(case).items()})
+    np.savez_compressed(GOLDEN, versions=json.dumps(pinned_versions()), **traces)
     print(f"wrote {GOLDEN}")
+
+
+if __name__ == "__main__" and "--write" in sys.argv:
+    write()

@@ -5,6 +5,7 @@ import gymnasium as gym
 import imageio_ffmpeg
 import numpy as np
 import pytest
+from conftest import id_matrix, registered_ids
 from gymnasium.wrappers import RecordVideo
 from PIL import Image
 
@@ -55,7 +56,7 @@ def test_interrupted_writer_leaves_no_file(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("env_id", sorted(i for i in gym.registry if i.startswith("stsf_gym/")))
+@pytest.mark.parametrize("env_id", id_matrix(registered_ids()))
 def test_record_video_on_every_registered_id(tmp_path, env_id):
     assert stsf_gym.ENV_WORLDS  # the ids are registered by the import
     env = gym.make(env_id, render_mode="rgb_array", sim__max_episode_seconds=1.0)

@@ -6,6 +6,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import id_matrix, registered_ids
 from gymnasium.envs.registration import EnvSpec
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
@@ -69,7 +70,7 @@ def test_spec_of_a_registered_estimating_id_does_not_wrap_twice(make_env):
         again.close()
 
 
-@pytest.mark.parametrize("env_id", sorted(i for i in gym.registry if i.startswith("stsf_gym/")))
+@pytest.mark.parametrize("env_id", id_matrix(registered_ids()))
 def test_spec_json_round_trip_on_every_id(env_id):
     """``EnvSpec.from_json(env.spec.to_json())`` gives the same spec, and ``gym.make`` takes it
     (a tuple recorded by a wrapper came back a list: every estimating id failed)."""

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import id_matrix
 
 import stsf_gym
 from stsf_gym.agents.training.hyperparams import load_hyperparams
@@ -44,7 +45,7 @@ def test_sections_follow_the_training_config():
     assert truth["policy"] == "MlpPolicy" and truth["n_steps"] == 1024
 
 
-@pytest.mark.parametrize("env_id", sorted(hyperparams))
+@pytest.mark.parametrize("env_id", id_matrix(hyperparams))
 def test_rl_zoo3_builds_the_agent_on_every_estimating_id(tmp_path, env_id):
     """rl-zoo3's own ExperimentManager reads each id's section, builds the env and the model,
     and the env steps (what ``rl_zoo3.train`` does before learning)."""
@@ -73,6 +74,7 @@ def test_rl_zoo3_builds_the_agent_on_every_estimating_id(tmp_path, env_id):
         model.env.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "env_id", ["stsf_gym/Straight10m-Truth-v0", "stsf_gym/Suite-Corridor-STSF-v0"]
 )

@@ -15,8 +15,8 @@ same ones each round) and the round is saved (model, data, log), so an interrupt
 resumes after its last round with the result an uninterrupted one gives. The stage ends with
 the round's policy that did best on the validation worlds, the latest of equals (``keep:
 best``, the default), or with the last round's (``keep: last``): later rounds add data where
-the learner strays, yet a round can lose what an earlier one had (docs/agents.md measures
-both).
+the learner strays, yet a round can lose what an earlier one had (docs/agents-results.md
+measures both).
 """
 
 from __future__ import annotations

@@ -14,6 +14,8 @@
 5. Where the time goes: cProfile's top functions over the camera pipeline (case e).
 6. Recording (:mod:`.recording`): what ``--record`` adds to an episode's wall time, the files'
    sizes, and how much faster a replay of a recorded episode runs than the episode itself.
+7. What a process costs (:mod:`.process_cost`): the env's and the training stack's import
+   times and the first step (compiled kernels loaded from their cache included).
 
 Writes ``bench.json`` and ``bench.md`` (ending in the targets table: each target measured, met
 or the measured reason, and the load average at the run's start and end) to the output folder.
@@ -27,6 +29,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from stsf_gym.bench.process_cost import process_costs
 from stsf_gym.bench.recording import recording_costs
 from stsf_gym.bench.speed import CASES, FAST_CASES, render_latency, run_case, vector_scaling
 from stsf_gym.bench.step import SEGMENT_STEPS, STAGES, step_section
@@ -66,7 +69,7 @@ def run_step_bench(
     summary = {
         "machine": {**machine(), "load_average": [load_start, os.getloadavg()]},
         "step": step,
-        "provenance": provenance({"steps": steps, "baseline": step["baseline"]}),
+        "provenance": provenance({"steps": steps, "baseline": step["baseline"]}, timed=True),
     }
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "bench.json", summary)
@@ -92,18 +95,21 @@ def run_bench(
         speed.append(run_case(name, seconds, seed, profile=name == PROFILED_CASE))
     renders = render_latency()
     vector = vector_scaling(vector_steps, seed)
+    about = machine()
     summary = {
-        "machine": {**machine(), "load_average": [load_start, os.getloadavg()]},
+        "machine": {**about, "load_average": [load_start, os.getloadavg()]},
         "step": step,
         "speed": speed,
         "render": renders,
         "vector": vector,
+        "process": process_costs(about["reference_ms"]),
     }
     if not missing_modules():  # the record extra: a core install measures no recording
         summary["recording"] = recording_costs(seed)
     summary["targets"] = targets(summary)
     summary["provenance"] = provenance(
-        {"sim_seconds": sim_seconds, "vector_steps": vector_steps, "baseline": step["baseline"]}
+        {"sim_seconds": sim_seconds, "vector_steps": vector_steps, "baseline": step["baseline"]},
+        timed=True,
     )
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "bench.json", summary)
@@ -239,6 +245,7 @@ def targets(summary: dict) -> list[dict]:
     ]
     if "recording" in summary:
         checks += [(*check, "") for check in recording_checks(summary["recording"])]
+    checks += process_checks(summary["process"])
     rows = []
     for name, value, op, bound, reason in checks:
         met = bool({">=": value >= bound, "<=": value <= bound, "<": value < bound}[op])
@@ -261,6 +268,29 @@ def targets(summary: dict) -> list[dict]:
         }
     )
     return rows
+
+
+def process_checks(process: dict) -> list[tuple[str, float, str, float, str]]:
+    """The process-cost targets, in reference workloads (about 50 ms each on this project's
+    2-core machine): the env's import within a second, the training stack's within 3 s (torch
+    and SB3 are most of it), the first step within 5 s (numba's own start-up about 3 s)."""
+    return [
+        ("import stsf_gym, reference workloads", process["import_env_references"], "<=", 20, ""),
+        (
+            "import the training stack, reference workloads",
+            process["import_training_references"],
+            "<=",
+            60,
+            "torch and stable-baselines3 imported by the trainer's modules",
+        ),
+        (
+            "first step of STSF (make, reset, step), reference workloads",
+            process["first_step_references"],
+            "<=",
+            100,
+            "numba's start-up when the first compiled kernel loads from its cache",
+        ),
+    ]
 
 
 def recording_checks(recording: dict) -> list[tuple[str, float, str, float]]:
@@ -445,6 +475,14 @@ def to_markdown(summary: dict) -> str:
             + "\nImport of the writers' libraries (once per process, CPU s): "
             + ", ".join(f"{k} {v:.2f}" for k, v in summary["recording"]["import_cpu_s"].items())
             + "\n"
+        )
+    if "process" in summary:
+        c = summary["process"]
+        parts.append(
+            "## What a process costs (fresh processes, best of 3)\n\n"
+            f"Import of `stsf_gym` {c['import_env_s']:.2f} s, of the training stack "
+            f"{c['import_training_s']:.2f} s more, the first step of STSF (make, reset, step) "
+            f"{c['first_step_s']:.2f} s; peak memory of each env case in the speed table.\n"
         )
     parts.append("## Targets\n\n" + markdown_table(summary["targets"]))
     return "\n".join(parts)

@@ -47,11 +47,11 @@ CASES: dict[str, tuple[str, dict, str]] = {
     "stsf, fast camera, follower": ("stsf_gym/Suite-Corridor-STSF-v0", NO_STOP, "follower"),
     "stsf, fast camera, random": ("stsf_gym/Suite-Corridor-STSF-v0", NO_STOP, "random"),
 }
-#: A step's stages, each the cumulative time of a function as both this code and the code
-#: before issue 36 name it (file, function; its outermost call where several match): the
-#: env's step and, within it, the physics, the sonar and the fast camera; the pose wrapper's
-#: step (which holds the env's) and, within it, the estimator's camera frames, the rest of its
-#: update and the camera pointing; the follower.
+#: A step's stages, each the cumulative time of a function as both this code and a baseline
+#: checkout (from commit a543992 on) name it (file, function; its outermost call where several
+#: match): the env's step and, within it, the physics, the sonar and the fast camera; the pose
+#: wrapper's step (which holds the env's) and, within it, the estimator's camera frames, the rest
+#: of its update and the camera pointing; the follower.
 STAGES: dict[str, tuple[str, str]] = {
     "env step": ("corridor_env.py", "step"),
     "physics": ("simulator.py", "step"),

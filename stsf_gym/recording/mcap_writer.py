@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import cv2
@@ -18,6 +17,7 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from stsf_gym.camera_model import rot_z
+from stsf_gym.io import create_temporary
 from stsf_gym.recording import cdr, qos, topics
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording.records import EpisodeStart, StepRecord, nanoseconds
@@ -40,8 +40,7 @@ class McapLogWriter:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, self._tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.name}.")
+        fd, self._tmp = create_temporary(self.path, "")
         self._file = os.fdopen(fd, "wb")
         self._writer = Writer(self._file, compression=CompressionType.ZSTD)
         self._writer.start(profile="ros2", library="stsf-gym")
@@ -83,7 +82,6 @@ class McapLogWriter:
             return
         self._writer.finish()
         self._file.close()
-        os.chmod(self._tmp, 0o644)
         os.replace(self._tmp, self.path)
 
 

@@ -8,12 +8,14 @@ so a rerun reuses it only when both are unchanged.
 The code is identified three ways: the package version, the git commit with a ``dirty`` flag
 (only when the package runs from a git checkout, e.g. an editable install), and
 ``source_digest``, a SHA-256 over every module and package config file of the installed
-package. The digest is what the caches compare: it changes with any edit, committed or not,
-and is the same for a wheel and the checkout it was built from. A results file also lists the
-code its run loaded (:func:`loaded_code`): each package module imported in the run's process or
-in a worker that ran its jobs (workers report theirs through :func:`run_reporting_modules` and
-:func:`worker_result`), and every package config, with each file's digest; so a figure is
-stale only when code it ran has changed (``benchmarks/measured_blocks.py``).
+package (the same for a wheel and the checkout it was built from). What a number depends on is
+the behaviour versions (:mod:`stsf_gym.results.behaviour`): a results file records those of
+the subsystems its run loaded, and caches compare those of all of them, so a rewrite that keeps
+every number reuses and keeps what was made before. A results file also lists the code its run
+loaded (:func:`loaded_code`): each package module imported in the run's process or in a worker
+that ran its jobs (workers report theirs through :func:`run_reporting_modules` and
+:func:`worker_result`), and every package config, with each file's digest; timings, which any
+rewrite may change, are judged by what that code computes (:func:`timed_code`).
 """
 
 from __future__ import annotations
@@ -22,9 +24,11 @@ import functools
 import hashlib
 import importlib.metadata
 import importlib.util
+import itertools
 import json
 import os
 import platform
+import re
 import shlex
 import subprocess
 import sys
@@ -34,6 +38,8 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
+
+from stsf_gym.results.behaviour import behaviour, code_digest, versions_digest
 
 #: Distributions whose versions shape results (those installed are listed).
 RESULT_PACKAGES = (
@@ -67,8 +73,59 @@ def set_command(argv: Sequence[str]) -> None:
 
 
 def command_line() -> str:
-    """The command of this run, as a shell would take it."""
-    return shlex.join(_command if _command is not None else sys.argv)
+    """The command of this run as a user would type it anywhere: each absolute path named
+    (:func:`portable`), as a shell would take it."""
+    return shlex.join(portable(list(_command if _command is not None else sys.argv)))
+
+
+#: The names of the absolute paths given to these options in a recorded command.
+PATH_NAMES = {"--out": "OUT", "--baseline": "BASELINE", "--config": "CONFIG"}
+#: An absolute path inside a command-line word (after a start, ``=``, ``,`` or ``:``).
+ABSOLUTE = re.compile(r"(?:(?<=^)|(?<=[=,:]))/[^\s,=:/][^\s,=:]*")
+
+
+def path_names(argv: Sequence[str]) -> dict[str, str]:
+    """``{absolute path: name}`` of the paths in ``argv``: those of :data:`PATH_NAMES`'s
+    options by the option, every other one (an agent's model or training folder) ``MODEL``,
+    ``MODEL2``, ... in order; a path inside a named one is named through it (``OUT/a.json``)."""
+    names = {
+        os.path.normpath(value): PATH_NAMES[flag]
+        for flag, value in itertools.pairwise(argv)
+        if flag in PATH_NAMES and os.path.isabs(value)
+    }
+    for word in argv:
+        for path in ABSOLUTE.findall(word):
+            path = os.path.normpath(path)
+            if not any(path == n or path.startswith(n + "/") for n in names):
+                count = sum(name.startswith("MODEL") for name in names.values())
+                names[path] = "MODEL" if count == 0 else f"MODEL{count + 1}"
+    return names
+
+
+def portable(value: T, argv: Sequence[str] | None = None) -> T:
+    """``value`` (a string, or lists and dicts of them) with every absolute path of the command
+    ``argv`` (default this run's) replaced by its name (:func:`path_names`): what a results
+    file or a page shows, the same on every machine."""
+    names = path_names(
+        list(_command if _command is not None else sys.argv) if argv is None else argv
+    )
+    ordered = sorted(names.items(), key=lambda item: -len(item[0]))
+
+    def rename(text: str) -> str:
+        for path, name in ordered:
+            text = re.sub(re.escape(path) + r"(?=$|[/\s,=:\"'])", name, text)
+        return text
+
+    def walk(item: Any) -> Any:
+        if isinstance(item, str):
+            return rename(item)
+        if isinstance(item, list):
+            return [walk(v) for v in item]
+        if isinstance(item, dict):
+            return {k: walk(v) for k, v in item.items()}
+        return item
+
+    return walk(value)
 
 
 def _package_folders() -> list[Path]:
@@ -147,6 +204,13 @@ def loaded_code() -> dict[str, str]:
     return code
 
 
+def timed_code(loaded: Mapping[str, str]) -> dict[str, str]:
+    """``{relative path: code_digest}`` of the ``loaded`` code (:func:`loaded_code`): what a
+    timing depends on, docstrings and comments left out (a second per hundred modules)."""
+    parents = {folder.name: folder.parent for folder in _package_folders()}
+    return {path: code_digest(parents[path.split("/", 1)[0]] / path) for path in loaded}
+
+
 @functools.cache
 def source_digest() -> str:
     """SHA-256 (hex, 16 digits) over the relative path and bytes of every ``.py`` and ``.yaml``
@@ -196,17 +260,19 @@ def package_versions(names: Iterable[str] = RESULT_PACKAGES) -> dict[str, str]:
 
 
 def code_version() -> dict[str, Any]:
-    """The package version, git commit and dirty flag, the source digest and the code the run
-    loaded (:func:`loaded_code`)."""
+    """The package version, git commit and dirty flag, the source digest, the code the run
+    loaded (:func:`loaded_code`) and the behaviour versions of its subsystems."""
     try:
         version = importlib.metadata.version("stsf-gym")
     except importlib.metadata.PackageNotFoundError:
         version = None
+    loaded = loaded_code()
     return {
         "version": version,
         **git_state(),
         "source_digest": source_digest(),
-        "loaded_code": loaded_code(),
+        "behaviour": behaviour(loaded),
+        "loaded_code": loaded,
     }
 
 
@@ -235,17 +301,24 @@ def by_digest(configs: Mapping[str, Mapping[str, Any]]) -> dict[str, dict]:
 
 
 def fingerprint(config: Mapping[str, Any] | None = None) -> dict[str, str]:
-    """What a cached unit of work is reused for: the code's digest and its configuration's."""
-    return {"code": source_digest(), "config": config_digest(config or {})}
+    """What a cached unit of work is reused for: the behaviour versions of the code
+    (:func:`~stsf_gym.results.behaviour.versions_digest`) and its configuration's digest."""
+    return {"code": versions_digest(), "config": config_digest(config or {})}
 
 
 def provenance(
-    config: Mapping[str, Any] | None = None, seeds: Iterable[int] | None = None
+    config: Mapping[str, Any] | None = None,
+    seeds: Iterable[int] | None = None,
+    timed: bool = False,
 ) -> dict[str, Any]:
     """The record a results file carries: code, packages, Python, platform, the fully resolved
-    ``config``, the ``seeds`` and the command line."""
+    ``config``, the ``seeds`` and the command line; for ``timed`` results (speed figures) also
+    what the loaded code computes (:func:`timed_code`)."""
+    code = code_version()
+    if timed:
+        code["timed_code"] = timed_code(code["loaded_code"])
     return {
-        "stsf_gym": code_version(),
+        "stsf_gym": code,
         "packages": package_versions(),
         "python": platform.python_version(),
         "platform": platform.platform(),

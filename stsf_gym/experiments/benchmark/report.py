@@ -1,34 +1,12 @@
-"""Renderings of a benchmark's results.json: the Markdown leaderboard and its figure."""
+"""The Markdown leaderboard of a benchmark's results.json (``leaderboard.md``, printed in the
+terminal too): every row named by its agent, the learnt agents beside the follower, the
+paired differences."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from stsf_gym.experiments.benchmark.trained import SEED_FOLDERS
-from stsf_gym.io import markdown_table, save_figure
-
-
-def _label(row: dict) -> str:
-    if not row["agent"].endswith(".zip"):  # an agent by name drives on every pose source
-        return (
-            row["estimator"]
-            if row["agent"] == "follower"
-            else f"{row['agent']} / {row['estimator']}"
-        )
-    return f"{agent_name(row['agent'])} / {row['estimator']}"
-
-
-def agent_name(agent: str) -> str:
-    """``follower``; a training folder by its name (``ppo-stsf``); a model by its training
-    folder's name, with its seed folder (``ppo-stsf/seed-0``), or by its file's stem when
-    it is no ``model.zip``. The JSON keeps the whole path."""
-    path = Path(agent)
-    if path.suffix != ".zip":
-        return path.name
-    if path.name != "model.zip":
-        return path.stem
-    folder = path.parent
-    return f"{folder.parent.name}/{folder.name}" if folder.match(SEED_FOLDERS) else folder.name
+from stsf_gym.experiments.benchmark.against_follower import against_follower_markdown
+from stsf_gym.experiments.benchmark.trained import agent_name
+from stsf_gym.io import markdown_table
 
 
 def leaderboard_markdown(summary: dict) -> str:
@@ -67,6 +45,7 @@ def leaderboard_markdown(summary: dict) -> str:
             }
         )
     text += markdown_table(table)
+    text += against_follower_markdown(summary)
     if summary.get("trained"):
         text += (
             "\n## Trained agents over their training seeds (IQM, 95 % stratified bootstrap; "
@@ -87,15 +66,13 @@ def leaderboard_markdown(summary: dict) -> str:
         )
     if summary.get("trained_paired"):
         text += (
-            "\n## Trained agents on their own pose sources, paired run by run (success "
-            "difference, Newcombe 1998, method 10)\n\n"
+            f"\n## Trained agents {_where(summary['trained_paired'])}, paired run by run "
+            "(success difference, Newcombe 1998, method 10)\n\n"
         )
         text += markdown_table(
             [
                 {
-                    "first - second": f"{agent_name(p['first']['agent'])} on "
-                    f"{p['first']['estimator']} - {agent_name(p['second']['agent'])} on "
-                    f"{p['second']['estimator']}",
+                    "first - second": f"{_side(p['first'])} - {_side(p['second'])}",
                     "per run (95 % CI)": "; ".join(
                         f"{d['difference']:+.2f} ({d['low']:+.2f} to {d['high']:+.2f})"
                         for d in p["success_difference_per_run"]
@@ -131,6 +108,23 @@ def leaderboard_markdown(summary: dict) -> str:
     return text
 
 
+def _where(pairs: list[dict]) -> str:
+    """Where the paired agents drove: their own pose sources (protocol (b)), or those named by
+    ``--estimators``, some not the one an agent was trained on (protocol (a))."""
+    sides = [side for p in pairs for side in (p["first"], p["second"])]
+    if all(side.get("trained_on") == side["estimator"] for side in sides):
+        return "on their own pose sources"
+    if any(side.get("trained_on") not in (None, side["estimator"]) for side in sides):
+        return "on the pose sources named by --estimators (not all their own)"
+    return "on different pose sources"  # results written before sides said what they knew
+
+
+def _side(side: dict) -> str:
+    trained = side.get("trained_on")
+    own = "" if trained in (None, side["estimator"]) else f" (trained on {trained})"
+    return f"{agent_name(side['agent'])} on {side['estimator']}{own}"
+
+
 def _iqm(row: dict, key: str) -> str:
     low, high = row[f"{key}_iqm_ci95"]
     return f"{row[f'{key}_iqm']:.2f} ({low:.2f}-{high:.2f})"
@@ -140,55 +134,3 @@ def _stat(value: dict) -> str:
     if value["mean"] is None:
         return "-"
     return f"{value['mean']:.2f} ± {value['std']:.2f}"
-
-
-def plot_leaderboard(summary: dict, path: str | Path) -> Path:
-    """Success rate (Wilson 95 % intervals) and SPL (bootstrap 95 % intervals) per row, and
-    the paired differences in success with their intervals."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    rows = sorted(summary["rows"], key=lambda r: r["success_rate"]["mean"])
-    labels = [_label(r) for r in rows]
-    fig, axes = plt.subplots(1, 3, figsize=(15, 0.5 * max(len(rows), len(summary["paired"])) + 2))
-    for ax, key, ci, title in (
-        (axes[0], "success_rate", "success_ci95", "success rate (Wilson 95 % CI)"),
-        (axes[1], "spl", "spl_ci95", "SPL (stratified bootstrap 95 % CI)"),
-    ):
-        means = [r[key]["mean"] for r in rows]
-        errors = [
-            [m - r[ci][0] for m, r in zip(means, rows, strict=True)],
-            [r[ci][1] - m for m, r in zip(means, rows, strict=True)],
-        ]
-        ax.errorbar(means, range(len(rows)), xerr=errors, fmt="o", capsize=4)
-        ax.set(yticks=range(len(rows)), yticklabels=labels, xlim=(-0.02, 1.02), title=title)
-        ax.grid(alpha=0.3)
-    pairs = summary["paired"]
-    ax = axes[2]
-    for i, p in enumerate(pairs):
-        s = p["success_difference"]
-        color = "tab:red" if p["success_differs"] else "tab:gray"
-        ax.errorbar(
-            s["difference"],
-            i,
-            xerr=[[s["difference"] - s["low"]], [s["high"] - s["difference"]]],
-            fmt="o",
-            capsize=4,
-            color=color,
-        )
-    ax.axvline(0, color="k", lw=0.8)
-    ax.set(
-        yticks=range(len(pairs)),
-        yticklabels=[f"{p['first']} - {p['second']}" for p in pairs],
-        title="paired success difference (95 % CI)",
-    )
-    ax.grid(alpha=0.3)
-    worlds, episodes = summary["worlds"], rows[0]["episodes"] if rows else 0
-    fig.suptitle(
-        f"Suite {summary['suite']}: declared arrival, {episodes} test worlds "
-        f"{worlds['world_seeds'][0]}-{worlds['world_seeds'][1]}"
-    )
-    fig.tight_layout()
-    return save_figure(fig, path)

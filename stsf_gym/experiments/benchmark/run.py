@@ -28,8 +28,9 @@ from stsf_gym.envs.task import Polyline
 from stsf_gym.envs.worlds.coverage import landmark_coverage
 from stsf_gym.envs.worlds.generator import generate_world
 from stsf_gym.episode_env import estimator_options
+from stsf_gym.experiments.benchmark.figure import plot_leaderboard
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, paired_bootstrap
-from stsf_gym.experiments.benchmark.report import leaderboard_markdown, plot_leaderboard
+from stsf_gym.experiments.benchmark.report import leaderboard_markdown
 from stsf_gym.experiments.benchmark.scores import episode_scores, leaderboard_row
 from stsf_gym.experiments.benchmark.trained import (
     agent_pose_sources,
@@ -117,7 +118,12 @@ def benchmark(
         make_runner(backend, workers, address),
         config=lambda cell: configs[cell_name(cell)],
     )
-    summary = summarise_benchmark(loaded, cells, results)
+    own_sources = {
+        agent: record["estimator"]
+        for agent in dict.fromkeys(cell["agent"] for cell in cells)
+        if (record := trained_on(agent))
+    }
+    summary = summarise_benchmark(loaded, cells, results, own_sources)
     summary["worlds"] = worlds_summary(loaded, seeds)
     summary["request"] = request
     summary["provenance"] = provenance(by_digest(configs), seeds)
@@ -149,9 +155,13 @@ def check_same_request(results: Path, request: dict) -> None:
         )
 
 
-def summarise_benchmark(suite: Suite, cells: list[dict], results: list[dict]) -> dict:
+def summarise_benchmark(
+    suite: Suite, cells: list[dict], results: list[dict], own_sources: dict[str, str] | None = None
+) -> dict:
     """Rows per (agent, pose source), paired differences of every pair of pose sources per
-    agent (on the seeds both finished), and the cells that failed to run."""
+    agent (on the seeds both finished), the learnt agents over their training seeds and
+    against the follower (``own_sources``: each model's training pose source), and the cells
+    that failed to run."""
     scores: dict[tuple[str, str], dict[int, dict]] = {}
     failed = []
     for cell, result in zip(cells, results, strict=True):
@@ -193,8 +203,8 @@ def summarise_benchmark(suite: Suite, cells: list[dict], results: list[dict]) ->
         "goal_radius_m": load_config(suite.env).task.goal_radius,
         "seeds": [min(c["seed"] for c in cells), max(c["seed"] for c in cells)],
         "rows": rows,
-        "trained": aggregate_runs(scores),
-        "trained_paired": paired_across_sources(scores),
+        "trained": aggregate_runs(scores, own_sources),
+        "trained_paired": paired_across_sources(scores, own_sources),
         "paired": paired,
         "failed": failed,
     }

@@ -46,6 +46,23 @@ def expand_agents(agents: list[str]) -> list[str]:
     return expanded
 
 
+def agent_name(agent: str) -> str:
+    """The short name the report gives an agent: ``follower``; a training folder by its name
+    (``ppo-stsf``); a shipped agent without its prefix and suite (``ppo-truth``); a model by
+    its training folder's or shipped agent's name with its seed (``ppo-stsf/seed-0``,
+    ``ppo-truth/seed-0``), or by its file's stem when it is neither. The JSON keeps the whole
+    path."""
+    path = Path(agent)
+    if path.suffix != ".zip":
+        return path.name
+    folder = path.parent
+    if folder.parent.parent.name == pretrained.MODELS.name:  # <models>/<suite>/<agent>/seed-S.zip
+        return f"{folder.name}/{path.stem}"
+    if path.name != "model.zip":
+        return path.stem
+    return f"{folder.parent.name}/{folder.name}" if folder.match(SEED_FOLDERS) else folder.name
+
+
 def agent_pose_sources(
     agent: str, estimators: list[str] | None, learnt_sources: list[str] = ()
 ) -> list[str]:
@@ -84,18 +101,27 @@ def training_groups(rows) -> dict[tuple[str, str], list[str]]:
     return dict(sorted(groups.items()))
 
 
-def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
+def aggregate_runs(
+    scores: dict[tuple[str, str], dict[int, dict]], own_sources: dict[str, str] | None = None
+) -> list[dict]:
     """Per training folder and pose source: IQM of success and SPL over its models' episodes
     on the test worlds every model finished, with two-level bootstrap intervals; where the
     follower drove the same pose source, each model's success paired with the follower's on
     the worlds both finished (Newcombe's interval) and the IQM's ratio to the follower's
-    rate."""
+    rate. ``own_sources`` (model -> the pose source it was trained on) adds ``trained_on``."""
     aggregates = []
     for (group, estimator), runs in training_groups(scores).items():
         worlds = sorted(set.intersection(*(set(scores[run, estimator]) for run in runs)))
         if not worlds:
             continue
-        row = {"agent": group, "estimator": estimator, "runs": len(runs), "worlds": len(worlds)}
+        row = {
+            "agent": group,
+            "estimator": estimator,
+            "trained_on": _trained_on(runs, own_sources),
+            "models": runs,
+            "runs": len(runs),
+            "worlds": len(worlds),
+        }
         for key in ("success", "spl"):
             matrix = [[float(scores[run, estimator][w][key]) for w in worlds] for run in runs]
             interval = seed_iqm(matrix)
@@ -109,6 +135,12 @@ def aggregate_runs(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]
     return aggregates
 
 
+def _trained_on(runs: list[str], own_sources: dict[str, str] | None) -> str | None:
+    """The pose source the runs of one training folder were trained on (None if unknown)."""
+    sources = {(own_sources or {}).get(run) for run in runs}
+    return sources.pop() if len(sources) == 1 else None
+
+
 def _against_follower(follower: dict[int, dict], runs: list[dict[int, dict]], row: dict) -> dict:
     """Each run's success paired with the follower's, and the IQM's ratio to its rate."""
     paired = [_paired_success(run, follower) for run in runs]
@@ -120,11 +152,15 @@ def _against_follower(follower: dict[int, dict], runs: list[dict[int, dict]], ro
     }
 
 
-def paired_across_sources(scores: dict[tuple[str, str], dict[int, dict]]) -> list[dict]:
-    """Protocol (b)'s question, whether learnt agents separate pose sources as the follower
-    does: for every two training folders that drove on different pose sources, their runs
-    paired seed by seed (the i-th run of each, in training-seed order), each pair's success
-    compared on the test worlds both finished (Newcombe's interval)."""
+def paired_across_sources(
+    scores: dict[tuple[str, str], dict[int, dict]], own_sources: dict[str, str] | None = None
+) -> list[dict]:
+    """Whether learnt agents separate pose sources as the follower does: for every two
+    training folders (or one folder on two pose sources) that drove on different pose
+    sources, their runs paired seed by seed (the i-th run of each, in training-seed order),
+    each pair's success compared on the test worlds both finished (Newcombe's interval).
+    Each side names the pose source it drove on and, from ``own_sources``, the one it was
+    trained on (protocol (b): the same; with ``--estimators``: maybe not)."""
     groups = list(training_groups(scores).items())
     pairs = []
     for ((first, source), runs), ((second, other), runs_b) in itertools.combinations(groups, 2):
@@ -136,8 +172,16 @@ def paired_across_sources(scores: dict[tuple[str, str], dict[int, dict]]) -> lis
         ]
         pairs.append(
             {
-                "first": {"agent": first, "estimator": source},
-                "second": {"agent": second, "estimator": other},
+                "first": {
+                    "agent": first,
+                    "estimator": source,
+                    "trained_on": _trained_on(runs, own_sources),
+                },
+                "second": {
+                    "agent": second,
+                    "estimator": other,
+                    "trained_on": _trained_on(runs_b, own_sources),
+                },
                 "success_difference_per_run": per_run,
                 "runs_differing": sum(p["low"] > 0 or p["high"] < 0 for p in per_run),
             }

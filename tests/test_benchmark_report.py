@@ -1,0 +1,173 @@
+"""The benchmark's report on small synthetic results: each learnt agent beside the follower on
+the same pose source in words and a table, agent names on every row and in the figure, the
+paired section titled by where the agents drove, and tables that fit 80 columns."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from rich.console import Console
+
+from stsf_gym.agents import pretrained
+from stsf_gym.envs.suite import load_suite
+from stsf_gym.experiments.benchmark.figure import paired_rows, plot_leaderboard, row_label
+from stsf_gym.experiments.benchmark.intervals import newcombe_paired
+from stsf_gym.experiments.benchmark.report import leaderboard_markdown
+from stsf_gym.experiments.benchmark.run import summarise_benchmark
+from stsf_gym.experiments.benchmark.trained import agent_name
+from stsf_gym.terminal_table import NAME_WIDTH, print_markdown
+
+WORLDS = 12
+SEED_0 = "/runs/ppo-truth/seed-0/model.zip"
+SEED_1 = "/runs/ppo-truth/seed-1/model.zip"
+ON_STSF = "/runs/ppo-stsf/seed-0/model.zip"  # trained on STSF's estimate
+#: Which worlds each (agent, pose source) succeeds on: the follower on all of the true pose's,
+#: seed 0 of the learnt agent on two, seed 1 on all but one.
+SUCCEEDS = {
+    ("follower", "truth"): set(range(WORLDS)),
+    ("follower", "stsf"): set(range(0, WORLDS, 2)),
+    (SEED_0, "truth"): {0, 1},
+    (SEED_1, "truth"): set(range(1, WORLDS)),
+    (SEED_0, "stsf"): {0},
+    (SEED_1, "stsf"): {0, 2},
+    (ON_STSF, "stsf"): {0, 2, 4},
+}
+
+
+def _result(success: bool) -> dict:
+    stop = {"true_distance_m": 0.1 if success else 2.0, "success": success}
+    return {
+        "outcome": "goal" if success else "missed",
+        "distance": 12.0,
+        "metrics": {"ate_rmse_m": 0.1},
+        "navigation": {"goals": 1, "geodesic_length_m": 10.0, "stops": [stop]},
+    }
+
+
+def _summary(keys, estimator_name: dict | None = None) -> dict:
+    """summarise_benchmark over hand-made cells: ``keys`` are (agent, pose source)."""
+    rename = estimator_name or {}
+    cells, results = [], []
+    for agent, source in keys:
+        for seed in range(WORLDS):
+            name = rename.get(source, source)
+            cells.append({"agent": agent, "estimator": name, "seed": seed, "values": {}})
+            results.append(_result(seed in SUCCEEDS[agent, source]))
+    own = {SEED_0: "truth", SEED_1: "truth", ON_STSF: "stsf"}
+    summary = summarise_benchmark(load_suite("corridor"), cells, results, own)
+    summary["worlds"] = {
+        "world_seeds": [1000, 1000 + WORLDS - 1],
+        "coverage_configured": [1, 1],
+        "coverage": {"mean": 1.0, "values": [1.0]},
+        "longest_dark_m": {"mean": 0.0},
+        "goals": {"mean": 1.0},
+        "path_length_m": {"mean": 10.0},
+    }
+    return summary
+
+
+OWN = [("follower", "truth"), (SEED_0, "truth"), (SEED_1, "truth")]
+
+
+def _table(text: str, heading: str) -> list[list[str]]:
+    """The body rows of the first Markdown table after ``heading``."""
+    lines = text[text.index(heading) :].splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("|"))
+    rows = []
+    for line in lines[start + 2 :]:
+        if not line.startswith("|"):
+            break
+        rows.append([cell.strip() for cell in line.strip("|").split("|")])
+    return rows
+
+
+def _difference(first, second) -> dict:
+    worlds = range(WORLDS)
+    return newcombe_paired(
+        [w in SUCCEEDS[first] for w in worlds], [w in SUCCEEDS[second] for w in worlds]
+    )
+
+
+def test_each_learnt_model_is_shown_beside_the_follower_with_its_paired_interval():
+    text = leaderboard_markdown(_summary(OWN))
+    assert "## Learnt agents beside the follower on the same pose source" in text
+    assert "**ppo-truth** on truth, 2 training seeds" in text
+    assert "1 of 2 below the follower, 0 above, 1 not told apart" in text
+    rows = {row[0]: row for row in _table(text, "## Learnt agents beside")}
+    assert set(rows) == {"ppo-truth/seed-0", "ppo-truth/seed-1"}
+    for model, name in ((SEED_0, "ppo-truth/seed-0"), (SEED_1, "ppo-truth/seed-1")):
+        d = _difference((model, "truth"), ("follower", "truth"))
+        interval = f"{d['difference']:+.2f} ({d['low']:+.2f} to {d['high']:+.2f})"
+        rate = len(SUCCEEDS[model, "truth"]) / WORLDS
+        assert rows[name] == [name, "truth", f"{rate:.2f}", "1.00", interval, rows[name][5]]
+    assert rows["ppo-truth/seed-0"][5] == "below" and rows["ppo-truth/seed-1"][5] == "level"
+
+
+def test_every_row_names_its_agent():
+    text = leaderboard_markdown(_summary(OWN))
+    agents = {row[0] for row in _table(text, "| agent | pose source | success (95 % CI)")}
+    assert agents == {"follower", "ppo-truth/seed-0", "ppo-truth/seed-1"}
+    shipped = pretrained.MODELS / "corridor" / "ppo-truth" / "seed-2.zip"
+    assert agent_name(str(shipped)) == "ppo-truth/seed-2"  # not a bare seed-2
+    relative = "agents/pretrained/trained-models/sparse/ppo-mcl/seed-0.zip"
+    assert agent_name(relative) == "ppo-mcl/seed-0"
+
+
+def test_without_the_follower_on_that_pose_source_the_report_says_how_to_get_it():
+    text = leaderboard_markdown(_summary([(SEED_0, "truth"), (SEED_1, "truth")]))
+    assert "the follower did not drive on truth in this run" in text
+
+
+@pytest.mark.parametrize(
+    ("keys", "title", "pair"),
+    [
+        (  # protocol (b): each learnt agent on the pose source it was trained on
+            [(SEED_0, "truth"), (ON_STSF, "stsf")],
+            "on their own pose sources",
+            "ppo-stsf on stsf - ppo-truth on truth",
+        ),
+        (  # protocol (a): --estimators truth,stsf for an agent trained on the true pose
+            [(SEED_0, "truth"), (SEED_1, "truth"), (SEED_0, "stsf"), (SEED_1, "stsf")],
+            "on the pose sources named by --estimators (not all their own)",
+            "ppo-truth on stsf (trained on truth) - ppo-truth on truth",
+        ),
+    ],
+)
+def test_the_paired_section_says_where_the_agents_drove(keys, title, pair):
+    text = leaderboard_markdown(_summary(keys))
+    heading = f"## Trained agents {title}, paired run by run"
+    assert heading in text and text.count("## Trained agents on") == 1
+    (row,) = _table(text, heading)
+    assert row[0] == pair
+
+
+def test_the_figure_names_the_agent_of_every_row(tmp_path):
+    summary = _summary([*OWN, ("follower", "stsf")])
+    assert sorted(row_label(row) for row in summary["rows"]) == [
+        "follower / stsf",
+        "follower / truth",
+        "ppo-truth/seed-0 / truth",
+        "ppo-truth/seed-1 / truth",
+    ]
+    labels = [label for label, _ in paired_rows(summary)]
+    assert labels == [
+        "follower: truth - stsf",
+        "ppo-truth/seed-0 - follower, on truth",
+        "ppo-truth/seed-1 - follower, on truth",
+    ]
+    assert plot_leaderboard(summary, tmp_path / "leaderboard.png").stat().st_size > 10_000
+
+
+def test_terminal_tables_fit_80_columns_with_a_long_pose_source_name():
+    long_name = "my_package.estimators:VeryLongEstimatorName"
+    summary = _summary([*OWN, ("follower", "stsf")], {"stsf": long_name})
+    console = Console(width=80, record=True, file=open(os.devnull, "w"))
+    print_markdown(leaderboard_markdown(summary), console, "leaderboard.md")
+    lines = console.export_text().splitlines()
+    assert max(len(line.rstrip()) for line in lines) <= 80
+    header = next(i for i, line in enumerate(lines) if line.startswith("agent"))
+    assert "success" in " ".join(lines[header - 2 : header + 1])  # the column stayed
+    assert not any(long_name in line for line in lines)  # wrapped at NAME_WIDTH, kept whole
+    for start in range(0, len(long_name), NAME_WIDTH):
+        assert any(long_name[start : start + NAME_WIDTH] in line for line in lines)
