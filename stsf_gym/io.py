@@ -54,7 +54,7 @@ def check_folder(folder: str | Path, flag: str) -> None:
     if not os.access(existing, os.W_OK | os.X_OK):
         raise PermissionError(f"{flag} {folder}: {existing} is not writable")
     try:  # root passes os.access everywhere, also in a kernel folder (/proc) or a read-only mount
-        handle, probe = tempfile.mkstemp(prefix=".write-probe.", suffix=".tmp", dir=existing)
+        handle, probe = create_temporary(existing / "write-probe")
     except OSError as err:
         message = f"{flag} {folder}: {existing} is not writable ({err.strerror})"
         raise PermissionError(message) from None
