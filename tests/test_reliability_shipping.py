@@ -250,3 +250,24 @@ def test_agents_suite_lists_that_suites_agents_only(capsys, monkeypatch):
     assert rows and {r["suite"] for r in rows} == {"corridor"}
     assert cli.main(["agents", "--replace"]) == 2
     assert "--replace replaces a shipped agent by --ship" in capsys.readouterr().err
+
+
+def test_a_shipped_agents_folder_is_readable_as_any_other(models, tmp_path, run_cli):
+    """Built beside its destination, it keeps the mode ``mkdir`` gives (not mkdtemp's 0o700)."""
+    import os
+
+    umask = os.umask(0o022)
+    try:
+        assert (
+            run_cli(
+                "agents",
+                "--ship",
+                str(training_folder(tmp_path / "t", (0,))),
+                "--suite",
+                "corridor",
+            )[0]
+            == 0
+        )
+    finally:
+        os.umask(umask)
+    assert (models / "corridor" / "ppo-truth").stat().st_mode & 0o777 == 0o755

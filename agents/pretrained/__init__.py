@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import re
 import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -156,6 +155,7 @@ def ship(training: Path, suite: str, replace: bool = False) -> str:
         build_agent,
         check_destination,
         checked_runs,
+        folder_beside,
         swap_in,
     )
 
@@ -164,7 +164,7 @@ def ship(training: Path, suite: str, replace: bool = False) -> str:
     target = MODELS / suite / f"{records[0]['algo']}-{records[0]['estimator']}"
     check_destination(target, replace)
     target.parent.mkdir(parents=True, exist_ok=True)
-    built = Path(tempfile.mkdtemp(prefix=f".{target.name}.new.", dir=target.parent))
+    built = folder_beside(target, "new")
     name = PREFIX + f"{suite}/{target.name}"
     try:
         build_agent(name, training, suite, records, built, seen_inputs)

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import json
 import os
+import secrets
 import shutil
-import tempfile
 from pathlib import Path
 
 from stsf_gym.agents.training_folder import MODEL, seed_runs
@@ -91,12 +91,25 @@ def check_destination(target: Path, replace: bool) -> None:
     check_folder(target.parent, "the shipping destination")
 
 
+def folder_beside(target: Path, tag: str) -> Path:
+    """A new, empty folder beside ``target`` (``.<name>.<tag>.<random>``), made as ``mkdir``
+    makes one (mode 0o777 less the user's umask; ``tempfile.mkdtemp`` makes it 0o700, which a
+    shipped agent renamed from it would keep)."""
+    while True:
+        folder = target.parent / f".{target.name}.{tag}.{secrets.token_hex(4)}"
+        try:
+            folder.mkdir()
+            return folder
+        except FileExistsError:
+            continue
+
+
 def swap_in(built: Path, target: Path) -> None:
     """Put folder ``built`` at ``target`` by renames: the old agent (if any) set aside first,
     removed only once the new one is in place; restored if the second rename fails."""
     aside = None
     if target.exists():
-        aside = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
+        aside = folder_beside(target, "old")
         os.replace(target, aside / target.name)
     try:
         os.replace(built, target)
