@@ -23,6 +23,7 @@ def tiny_run(tmp_path_factory):
     return out, json.loads(done.stdout)
 
 
+@pytest.mark.slow
 def test_curve_files_hold_numbers(tiny_run):
     out, summary = tiny_run
     on_disk = json.loads((out / "curve.json").read_text())
@@ -74,6 +75,7 @@ def test_tolerated_ate_stops_at_the_first_failing_level():
     assert tolerated_ate([level(1, 0.8, 0.1)]) is None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -35,6 +35,7 @@ TINY_PPO = {
 }
 
 
+@pytest.mark.slow
 def test_truth_pose_is_the_true_pose_with_a_fixed_tiny_covariance(make_env):
     env = PoseEstimateWrapper(make_env(**NO_CAMERA), "truth")
     obs, info = env.reset(seed=0)
@@ -99,6 +100,7 @@ def test_goal_features_saturate_at_the_horizon(make_env):
     )
 
 
+@pytest.mark.slow
 def test_a_far_goal_reads_as_the_route_point_at_the_horizon(make_env):
     """With ``far_goal: route`` a goal beyond the horizon reads as the path's point that far
     ahead (the 2 m lookahead point here); within it, the goal itself, as with ``direction``."""
@@ -167,6 +169,7 @@ def test_hyperparameter_sections_and_overrides_merge(tmp_path):
             load_hyperparams(algo, f"stsf_gym/Corridor-{source}-v0")
 
 
+@pytest.mark.slow
 def test_train_cli_names_the_bad_key(tmp_path):
     path = _write(tmp_path, GOOD + ", clip_rnge: 0.1}")
     result = subprocess.run(
@@ -187,6 +190,7 @@ def test_train_cli_names_the_bad_key(tmp_path):
     assert "'clip_rnge'" in result.stderr and "bad.yaml" in result.stderr
 
 
+@pytest.mark.slow
 def test_ppo_trains_saves_loads_and_evaluates(tmp_path):
     out = tmp_path / "ppo"
     summary = train(

@@ -26,6 +26,7 @@ def tiny_benchmark(tmp_path_factory):
     return out / "corridor", cli("benchmark", *TINY, "--out", str(out))
 
 
+@pytest.mark.slow
 def test_benchmark_writes_the_leaderboard(tiny_benchmark):
     out, summary = tiny_benchmark
     on_disk = json.loads((out / "results.json").read_text())
@@ -69,6 +70,7 @@ def test_bad_benchmark_input_is_named(tmp_path):
     assert done.returncode == 2 and "unknown estimator 'gps'" in done.stderr
 
 
+@pytest.mark.slow
 def test_accuracy_curve_on_the_declared_stop_task(tmp_path):
     args = ["--suite", "corridor", "--seeds", "1", "--levels", "1", "--estimators", ""]
     summary = cli("accuracy-curve", *args, "--out", str(tmp_path))

@@ -38,6 +38,7 @@ def square_blobs(image: np.ndarray, board: np.ndarray) -> np.ndarray:
     return np.array(centres).reshape(-1, 2)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("renderer", ["gl", "egl", "tiny"])
 @pytest.mark.parametrize(("env_id", "start", "pan_deg"), VIEWS)
 def test_squares_within_a_pixel_of_true_camera_projection(
@@ -120,6 +121,7 @@ def test_gl_renderer_used_when_expected(make_env):
         assert env.unwrapped.renderer == "gl"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("profile", ["paper", "ideal"])
 def test_feature_error_matches_the_profile(make_env, profile):
     """The detector's square centres, as the estimators see them (undistorted with the

@@ -25,6 +25,7 @@ def test_bad_arguments_are_refused(probability, dof):
         chi_square_quantile(probability, dof)
 
 
+@pytest.mark.slow
 def test_a_rendered_stsf_env_process_does_not_need_scipy():
     # SciPy made unimportable: numba, which imports it only to check its version and to link
     # its BLAS when present, goes on without it; the env and the estimator must not need it

@@ -44,6 +44,7 @@ def test_demo_json_and_files(tmp_path):
         assert (out / video).stat().st_size > 5_000
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "message"),
     [(["--set", "camera.widht=3"], "camera.widht"), (["--seconds", "-1"], "--seconds")],
@@ -61,6 +62,7 @@ def test_help_lists_commands():
     assert result.returncode == 0 and "demo" in result.stdout
 
 
+@pytest.mark.slow
 def test_only_validation_errors_are_bad_input(tmp_path):
     """A bad log is the user's (exit 2, one line naming the file); a ValueError from deep in a
     run is a bug: its traceback is kept and the exit code is not 2."""
@@ -83,6 +85,7 @@ def test_only_validation_errors_are_bad_input(tmp_path):
     assert "Traceback" in crash.stderr and "could not be broadcast" in crash.stderr
 
 
+@pytest.mark.slow
 def test_train_without_an_evaluation_says_so(tmp_path):
     """A run shorter than eval_freq evaluates nothing: said in words, not 'success rate nan'."""
     train = ["train", "--algo", "ppo", "--estimator", "truth", "--timesteps", "64"]

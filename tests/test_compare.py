@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from stsf_gym.cli import main
 from stsf_gym.experiments.compare import agent_for, compare
 from stsf_gym.results import check_rows
@@ -14,6 +16,7 @@ def test_each_pose_source_gets_its_own_model():
     assert agent_for("follower", "stsf") == "follower"
 
 
+@pytest.mark.slow
 def test_comparison_has_a_row_per_pair_and_a_figure(tmp_path):
     summary = compare(tmp_path, ["follower"], ["truth", "odometry"], seeds=2, workers=1, env=SHORT)
     rows = summary["rows"]

@@ -55,6 +55,7 @@ def monte_carlo_nees(runs: int = 40, speeds=None, **options) -> tuple[np.ndarray
     return np.mean(values, axis=0), chi2_bounds(3, runs)
 
 
+@pytest.mark.slow
 def test_white_bias_and_drift_are_consistent():
     average, bounds = monte_carlo_nees(
         noise_std=(0.05, 0.02), bias_std=(0.03, 0.01), drift_std=(0.05, 0.01)
@@ -63,6 +64,7 @@ def test_white_bias_and_drift_are_consistent():
     assert bounds[0] < np.mean(average) < bounds[1]
 
 
+@pytest.mark.slow
 def test_rate_latency_and_dropouts_are_consistent_for_motion_within_the_model():
     """With hold, latency and dropouts the covariance adds the motion since the measured
     instant as a velocity of std ``motion_std`` per axis: consistent when it is that."""
@@ -127,6 +129,7 @@ def test_options_come_from_the_yaml_file_and_bad_values_are_named():
         make_estimator("degraded-truth", nosie=1.0)
 
 
+@pytest.mark.slow
 def test_in_the_env_it_is_seeded_and_consistent():
     """The wrapper's source, driven by the follower: the same seed gives the same estimates,
     and over 10 seeds the Monte-Carlo NEES (3 dof) stays inside its 95 % bounds."""

@@ -73,6 +73,7 @@ TINY = {
 }
 
 
+@pytest.mark.slow
 def test_the_demonstration_stage_resumes_and_its_agent_drives_behind_its_stack(tmp_path):
     out = tmp_path / "run"
     summary = train(

@@ -37,6 +37,7 @@ def test_measured_coverage_lies_in_the_configured_range_over_100_worlds():
     assert fractions.std() > 0.03  # the dial draws coverage across its range
 
 
+@pytest.mark.slow
 def test_the_default_density_sees_a_board_from_every_path_point():
     gen = load_generator_config()
     for seed in range(1_000_000, 1_000_020):

@@ -1,5 +1,6 @@
 import gymnasium as gym
 import numpy as np
+import pytest
 from conftest import drive
 
 ACTIONS = [[0.5, 0.2]] * 12 + [[0.8, -0.4]] * 12
@@ -43,6 +44,7 @@ def _calibration_for_seed(env, seed):
     return env.unwrapped.odometry_calibration
 
 
+@pytest.mark.slow
 def test_two_envs_in_one_process_do_not_interfere(make_env):
     alone = _run(make_env(), seed=5)
     env_a, env_b = make_env(), make_env(camera__renderer="tiny")
@@ -56,6 +58,7 @@ def test_two_envs_in_one_process_do_not_interfere(make_env):
     _assert_same(alone, interleaved)
 
 
+@pytest.mark.slow
 def test_async_vector_env_of_four():
     env_fns = [(lambda: gym.make("stsf_gym/Corridor-v0", camera__enabled=False)) for _ in range(4)]
     vec = gym.vector.AsyncVectorEnv(env_fns)
@@ -76,6 +79,7 @@ def test_async_vector_env_of_four():
     np.testing.assert_array_equal(history[-1][0]["sonar"], obs["sonar"][2])
 
 
+@pytest.mark.slow
 def test_forked_workers_fall_back_from_egl_and_forkserver_keeps_it():
     """EGL deadlocks in a process forked after its parent loaded it: workers fall back."""
     parent = gym.make("stsf_gym/Corridor-v0")

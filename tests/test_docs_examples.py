@@ -121,6 +121,7 @@ def results(tmp_path_factory) -> dict[Path, list[str]]:
         return dict(zip(pages, pool.map(run_page, pages, folders), strict=True))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("page", [p for p in PAGES if runnable(p)], ids=lambda p: p.name)
 def test_the_page_blocks_run(results, page):
     assert not results[page], "\n\n".join(results[page])

@@ -12,6 +12,7 @@ from stsf_gym.results.schema import NEES_VERDICTS
 FAST = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 4.0}}
 
 
+@pytest.mark.slow
 def test_evaluate_writes_table_figures_and_resumes(tmp_path, monkeypatch):
     summary, _ = evaluate(
         tmp_path, ["odometry"], seeds=2, world="straight_10m", workers=1, env=FAST
@@ -42,6 +43,7 @@ def test_evaluate_writes_table_figures_and_resumes(tmp_path, monkeypatch):
     assert len(list((tmp_path / "episodes").glob("*.json"))) == 2  # earlier results intact
 
 
+@pytest.mark.slow
 def test_evaluate_cli_json_schema(tmp_path):
     result = subprocess.run(
         [
@@ -114,6 +116,7 @@ def test_evaluate_cli_json_schema(tmp_path):
     assert all(f"| {verdict} |" in table for verdict in verdicts)  # words, not -1/0/1
 
 
+@pytest.mark.slow
 def test_unknown_estimator_rejected(tmp_path):
     result = subprocess.run(
         [

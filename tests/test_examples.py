@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -29,6 +30,7 @@ def test_every_example_is_run_by_a_test():
             assert script.name in tests or f"examples.{script.stem}" in tests, script.name
 
 
+@pytest.mark.slow
 def test_custom_world_is_driven_and_a_broken_copy_refused(tmp_path):
     out = run("custom_world.py", "--out", str(tmp_path))
     assert (tmp_path / "u_corridor.yaml").is_file()
@@ -36,6 +38,7 @@ def test_custom_world_is_driven_and_a_broken_copy_refused(tmp_path):
     assert re.search(r"broken\.yaml: world\.landmarks\[0\]\.at must lie on a wall", out)
 
 
+@pytest.mark.slow
 def test_train_and_evaluate_round_trip(tmp_path):
     out = run("train_and_evaluate.py", "--out", str(tmp_path))
     assert (tmp_path / "ppo-truth" / "model.zip").is_file()
@@ -46,6 +49,7 @@ def test_train_and_evaluate_round_trip(tmp_path):
         assert re.search(line, out, re.MULTILINE), out
 
 
+@pytest.mark.slow
 def test_animation_of_an_episode(tmp_path):
     path = tmp_path / "short.gif"
     run("animate_episode.py", "--seconds", "4", "--camera", "fast", "--out", str(path))

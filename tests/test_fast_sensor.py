@@ -35,6 +35,7 @@ def statistics():
     return summaries
 
 
+@pytest.mark.slow
 def test_detection_rate_within_20_percent_of_the_rendered_detector(statistics):
     rendered, fast = statistics["rendered"], statistics["fast"]
     assert rendered["views"] == fast["views"] > 50
@@ -128,6 +129,7 @@ def test_detection_probability_follows_apparent_size(make_env):
     assert sizes[0] / sizes[1] == pytest.approx(2.0, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_stsf_in_fast_mode_matches_the_paper_target_on_the_straight_run():
     spec = EpisodeSpec(
         "straight_10m",

@@ -177,6 +177,7 @@ def fault_episode(estimator: str, fault: dict):
     return episode, recovery(episode, fault["start"], fault["start"])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fault", [KIDNAP, SPIKE], ids=["kidnap", "encoder_spike"])
 @pytest.mark.parametrize("estimator", ["conventional", "conventional-filter", "stsf", "ekf"])
 def test_landmark_estimators_recover(estimator, fault):
@@ -188,6 +189,7 @@ def test_landmark_estimators_recover(estimator, fault):
     assert abs(episode.heading_errors[-1]) < 0.02 and episode.relocalised >= 1
 
 
+@pytest.mark.slow
 def test_odometry_survives_a_kidnap_but_never_recovers():
     episode, result = fault_episode("odometry", KIDNAP)
     assert not result["recovered"] and episode.errors[-1] > 0.3
@@ -223,6 +225,7 @@ def test_relocalisation_restarts_at_the_agreeing_candidates_mean():
     assert pose == pytest.approx([2.1, 1.0, 0.0])  # not the newest candidate
 
 
+@pytest.mark.slow
 def test_evaluate_reports_fault_runs(tmp_path):
     from stsf_gym.experiments.evaluate import evaluate
 

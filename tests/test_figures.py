@@ -8,6 +8,7 @@ from stsf_gym.results import check_rows
 SHORT = {"sim": {"max_episode_seconds": 3.0}}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("run", "estimators"),
     [

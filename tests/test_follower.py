@@ -41,6 +41,7 @@ def test_without_avoidance_the_clutter_stops_it():
     assert info["progress"] < 10.0  # stopped by the first obstacles, far from the goal
 
 
+@pytest.mark.slow
 def test_reaches_the_goal_on_stsf():
     spec = EpisodeSpec(world="irl_corridor", estimator="stsf", seed=0, env={"camera__mode": "fast"})
     result = run_episode(spec)

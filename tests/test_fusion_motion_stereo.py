@@ -136,6 +136,7 @@ def _monte_carlo_variance(scene, sigma_px, cov_t, cov_rot, rng, samples=2000):
     return np.var(ranges)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("seed", "n_points"), [(11, 1), (12, 4)])
 def test_variance_matches_monte_carlo(seed, n_points):
     rng = np.random.default_rng(seed)

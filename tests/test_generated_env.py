@@ -96,6 +96,7 @@ def test_estimator_ids_and_policy_path_follow_the_world(make_env):
     assert obs.shape == policy.observation_space.shape
 
 
+@pytest.mark.slow
 def test_gymnasium_env_checker(make_env):
     from gymnasium.utils.env_checker import check_env
 
@@ -110,6 +111,7 @@ def test_world_is_not_an_argument(make_env):
 CLI = [sys.executable, "-m", "stsf_gym.cli"]
 
 
+@pytest.mark.slow
 def test_cli_world_yaml_and_grid(tmp_path):
     out = tmp_path / "w.yaml"
     for _ in range(2):  # the second run replaces the file
@@ -126,6 +128,7 @@ def test_cli_world_yaml_and_grid(tmp_path):
     assert png.read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -141,6 +144,7 @@ def test_cli_split_errors(tmp_path, args, message):
     assert result.returncode == 2 and message in result.stderr
 
 
+@pytest.mark.slow
 def test_a_drawn_world_the_generator_cannot_lay_out_is_drawn_again(make_env, monkeypatch):
     """A train world seed of the sparse suite had no layout of its landmark coverage and ended
     a training run (`stsf-gym train --suite sparse`, seed 0, DAgger round 1). A drawn world

@@ -44,6 +44,7 @@ def odometry_error():
     return run("odometry")[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("estimator", ["conventional", "conventional-filter", "stsf"])
 def test_landmarks_correct_the_drift(estimator, odometry_error):
     error, nees, counters = run(estimator)
@@ -53,6 +54,7 @@ def test_landmarks_correct_the_drift(estimator, odometry_error):
     assert np.isfinite(nees)  # consistency is a Monte-Carlo property: tested below
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("estimator", ["conventional", "conventional-filter", "stsf", "ekf"])
 def test_average_nees_is_inside_its_chi_square_bounds(estimator):
     """Bar-Shalom's Monte-Carlo test over 10 seeds of the straight 10 m (simulated detections,
@@ -135,6 +137,7 @@ def recorded():
     return model, history
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("estimator", ["conventional", "conventional-filter", "stsf", "ekf"])
 def test_recovers_after_a_long_gap_and_ignores_bad_frames(recorded, estimator):
     model, history = recorded

@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from stsf_gym import layers
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -27,6 +29,7 @@ print(json.dumps(sorted(sys.modules)))
 """
 
 
+@pytest.mark.slow
 def test_the_estimators_load_without_the_simulator():
     done = subprocess.run(
         [sys.executable, "-c", CORE_IMPORT], capture_output=True, text=True, cwd=ROOT, check=True
@@ -104,6 +107,7 @@ def test_violations_are_found(tmp_path):
     assert "stsf_gym.cli" not in found  # imports for type checking only do not count
 
 
+@pytest.mark.slow
 def test_layers_command_prints_the_graph():
     done = subprocess.run(
         [sys.executable, "-m", "stsf_gym.layers"], capture_output=True, text=True, cwd=ROOT

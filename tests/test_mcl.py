@@ -24,6 +24,7 @@ def test_global_localization_from_a_uniform_prior():
     assert run["final_error_m"] < 0.10
 
 
+@pytest.mark.slow
 def test_global_localization_with_the_follower_on_its_own_estimate():
     # seed 1: the sonar alone settles the particles on the corridor's other end within a second;
     # the robot wanders until a board confirms a narrow estimate, then follows the path on it
@@ -32,6 +33,7 @@ def test_global_localization_with_the_follower_on_its_own_estimate():
     assert run["within_for_good_from_m"] is not None and run["final_error_m"] < 0.10, run
 
 
+@pytest.mark.slow
 def test_kidnap_recovered_without_a_restart():
     faults = read_yaml(CONFIG_DIR / "faults" / "kidnap.yaml")["faults"]
     env = gym.make(

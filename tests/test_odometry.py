@@ -15,6 +15,7 @@ def test_straight_and_turn_in_place():
     np.testing.assert_allclose(pose, [0.0, 0.0, np.pi / 2], atol=1e-12)
 
 
+@pytest.mark.slow
 def test_dead_reckoning_covariance_matches_monte_carlo():
     """The odometry estimator's covariance (slip as a random walk, the calibration errors fixed
     per run) against sampled runs with both: the NEES averages the state dimension (3)."""

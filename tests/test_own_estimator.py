@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = "examples.complementary:ComplementaryFilter"
 
 
+@pytest.mark.slow
 def test_example_through_the_cli(tmp_path):
     """The console script (not ``python -m``) imports the example from the working directory."""
     script = Path(sys.executable).parent / "stsf-gym"
@@ -99,6 +100,7 @@ class MySTSF(STSFEstimator):
 '''
 
 
+@pytest.mark.slow
 def test_subclass_keeps_its_parents_configured_defaults(tmp_path):
     """A user's subclass of a package estimator, in a module of their own, runs through the
     console script on its parent's ``configs/estimators/`` defaults (it failed with ``missing

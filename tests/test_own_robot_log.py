@@ -8,9 +8,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
+@pytest.mark.slow
 def test_a_plain_script_log_replays(tmp_path):
     script = ROOT / "examples" / "own_robot_log.py"
     subprocess.run([sys.executable, str(script), "--out", str(tmp_path)], check=True, cwd=ROOT)

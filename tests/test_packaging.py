@@ -74,6 +74,7 @@ def built(tmp_path_factory) -> dict[str, Path]:
     return {"sdist": sdist, "wheel": wheel}
 
 
+@pytest.mark.slow
 def test_the_wheel_holds_one_namespace_with_every_module_and_config(built):
     names = zipfile.ZipFile(built["wheel"]).namelist()
     tops = {name.split("/")[0] for name in names}
@@ -163,6 +164,7 @@ def installed(built, tmp_path_factory) -> Path:
     return venv
 
 
+@pytest.mark.slow
 def test_a_core_install_runs_the_quick_start_and_names_the_missing_extra(installed, tmp_path):
     python, cli = installed / "bin" / "python", installed / "bin" / "stsf-gym"
     for extra_module in ("mcap", "rosbags", "rerun", "ray", "rl_zoo3"):
@@ -179,6 +181,7 @@ def test_a_core_install_runs_the_quick_start_and_names_the_missing_extra(install
     assert done.returncode == 2 and "pip install 'stsf-gym[record]'" in done.stderr, done.stderr
 
 
+@pytest.mark.slow
 def test_the_installed_wheel_works_beside_a_users_own_envs_and_agents(installed, tmp_path):
     for package in ("envs", "agents"):
         (tmp_path / package).mkdir()

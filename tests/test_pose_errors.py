@@ -90,6 +90,7 @@ def _drive(samples: int, rng, noise: OdometryNoise, wheelbase: float = 0.3):
     return checkpoints
 
 
+@pytest.mark.slow
 def test_dead_reckoning_with_fixed_calibration_errors_is_consistent():
     """First order: exact while the heading error stays small. With the env's calibration
     errors that holds for the first 3 m; after 9 m and a turn the heading is about 0.15 rad off

@@ -21,6 +21,7 @@ def test_agents_are_shipped():
     assert "pretrained:corridor/ppo-truth" in SHIPPED
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SHIPPED)
 def test_each_seed_loads_and_drives_an_episode(name):
     record = pretrained.summary(name)
@@ -53,6 +54,7 @@ def test_stsf_gym_agents_lists_them_as_json():
         assert len(row["val_success"]) == len(row["seeds"]) >= 1
 
 
+@pytest.mark.slow
 def test_none_is_stale_and_a_change_of_what_they_see_is_flagged(monkeypatch):
     assert pretrained.stale() == []
     from stsf_gym.agents.observation import PolicyObservation

@@ -134,6 +134,7 @@ def mutate(stream: list[dict], dt: float, plan) -> list[tuple[dict, float]]:
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(ESTIMATORS))
 @given(plan=mutations())
 @STREAMS

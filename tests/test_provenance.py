@@ -74,6 +74,7 @@ def _episode_stamps(folder):
     return {f.name: f.stat().st_mtime_ns for f in sorted((folder / "episodes").glob("*.json"))}
 
 
+@pytest.mark.slow
 def test_an_edited_default_or_a_new_behaviour_version_recomputes_saved_episodes(
     tmp_path, monkeypatch, capsys
 ):
@@ -111,6 +112,7 @@ def test_an_edited_default_or_a_new_behaviour_version_recomputes_saved_episodes(
     assert third["rows"][0]["final_error_m"] == first["rows"][0]["final_error_m"]
 
 
+@pytest.mark.slow
 def test_a_checkpoint_of_other_code_is_set_aside_not_resumed(tmp_path, monkeypatch, capsys):
     out = tmp_path / "run"
     train("ppo", "truth", out, 64, n_envs=1, overrides=TINY_PPO, progress_bar=False)

@@ -35,6 +35,7 @@ def _run(script: str, verbose: bool) -> subprocess.CompletedProcess:
     )
 
 
+@pytest.mark.slow
 def test_env_lifecycle_prints_no_banner_unless_verbose():
     quiet = _run(SCRIPT, verbose=False)
     assert quiet.stdout == "finished\n"
@@ -103,6 +104,7 @@ def test_markdown_reports_keep_their_prose():
     assert "|" not in out and "---" not in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("verbose", [False, True])
 def test_cli_is_quiet_unless_verbose(tmp_path, verbose):
     command = [sys.executable, "-m", "stsf_gym.cli", "evaluate", "--estimators", "odometry"]

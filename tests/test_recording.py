@@ -166,6 +166,7 @@ def test_quaternions_of_rotation_matrices():
         assert min(abs(ours - theirs).max(), abs(ours + theirs).max()) < 1e-12
 
 
+@pytest.mark.slow
 def test_the_rerun_recording_reads_back(tmp_path):
     from rerun.chunk import RrdReader
 

@@ -2,6 +2,7 @@ import subprocess
 import sys
 
 import gymnasium as gym
+import pytest
 
 import stsf_gym
 
@@ -14,6 +15,7 @@ def test_ids_registered_and_registration_idempotent():
     assert dict(gym.registry).keys() == before.keys()
 
 
+@pytest.mark.slow
 def test_make_with_module_prefix_without_import():
     code = (
         "import gymnasium as gym\n"

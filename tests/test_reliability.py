@@ -166,6 +166,7 @@ def _name(job: dict) -> str:
     return f"job{job['n']}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workers", [1, 2])
 def test_crashed_jobs_are_reported_and_rerun(tmp_path, capsys, workers):
     crashes = {1: "raise"} if workers == 1 else {1: "raise", 3: "exit"}
@@ -179,6 +180,7 @@ def test_crashed_jobs_are_reported_and_rerun(tmp_path, capsys, workers):
     assert all((tmp_path / f"marker{n}.runs").read_text() == "x" for n in range(5))
 
 
+@pytest.mark.slow
 def test_job_failing_twice_keeps_the_others_and_a_rerun_resumes(tmp_path, capsys):
     out = tmp_path / "out"
     with pytest.raises(JobsFailed, match="job2: the worker process died") as failed:
@@ -196,6 +198,7 @@ def test_job_failing_twice_keeps_the_others_and_a_rerun_resumes(tmp_path, capsys
 # --- long runs and many envs --------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_env_lifetimes_leak_no_clients_bodies_or_memory():
     soak = _soak_module()
     report = soak.cycle_envs(LIFETIME_CYCLES)
@@ -206,6 +209,7 @@ def test_env_lifetimes_leak_no_clients_bodies_or_memory():
     assert soak.failures({"cycles": report}) == []
 
 
+@pytest.mark.slow
 def test_parallel_soak_matches_serial_bit_for_bit():
     soak = _soak_module()
     report = soak.soak(SOAK_STEPS, workers=2, seed=3)
@@ -230,6 +234,7 @@ def _renderers_here() -> list[str]:
     return here
 
 
+@pytest.mark.slow
 def test_images_are_bit_identical_per_renderer_serial_and_parallel():
     """Each renderer repeats itself exactly (here and in forkserver workers); the renderers
     rasterise differently, so their images differ."""

@@ -42,6 +42,7 @@ def evaluated(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_replay_gives_the_evaluation_again_without_the_simulator(evaluated, tmp_path):
     (log,) = sorted((evaluated / "recordings").glob("*.mcap"))
     report = tmp_path / "modules.json"
@@ -60,6 +61,7 @@ def test_replay_gives_the_evaluation_again_without_the_simulator(evaluated, tmp_
     assert (tmp_path / "r" / "trajectories" / f"{log.stem}-odometry" / "estimate.txt").is_file()
 
 
+@pytest.mark.slow
 def test_the_replay_modules_load_no_simulator_module():
     done = subprocess.run(
         [sys.executable, "-c", MODULES], capture_output=True, text=True, cwd=ROOT, check=True

@@ -117,6 +117,7 @@ def test_train_cells_carry_trainer_options_and_check_them(tmp_path):
         load_sweep(write_sweep(tmp_path, doc))
 
 
+@pytest.mark.slow
 def test_local_sweep_writes_summary_and_resumes(local_run, monkeypatch):
     path, out, summary = local_run
     assert summary["cells"] == summary["finished"] == 4 and summary["failed"] == []
@@ -148,6 +149,7 @@ def fake_cell(cell: dict) -> dict:
     return {"metrics": {"final_error_m": level * (1 + cell["seed"]), "ate_rmse_m": level}}
 
 
+@pytest.mark.slow
 def test_failed_cells_are_reported_and_retried(tmp_path, monkeypatch):
     doc = {
         "base": {"world": "straight_10m"},
@@ -179,6 +181,7 @@ def test_failed_cells_are_reported_and_retried(tmp_path, monkeypatch):
     assert again["finished"] == 8 and again["failed"] == []
 
 
+@pytest.mark.slow
 def test_ray_gives_the_local_table(local_run, tmp_path):
     ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'stsf-gym[ray]')")
     path, out, summary = local_run

@@ -195,6 +195,7 @@ def rig_run():
     return cfg, run_seed(cfg, seed=0)
 
 
+@pytest.mark.slow
 def test_the_rig_stops_at_the_places_and_drives_the_baselines(rig_run):
     cfg, result = rig_run
     np.testing.assert_allclose(result.truth, cfg.distances, atol=0.01)
@@ -213,6 +214,7 @@ def test_the_rendered_rig_measures_the_distances(rig_run):
     assert result.stsf[0] == result.conventional[0]
 
 
+@pytest.mark.slow
 def test_cli_reproduce_table1_json(tmp_path):
     result = subprocess.run(
         [

@@ -5,6 +5,7 @@ from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 from test_table1 import DISTANCES, NORMAL, K, synthetic_places
 
 from stsf_gym.estimators.odometry import OdometryNoise
@@ -46,6 +47,7 @@ def places_with_odometry():
     return places
 
 
+@pytest.mark.slow
 def test_joint_covariance_matches_monte_carlo():
     places = places_with_odometry()
     k = len(places) - 1
@@ -90,6 +92,7 @@ def test_joint_covariance_matches_monte_carlo():
     assert empirical[-1, -1] >= weights @ empirical @ weights
 
 
+@pytest.mark.slow
 def test_rows_report_the_joint_fusion():
     places = places_with_odometry()
     rows = joint_rows(places, K, NORMAL, SIGMA_PX, 0.0, NOISE.calibration_cov)

@@ -46,6 +46,7 @@ def _run(name, model, history, start, **options):
     return estimator, np.array(means)
 
 
+@pytest.mark.slow
 def test_paper_conventional_keeps_nothing_beyond_the_pair(recorded):
     """Started 1.5 cm and 0.3 deg apart, two paper-conventional estimators agree exactly from
     their first landmark update on: the estimate is the current pair's measurement, nothing
@@ -78,6 +79,7 @@ def test_stsf_fuses_more_frames_than_the_pair(recorded):
     assert longest > 2
 
 
+@pytest.mark.slow
 def test_track_aided_matching_matches_more_frames(recorded):
     """The same frames, STSF with track-aided matching against the plain detector alone."""
     model, history, *_ = recorded
@@ -98,6 +100,7 @@ def _truth(camera, world_from_camera, world_points):
     return uv.reshape(-1, 2)
 
 
+@pytest.mark.slow
 def test_predicted_boards_the_detector_misses_are_found_with_the_right_id(recorded):
     """Predictions 2 px off the true board: where the plain detector misses a board of at
     least 14 px, the matcher finds most, with square centres within a pixel of the truth; a

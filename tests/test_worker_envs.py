@@ -33,6 +33,7 @@ class FailsOnThirdStep(gym.Env):
         return np.zeros(1, np.float32), 0.0, False, False, {}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("failing", [0, 1])
 def test_a_dead_worker_raises_from_the_step_and_close_returns(failing):
     envs = FailFastSubprocVecEnv(

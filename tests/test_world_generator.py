@@ -59,6 +59,7 @@ def seen_from_path(world, obstacles: bool = True) -> np.ndarray:
     )
 
 
+@pytest.mark.slow
 def test_worlds_pass_the_env_checks(worlds):
     for seed, world in worlds.items():
         cfg = load_config(world=world_tree(seed, GEN, ENV))  # world and clearance checks
