@@ -178,3 +178,15 @@ def test_an_observation_scale_of_zero_fails_before_the_training_folder_is_made(r
     code, err = run_cli("train", "--set", "observation.scale=0", "--out", str(tmp_path / "o"))
     assert code == 2 and "observation.scale must be > 0, got 0.0" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_finished_run_of_other_settings_is_kept_before_training_afresh(tmp_path, capsys):
+    from stsf_gym.agents.training.replaced_runs import keep_replaced_run
+
+    out = tmp_path / "run"
+    before = finished_run(out)
+    made_by = json.loads(before["train.json"])["made_by"]
+    assert keep_replaced_run(out, made_by) is None and files(out) == before  # its own run
+    kept = keep_replaced_run(out, {**made_by, "config": "another"})
+    assert kept == out / "replaced-runs" / "0" and files(kept) == before
+    assert not (out / "model.zip").exists() and "kept in" in capsys.readouterr().err

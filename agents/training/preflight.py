@@ -4,7 +4,9 @@ trained work of another kind of run (another algorithm, pose source, world or su
 or under way, which training there would overwrite.
 
 A run of the same kind in ``--out`` is the run's own: a rerun resumes it, or finds it finished
-and leaves it untouched (:mod:`stsf_gym.agents.training.train`).
+and leaves it untouched (:mod:`stsf_gym.agents.training.train`). One finished by other code or
+settings is trained afresh, its model and record first kept aside
+(:mod:`stsf_gym.agents.training.replaced_runs`).
 """
 
 from __future__ import annotations

@@ -48,6 +48,7 @@ from stsf_gym.agents.training.hyperparams import (
     load_hyperparams,
     policy_kwargs_for_sb3,
 )
+from stsf_gym.agents.training.replaced_runs import keep_replaced_run
 from stsf_gym.agents.training.resumed_eval import ResumableEvalCallback
 from stsf_gym.agents.training.training_log import (
     EPISODES_CSV,
@@ -399,6 +400,7 @@ def train(
     finished = _finished(out, meta["made_by"], total)
     if finished is not None:  # a campaign's rerun: this run is done, its files stay untouched
         return finished
+    keep_replaced_run(out, meta["made_by"])  # a run finished by other code or settings: kept
     cls = algorithm_class(algo)
     train_spec = {**spec, "env": train_settings}
     train_env = make_vec_env(n_envs, out, "train", **train_spec)
