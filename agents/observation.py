@@ -8,8 +8,9 @@ estimate, the sensors and the world's path (public map knowledge), never from ``
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Literal
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from typing import Any, Literal
 
 import gymnasium as gym
 import numpy as np
@@ -36,12 +37,12 @@ class ObservationConfig:
     point ``goal_horizon`` metres ahead along the path, as a leg's goal that far ahead reads."""
 
     lookahead: tuple[float, ...] = (0.0, 0.5, 1.0, 2.0, 4.0)
-    scale: float = 4.0
+    scale: Positive = 4.0
     goal_horizon: Positive | None = None
     far_goal: Literal["direction", "route"] = "direction"
 
 
-def observation_config(data: dict | None) -> ObservationConfig:
+def observation_config(data: Mapping[str, Any] | None) -> ObservationConfig:
     """An :class:`ObservationConfig` from a mapping; unknown keys raise ``ConfigError``."""
     return build(ObservationConfig, data or {}, "observation")
 
@@ -66,12 +67,17 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     task's protocol), which stable-baselines3's evaluation callback counts.
     """
 
-    def __init__(self, env: gym.Env, config: ObservationConfig | None = None) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, config=config)
+    def __init__(
+        self, env: gym.Env, config: ObservationConfig | Mapping[str, Any] | None = None
+    ) -> None:
+        if not isinstance(config, ObservationConfig):  # a mapping, as a JSON spec holds it
+            config = observation_config(config)
+        # recorded as plain values, so the env's spec survives EnvSpec.to_json/from_json
+        gym.utils.RecordConstructorArgs.__init__(self, config=asdict(config))
         gym.ObservationWrapper.__init__(self, env)
         if "pose" not in env.observation_space.spaces:
             raise ValueError("PolicyObservation needs obs['pose']: wrap in PoseEstimateWrapper")
-        self.config = config or ObservationConfig()
+        self.config = config
         cfg = env.unwrapped.config
         self._world, self.path = cfg.world, Polyline(cfg.world.path)
         self.sonar_range = (cfg.sonar.min_range, cfg.sonar.max_range)

@@ -5,7 +5,8 @@ A name the CLI takes stands for one or more single agents, one per trained model
 - ``pretrained:<suite>/<algo>-<pose source>`` (or an alias of one, :mod:`stsf_gym.agents.
   pretrained`): the model of each of its training seeds;
 - a training folder (the ``OUT`` of ``stsf-gym train``): its ``seed-*/model.zip``, or the
-  ``model.zip`` of a one-seed run;
+  ``model.zip`` of a one-seed run, taken whole (:mod:`~stsf_gym.agents.training_folder`: an
+  unfinished or misnamed seed is refused by name);
 - a ``.zip`` model file: itself, as an absolute path;
 - anything else (``follower``, ``cautious-follower``, a registered name, ``package.module:Class``):
   itself; :func:`~stsf_gym.agents.registry.make_agent` judges it.
@@ -19,9 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.agents import pretrained
-from stsf_gym.validation import ConfigError
-
-SEED_FOLDERS = "seed-*"  # a `stsf-gym train --seeds N` folder's runs
+from stsf_gym.agents.training_folder import SEED_FOLDERS, folder_models
 
 
 def resolve_agent(name: str) -> list[str]:
@@ -31,29 +30,10 @@ def resolve_agent(name: str) -> list[str]:
     if name.startswith(pretrained.PREFIX):
         return [str(model) for model in pretrained.models(name)]
     if path.is_dir():
-        return [str(model.resolve()) for model in training_models(path)]
+        return [str(model.resolve()) for model in folder_models(path)]
     if path.suffix == ".zip":
         return [str(path.resolve())]
     return [name]
-
-
-def training_models(folder: Path) -> list[Path]:
-    """The model of each run in training folder ``folder``; ConfigError if one is missing."""
-    runs = sorted(folder.glob(f"{SEED_FOLDERS}/model.zip"), key=_seed_order)
-    models = runs or [folder / "model.zip"]
-    missing = [m for m in models if not m.is_file()]
-    if missing:
-        raise ConfigError(
-            f"agent folder {folder} holds no trained model: {missing[0]} not found "
-            "(a folder of `stsf-gym train --seeds N`, or of one run)"
-        )
-    return models
-
-
-def _seed_order(model: Path) -> tuple[int, str]:
-    """``seed-10`` after ``seed-9``: runs by their seed's number."""
-    suffix = model.parent.name.removeprefix("seed-")
-    return (int(suffix), "") if suffix.isdigit() else (0, suffix)
 
 
 def training_group(agent: str) -> str | None:

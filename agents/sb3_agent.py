@@ -9,6 +9,7 @@ the ``.zip`` with the model, so a model file alone is enough to evaluate it
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import zipfile
 from pathlib import Path
@@ -24,6 +25,33 @@ def check_model_file(path: str | Path) -> Path:
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"agent model not found: {path} (train one with `stsf-gym train`)")
+    return path
+
+
+def check_weights(path: str | Path) -> Path:
+    """``path`` if every tensor file in it (``policy.pth``, ...) loads as stable-baselines3 loads
+    it (``torch.load(weights_only=True)``); ConfigError naming the file and entry otherwise, so
+    a model whose weights are corrupt fails before any work, not inside an episode."""
+    import torch
+
+    path = check_model_file(path)
+    try:
+        with zipfile.ZipFile(path) as archive:
+            entries = [n for n in archive.namelist() if n.endswith(".pth")]
+            if "policy.pth" not in entries:
+                raise ConfigError(f"{path} holds no policy.pth: not a stable-baselines3 model")
+            for entry in entries:
+                try:
+                    tensors = io.BytesIO(archive.read(entry))
+                    torch.load(tensors, map_location="cpu", weights_only=True)
+                except Exception as err:  # torch raises many kinds on a corrupt file
+                    raise ConfigError(  # torch's own text would advise weights_only=False
+                        f"{path}: its weights ({entry}) cannot be read ({type(err).__name__}): "
+                        "the file is corrupt or was not saved by stable-baselines3; train or "
+                        "copy it again"
+                    ) from None
+    except zipfile.BadZipFile as err:
+        raise ConfigError(f"{path} is not a stable-baselines3 model: {err}") from None
     return path
 
 

@@ -105,9 +105,9 @@ class SB3Agent:
     actions deterministic. :meth:`make_env` builds the env it was trained for."""
 
     def __init__(self, path: str) -> None:
-        from stsf_gym.agents.sb3_agent import check_model_file, model_digest, model_metadata
+        from stsf_gym.agents.sb3_agent import check_weights, model_digest, model_metadata
 
-        self.path = check_model_file(path)
+        self.path = check_weights(path)  # a missing file or corrupt weights: refused here
         self.meta, self.digest = model_metadata(self.path), model_digest(self.path)
         self.model = None
 

@@ -45,7 +45,7 @@ def estimating_ids() -> list[str]:
 def zoo_section(algo: str, env_id: str) -> dict:
     """rl-zoo3's hyper-parameters of ``env_id`` from ``configs/agents/<algo>.yaml``; a suite id's
     ``env_kwargs`` hold the suite's env settings over the file's, as ``stsf-gym train --suite``
-    trains (rl-zoo3 passes them to ``gym.make``, where a section replaces the registered one)."""
+    trains (rl-zoo3 passes them to ``gym.make``; the task's STOP entry is in the registration)."""
     suite = env_id.startswith(SUITE_PREFIX)
     hp = load_hyperparams(algo, env_id, suite=suite)
     cfg = hp.training

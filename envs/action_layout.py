@@ -19,6 +19,15 @@ ACTION_NAMES = ("v", "w", "pan", "tilt", "stop")
 MOUNT_AXES = {"none": (), "pan": ("pan",), "pan_tilt": ("pan", "tilt")}
 
 
+def numeric_action(action) -> np.ndarray:
+    """``action`` as an array, refused unless its dtype is an integer or a real float: a
+    boolean or complex action is the wrong kind, not one to cast (``True`` is not full speed)."""
+    raw = np.asarray(action)
+    if raw.dtype.kind not in "iuf":
+        raise ValueError(f"action must be numeric (int or float), got dtype {raw.dtype}")
+    return raw
+
+
 @dataclass(frozen=True)
 class ActionLayout:
     """The names of an action's entries, in order (a subsequence of :data:`ACTION_NAMES`)."""
@@ -66,7 +75,7 @@ class ActionLayout:
     def fill(self, action: np.ndarray, source: ActionLayout, **values: float) -> np.ndarray:
         """An action of this layout from ``action`` (laid out as ``source``) and ``values`` for
         the entries ``source`` lacks."""
-        flat = np.asarray(action, dtype=np.float32).ravel()
+        flat = numeric_action(action).astype(np.float32).ravel()
         if flat.shape != (len(source.names),):
             raise ValueError(f"action must have shape ({len(source.names)},), got {flat.shape}")
         given = dict(zip(source.names, flat, strict=True))

@@ -14,14 +14,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
 
+from stsf_gym.camera_model import invertible
 from stsf_gym.envs.fault_spec import FaultSpec
-from stsf_gym.envs.worlds.checks import check_clearance, check_route, check_world
+from stsf_gym.envs.worlds.checks import (
+    check_board_on_wall,
+    check_clearance,
+    check_route,
+    check_world,
+)
 from stsf_gym.validation import (
     ROBOT_EXTENT_M,
     WORLD_EXTENT_M,
@@ -38,6 +44,7 @@ from stsf_gym.validation import (
     RobotLength,
     WorldLength,
     build,
+    check_keywords,
     require,
 )
 from stsf_gym.vision.landmarks import LandmarkPattern
@@ -270,6 +277,13 @@ class CameraConfig:
             f"r(1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at distorted radius {reach:.3g}, "
             f"inside the image corner at {corner:.3g} (a lens maps each ray to one pixel)",
         )
+        require(
+            not any(self.lens.distortion) or invertible(self.lens.distortion, corner),
+            "lens.distortion",
+            f"{list(self.lens.distortion)} cannot be undone: the undistortion every estimator "
+            f"runs (stsf_gym.camera_model.undistort) does not find the rays of the image out to "
+            f"its corner at {corner:.3g} (the coefficients are too strong for a real lens)",
+        )
 
 
 @dataclass(frozen=True)
@@ -455,6 +469,8 @@ class EnvConfig:
                 f"must be a landmark of world {self.world.name!r} {map_ids}, "
                 f"got {fault.landmark_id}",
             )
+            if fault.at is not None:  # a decoy board hangs on a wall of this world, as a map's
+                check_board_on_wall(self.world, fault.at, fault.facing_deg, f"faults[{i}]")
         for axis in ("pan", "tilt"):
             limit = getattr(self.robot, f"{axis}_limit_deg")
             value = getattr(self.camera, f"{axis}_deg")
@@ -463,6 +479,10 @@ class EnvConfig:
                 f"camera.{axis}_deg",
                 f"must be within robot.{axis}_limit_deg (±{limit:g}), got {value}",
             )
+
+
+#: The env config's sections (the keyword arguments an env takes besides its own).
+SECTIONS = tuple(f.name for f in fields(EnvConfig) if f.name != "world")
 
 
 def load_config(
@@ -504,11 +524,22 @@ def load_config(
                 "world",
                 source,
             )
+    for name in SECTIONS:  # a section given a value (``camera="fast"``) is not merged into
+        if name != "faults" and not isinstance(tree.get(name, {}), Mapping):  # faults: a list
+            message = f"{name} is a section: it must be a mapping of its keys, got {tree[name]!r}"
+            raise ConfigError(message, name, sources.file_of(name) or None)
     _add_camera_profile(tree, sources)
     try:
         return build(EnvConfig, tree, "")
     except ConfigError as err:
         raise sources.attribute(err) from err
+
+
+def check_env_keywords(owner: str, overrides: Mapping[str, Any], named: tuple[str, ...]) -> None:
+    """Raise :class:`~stsf_gym.validation.UnexpectedKeyword` (a ``TypeError`` and a
+    :class:`ConfigError`) for a keyword argument of env ``owner`` (whose own parameters are
+    ``named``) that names no config section."""
+    check_keywords(owner, overrides, [*named, *SECTIONS])
 
 
 def _add_camera_profile(tree: dict, sources: KeySources) -> None:

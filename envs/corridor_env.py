@@ -11,8 +11,8 @@ import numpy as np
 from gymnasium import spaces
 
 from stsf_gym.camera_model import CameraCalibration, PanTiltMount
-from stsf_gym.envs.action_layout import ActionLayout
-from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
+from stsf_gym.envs.action_layout import ActionLayout, numeric_action
+from stsf_gym.envs.config import EnvConfig, WorldConfig, check_env_keywords, load_config
 from stsf_gym.envs.drive_controller import VelocityController
 from stsf_gym.envs.faults import FaultInjector
 from stsf_gym.envs.random_streams import RandomStreams
@@ -32,6 +32,7 @@ from stsf_gym.envs.task import PathTask
 from stsf_gym.envs.worlds.checks import check_start_pose
 from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
 from stsf_gym.geometry import OdometryCalibration, bounded
+from stsf_gym.validation import reset_options
 
 RENDER_VFOV_DEG = 60.0
 CHASE_DISTANCE, CHASE_MIN_DISTANCE, CHASE_WALL_GAP, CHASE_HEIGHT = 1.8, 0.3, 0.15, 1.6  # m
@@ -167,6 +168,7 @@ class CorridorEnv(gym.Env):
             raise ValueError(
                 f"render_mode must be None, 'rgb_array' or 'human', got {render_mode!r}"
             )
+        check_env_keywords(type(self).__name__, overrides, ("world", "config", "render_mode"))
         self.config: EnvConfig = load_config(config, world=world, **overrides)
         cfg = self.config
         self.render_mode = render_mode
@@ -333,7 +335,7 @@ class CorridorEnv(gym.Env):
 
     def _start_episode(self, options: dict | None):
         """Everything of :meth:`reset` after the seed and the episode's :attr:`streams`."""
-        options = dict(options or {})
+        options = reset_options(options)
         start = options.pop("start_pose", None)
         if options:
             raise ValueError(f"unknown reset option(s) {sorted(options)}; known: ['start_pose']")
@@ -386,10 +388,7 @@ class CorridorEnv(gym.Env):
         """Apply ``action`` (checked: numeric, finite, of the action space's shape; clipped to
         [-1, 1]) for one control period.
         """
-        raw = np.asarray(action)
-        if raw.dtype.kind not in "iuf":
-            raise ValueError(f"action must be numeric (int or float), got dtype {raw.dtype}")
-        a = raw.astype(np.float64).ravel()
+        a = numeric_action(action).astype(np.float64).ravel()
         if a.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
         if not np.isfinite(a).all():

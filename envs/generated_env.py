@@ -13,12 +13,12 @@ from typing import Any
 
 import gymnasium as gym
 
-from stsf_gym.envs.config import EnvConfig, WorldConfig, load_config
+from stsf_gym.envs.config import EnvConfig, WorldConfig, check_env_keywords, load_config
 from stsf_gym.envs.corridor_env import CorridorEnv
 from stsf_gym.envs.random_streams import RandomStreams
 from stsf_gym.envs.worlds.generator import GenerationError, generate_world, world_tree
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, reset_options
 from stsf_gym.yaml_layers import merge_settings
 
 REDRAWS = 10  # drawn worlds the generator cannot lay out, skipped before the error is raised
@@ -141,6 +141,8 @@ class GeneratedCorridorEnv(CorridorEnv):
     ) -> None:
         if "world" in overrides:
             raise world_argument_error(overrides["world"])
+        named = ("split", "generator", "config", "render_mode")
+        check_env_keywords(type(self).__name__, overrides, named)
         self.generator: GeneratorConfig = load_generator_config(generator)
         self.split = split
         self.world_seeds = self.generator.split_range(split)
@@ -152,7 +154,7 @@ class GeneratedCorridorEnv(CorridorEnv):
         """Start an episode in a new generated world: ``seed`` picks world ``seed`` of the split, or
         ``options["world_seed"]`` (it must lie in the split) a given one.
         """
-        options = dict(options or {})
+        options = reset_options(options)
         world_seed = options.pop("world_seed", None)
         gym.Env.reset(self, seed=seed)
         self.streams = RandomStreams.draw(self.np_random)

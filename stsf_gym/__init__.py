@@ -8,7 +8,8 @@ Importing the package registers the environments with Gymnasium (idempotently):
   ``"test"``, :mod:`stsf_gym.envs.generated_env`).
 
 - ``stsf_gym/Suite-<Level>-v0``: a benchmark suite's generated worlds under the declared-stop
-  task, one per ``configs/suites/<level>.yaml`` (:mod:`stsf_gym.envs.suite`).
+  task with its STOP action entry (:data:`SUITE_TASK`), one per ``configs/suites/<level>.yaml``
+  (:mod:`stsf_gym.envs.suite`).
 
 Each also has an id per pose source, e.g. ``stsf_gym/Corridor-STSF-v0`` or
 ``stsf_gym/Suite-Sparse-EKF-v0`` (see below).
@@ -34,8 +35,17 @@ ESTIMATOR_IDS: dict[str, str] = {
     "ConventionalFilter": "conventional-filter",  # the same pairs, merged recursively
     "STSF": "stsf",
     "EKF": "ekf",
+    "Smoother": "smoother",  # the fixed-lag factor-graph smoother (gtsam)
+    "MCL": "mcl",  # Monte Carlo localization on the sonar and the boards
     "Truth": "truth",  # privileged: the true pose, for reference runs
 }
+
+#: What every suite id adds to its suite file's env: the declared-arrival task's STOP entry
+#: (Habitat's STOP), in the registration itself, so no client's keyword arguments (rl-zoo3's
+#: ``--env-kwargs``, an evaluation env built from other ones) can leave it out. A client's
+#: ``task`` section merges key by key over it; only ``task={"stop_action": False}`` said in
+#: so many words removes it.
+SUITE_TASK = {"task": {"stop_action": True}}
 
 
 #: The id of generated worlds (``split="train" | "val" | "test"``,
@@ -66,11 +76,12 @@ def suite_id(name: str) -> str:
 
 def _register_suites() -> None:
     """The ids of every suite in ``configs/suites/``: the world env and one per pose source."""
-    from stsf_gym.yaml_layers import SUITE_DIR, read_yaml
+    from stsf_gym.yaml_layers import SUITE_DIR, deep_merge, read_yaml
 
     for path in sorted(SUITE_DIR.glob("*.yaml")):
         suite = read_yaml(path)  # checked when an env is made (stsf_gym.envs.suite)
-        generator, env = suite.get("generator") or {}, suite.get("env") or {}
+        generator = suite.get("generator") or {}
+        env = deep_merge(suite.get("env") or {}, SUITE_TASK)
         env_id = suite_id(path.stem)
         if env_id not in registry:
             register(

@@ -27,6 +27,7 @@ from stsf_gym.geometry import compiled
 from stsf_gym.validation import ROBOT_EXTENT_M, Range, RobotLength
 
 UNDISTORT_ITERATIONS = 20
+INVERSE_TOLERANCE = 1e-6  # normalised units (a thousandth of a pixel at a 640 px focal length)
 #: Rotation from the camera link (x forward, y left, z up) to OpenCV camera axes.
 LINK_FROM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
@@ -58,6 +59,21 @@ def undistort(xy_d: np.ndarray, dist: np.ndarray) -> np.ndarray:
     k1, k2, p1, p2, k3 = np.asarray(dist, dtype=float).tolist()
     flat = _undistorted(xy_d.reshape(-1, 2), k1, k2, p1, p2, k3, UNDISTORT_ITERATIONS)
     return flat.reshape(xy_d.shape)
+
+
+def invertible(dist, corner: float, tolerance: float = INVERSE_TOLERANCE) -> bool:
+    """Whether :func:`undistort` inverts distortion ``dist`` over the image: distorted points
+    out to the normalised corner radius ``corner``, in eight directions, undistorted and
+    distorted again land within ``tolerance`` of themselves (a lens too strong for the
+    fixed-point iteration, k1 = 1e6 say, makes it diverge)."""
+    angles = np.linspace(0.0, 2 * np.pi, 8, endpoint=False)
+    radii = np.linspace(0.0, corner, 41)
+    points = np.stack(
+        np.broadcast_arrays(np.outer(radii, np.cos(angles)), np.outer(radii, np.sin(angles))), -1
+    )
+    with np.errstate(all="ignore"):
+        back = distort(undistort(points, dist), dist)
+    return bool(np.all(np.abs(back - points) <= tolerance))
 
 
 @compiled

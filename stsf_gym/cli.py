@@ -16,6 +16,7 @@ from stsf_gym.results.provenance import set_command
 from stsf_gym.validation import FieldError, Range, check_number
 
 DEFAULT_WORLD = "irl_corridor"  # --world when none is given
+DEFAULT_POSE_SOURCE = "truth"  # train --estimator when none is given
 
 
 def _common(
@@ -204,11 +205,13 @@ def _agents(args: argparse.Namespace) -> dict | list:
     if args.ship is not None:
         if args.suite is None:
             raise ConfigError("--ship needs --suite: the suite the runs were trained on")
-        name = pretrained.ship(args.ship, args.suite)
+        name = pretrained.ship(args.ship, args.suite, args.replace)
         if not args.json:
             print(f"Shipped {name}")
         return pretrained.summary(name)
-    rows = pretrained.listing()
+    if args.replace:
+        raise ConfigError("--replace replaces a shipped agent by --ship: add --ship and --suite")
+    rows = [r for r in pretrained.listing() if args.suite in (None, r["suite"])]
     if not args.json:
         table = [
             {
@@ -300,6 +303,12 @@ def _train(args: argparse.Namespace) -> dict:
     args.world = _world(args)
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+    if args.estimators is not None and args.estimator is not None:
+        raise ConfigError(
+            "--estimator names one run's pose source, --estimators a campaign's: give one"
+        )
+    args.estimator = args.estimator or DEFAULT_POSE_SOURCE
+    _check_training_runs(args)
     shared = {
         "algo": args.algo,
         "timesteps": args.timesteps,
@@ -332,6 +341,32 @@ def _train(args: argparse.Namespace) -> dict:
         if not args.json:
             print(_run_line(args.estimator, seed, summary, out))
     return runs[0] if len(runs) == 1 else {"runs": runs}
+
+
+def _check_training_runs(args: argparse.Namespace) -> None:
+    """Before any training: the seeds in range, and each run's folder free of another kind
+    of run's trained work (:mod:`stsf_gym.agents.training.preflight`)."""
+    from stsf_gym.agents.training.preflight import (
+        check_out,
+        check_policy_settings,
+        check_seeds,
+        run_kind,
+    )
+
+    check_seeds(args.seed, args.seeds)
+    seeds = range(args.seed, args.seed + args.seeds)
+    if args.estimators is not None:
+        runs = [
+            (e, args.out / e / f"seed-{s}") for e in _pose_sources(args.estimators) for s in seeds
+        ]
+    else:
+        runs = [
+            (args.estimator, args.out / f"seed-{s}" if args.seeds > 1 else args.out) for s in seeds
+        ]
+    for estimator, out in runs:
+        kind = run_kind(args.algo, estimator, args.world, args.suite)
+        check_policy_settings(kind, args.config, parse_overrides(args.overrides))
+        check_out(out, kind)
 
 
 def _campaign(args: argparse.Namespace, shared: dict, seeds: range) -> dict:
@@ -394,9 +429,7 @@ def _sweep(args: argparse.Namespace) -> dict:
         args.file, out, args.backend, args.workers, args.address, args.seed, _env_overrides(args)
     )
     _print_markdown(args, out / "results.md")
-    for failed in summary["failed"]:
-        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
-    return summary
+    return _failed_cells(summary, finished=summary["finished"])
 
 
 def _accuracy_curve(args: argparse.Namespace) -> dict:
@@ -414,6 +447,11 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
     for level in levels:  # scales of the dial's errors
         check_number(level, "--levels", Range(ge=0))
     dial = parse_overrides(args.dial)
+    if "scale" in dial:  # each level sets it: a --dial scale would change nothing
+        raise ConfigError(
+            f"--dial scale={dial['scale']}: the dial's scale is what --levels lists "
+            f"(--levels {dial['scale']}); --dial sets the dial's other options"
+        )
     make_estimator("degraded-truth", **dial)  # a bad dial option fails before any work
     world = args.world or DEFAULT_WORLD
     env = _env_overrides(args, None if args.suite else world)
@@ -444,9 +482,8 @@ def _accuracy_curve(args: argparse.Namespace) -> dict:
         args.suite,
     )
     _print_markdown(args, args.out / "curve.md")
-    for failed in summary["failed"]:
-        print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
-    return summary
+    finished = len(summary["estimators"]) + sum(len(c["levels"]) for c in summary["curves"])
+    return _failed_cells(summary, finished)
 
 
 def _benchmark(args: argparse.Namespace) -> dict:
@@ -475,8 +512,23 @@ def _benchmark(args: argparse.Namespace) -> dict:
         _recording(args, args.out / args.suite),
     )
     _print_markdown(args, args.out / args.suite / "leaderboard.md")
+    return _failed_cells(summary, finished=len(summary["rows"]))
+
+
+class NothingFinished(RuntimeError):
+    """Every cell of a command failed: its files are written, the command exits 1."""
+
+
+def _failed_cells(summary: dict, finished: int) -> dict:
+    """Name each failed cell of ``summary`` on stderr; with ``finished`` results none (every
+    cell failed), raise :class:`NothingFinished`."""
     for failed in summary["failed"]:
         print(f"failed cell {json.dumps(failed['cell'])}: {failed['error']}", file=sys.stderr)
+    if summary["failed"] and not finished:
+        raise NothingFinished(
+            f"all {len(summary['failed'])} cell(s) failed (named above): nothing to score; "
+            "the report written says so, and a rerun retries them"
+        )
     return summary
 
 
@@ -624,7 +676,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="dagger: cloning + DAgger rounds; dagger+ppo: then PPO on the reward; ppo, sac: "
         "reward (ppo: after the demonstrations if the settings enable them) (ppo)",
     )
-    train.add_argument("--estimator", default="truth", help="pose source the agent drives on")
+    train.add_argument(
+        "--estimator", help=f"pose source the agent drives on ({DEFAULT_POSE_SOURCE})"
+    )
     train.add_argument(
         "--estimators",
         help="a campaign: one run per pose source (comma-separated) and seed, each in "
@@ -722,7 +776,16 @@ def build_parser() -> argparse.ArgumentParser:
     shipped.add_argument(
         "--ship", type=Path, help="a `train --seeds N` folder to ship as a pretrained agent"
     )
-    shipped.add_argument("--suite", choices=suite_names(), help="the suite it was trained on")
+    shipped.add_argument(
+        "--suite",
+        choices=suite_names(),
+        help="with --ship: the suite it was trained on; alone: list this suite's agents only",
+    )
+    shipped.add_argument(
+        "--replace",
+        action="store_true",
+        help="with --ship: replace an agent already shipped under the same name, whole",
+    )
     shipped.add_argument("--verbose", action="store_true", help="show PyBullet's C banners")
     shipped.set_defaults(run=_agents)
     bench = commands.add_parser("bench", help="the speed figures beside their targets")
@@ -797,6 +860,14 @@ def _preflight(args: argparse.Namespace) -> None:
 
     if getattr(args, "seed", 0) < 0:  # seeds seed a numpy SeedSequence: non-negative
         raise ConfigError(f"--seed must be at least 0, got {args.seed}")
+    if getattr(args, "config", None) is not None:
+        from stsf_gym.yaml_layers import read_yaml
+
+        if not read_yaml(args.config):  # missing, unreadable or malformed: named there
+            raise ConfigError(
+                f"--config {args.config}: the file is empty, it sets nothing; give the "
+                "settings it should hold, or leave --config out"
+            )
     for option, needed, reason in NEEDS:
         if given(option) and not given(needed):
             raise ConfigError(reason)
@@ -841,7 +912,7 @@ def main(argv: list[str] | None = None) -> int:
     ) as err:
         print(f"{error} {err}", file=sys.stderr)
         return 2
-    except JobsFailed as err:
+    except (JobsFailed, NothingFinished) as err:
         print(f"{error} {err}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

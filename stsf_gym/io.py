@@ -41,7 +41,8 @@ def write_atomic(path: str | Path, data: str | bytes) -> Path:
 
 
 def check_folder(folder: str | Path, flag: str) -> None:
-    """Fail before any work when ``folder`` cannot be made or written (makes nothing):
+    """Fail before any work when ``folder`` cannot be made or written (makes nothing; a probe
+    file is created and removed in the nearest existing folder):
     :class:`NotADirectoryError` or :class:`PermissionError` naming ``flag``, the option that
     chose it."""
     folder = Path(folder).absolute()
@@ -52,6 +53,13 @@ def check_folder(folder: str | Path, flag: str) -> None:
         raise NotADirectoryError(f"{flag} {folder}: {existing} is not a folder")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise PermissionError(f"{flag} {folder}: {existing} is not writable")
+    try:  # root passes os.access everywhere, also in a kernel folder (/proc) or a read-only mount
+        handle, probe = create_temporary(existing / "write-probe")
+    except OSError as err:
+        message = f"{flag} {folder}: {existing} is not writable ({err.strerror})"
+        raise PermissionError(message) from None
+    os.close(handle)
+    os.unlink(probe)
 
 
 def check_file(file: str | Path, flag: str) -> None:

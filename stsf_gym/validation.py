@@ -32,6 +32,34 @@ class ConfigError(ValueError):
         self.message, self.key, self.source = message, key, source
 
 
+class UnexpectedKeyword(ConfigError, TypeError):
+    """A keyword argument no constructor of this kind takes: a ``TypeError`` saying
+    ``unexpected keyword argument 'NAME'``, as Python and Gymnasium envs raise (clients such as
+    TorchRL's ``GymEnv`` retry without a keyword on exactly that), and a :class:`ConfigError`.
+    Built as a ConfigError is (``gym.make`` raises it again with its own message added)."""
+
+
+def check_keywords(owner: str, keywords: Mapping[str, Any], known: list[str]) -> None:
+    """Raise :class:`UnexpectedKeyword` for the first of ``keywords`` (flat ``camera__width``
+    or dotted keys count by their first part) that is not in ``known``."""
+    for key in keywords:
+        name = str(key).replace("__", ".").partition(".")[0]
+        if name not in known:
+            hint = difflib.get_close_matches(name, known, n=1)
+            suggestion = f" (did you mean {hint[0]!r}?)" if hint else ""
+            message = f"{owner}() got an unexpected keyword argument {name!r}{suggestion}"
+            raise UnexpectedKeyword(f"{message}; it takes {', '.join(known)}", name)
+
+
+def reset_options(options: Any) -> dict:
+    """A copy of ``reset(options=...)``: a mapping or None, anything else refused by name."""
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"reset options must be a mapping (dict) or None, got {options!r}")
+    return dict(options)
+
+
 class FieldError(ValueError):
     """Raised in a config dataclass's ``__post_init__``: ``field`` (relative key) is invalid."""
 

@@ -29,7 +29,7 @@ from stsf_gym.estimators.odometry import OdometryNoise
 from stsf_gym.estimators.settings import OdometrySettings
 from stsf_gym.geometry import bounded
 from stsf_gym.state_history import EstimatorDriver, history_horizon
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, reset_options
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
 START_STD = (0.01, 0.01, 0.005)
@@ -283,7 +283,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def reset(self, *, seed=None, options=None):
         """Reset the env and start the estimator at the commanded start pose; ``options`` as
         the env's, plus ``unknown_start`` (an estimator that localizes globally: ``mcl``)."""
-        options = dict(options or {})
+        options = reset_options(options)
         unknown_start = bool(options.pop("unknown_start", False))  # the wrapper's, not the env's
         obs, info = self.env.reset(seed=seed, options=options or None)
         start = self.env.unwrapped.start_pose  # where the env put the robot (start_pose option,

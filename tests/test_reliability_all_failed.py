@@ -1,5 +1,6 @@
 """A multi-cell command whose cells ALL fail reports the failed cells as it does one failure:
-its files are written, each failed cell is named on stderr, no traceback."""
+its files are written, each failed cell is named on stderr, no traceback; and it exits 1, as a
+run with nothing to score has failed (one failed cell among finished ones exits 0)."""
 
 from __future__ import annotations
 
@@ -47,7 +48,7 @@ def test_a_benchmark_whose_every_cell_fails_reports_them(run_cli, tmp_path):
     out = tmp_path / "out"
     argv = ["benchmark", "--suite", "corridor", "--worlds", "2", "--estimators", RAISING]
     code, err = run_cli(*argv, "--workers", "1", "--out", str(out))
-    assert code == 0  # as with one failed cell among finished ones
+    assert code == 1 and "all 2 cell(s) failed" in err
     _reported(err, cells=2)
     summary = json.loads((out / "corridor" / "results.json").read_text())
     assert summary["rows"] == [] and len(summary["failed"]) == 2
@@ -64,7 +65,7 @@ def test_a_sweep_whose_every_cell_fails_reports_them(run_cli, tmp_path):
     )
     out = tmp_path / "out"
     code, err = run_cli("sweep", str(sweep), "--workers", "1", "--out", str(out))
-    assert code == 0
+    assert code == 1 and "all 2 cell(s) failed" in err
     _reported(err, cells=2)
     summary = json.loads((out / "broken" / "results.json").read_text())
     assert summary["finished"] == 0 and len(summary["failed"]) == 2
@@ -78,7 +79,7 @@ def test_an_accuracy_curve_whose_every_cell_fails_reports_them(run_cli, tmp_path
     out = tmp_path / "out"
     argv = ["accuracy-curve", "--levels", "1,2", "--seeds", "1", "--estimators", "odometry"]
     code, err = run_cli(*argv, "--workers", "1", "--out", str(out))
-    assert code == 0
+    assert code == 1 and "all 3 cell(s) failed" in err
     _reported(err, cells=3)
     assert json.loads((out / "curve.json").read_text())["failed"]
 

@@ -19,6 +19,7 @@ what an agent sees (its sensors, its observation, its action layout) makes it **
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -26,7 +27,6 @@ import numpy as np
 
 from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.envs.config import ConfigError
-from stsf_gym.io import write_json
 from stsf_gym.results.provenance import note_data_files
 
 PREFIX = "pretrained:"
@@ -48,9 +48,23 @@ def seen_source(pose_source: str) -> str:
     return "truth" if pose_source in CPU_DEPENDENT else pose_source
 
 
+#: One part of a shipped agent's name (its suite, its ``<algo>-<pose source>``): a plain file
+#: name, so that no name reaches outside :data:`MODELS` (``..``, ``/``) or into a folder being
+#: shipped (a leading dot).
+NAME_PART = re.compile(r"[A-Za-z0-9][A-Za-z0-9_+-]*")
+
+
+def valid_name(name: str) -> bool:
+    """Whether ``name`` has the form ``pretrained:<suite>/<algo>-<pose source>``, each part a
+    plain :data:`NAME_PART` (says nothing of whether it is shipped)."""
+    parts = name.removeprefix(PREFIX).split("/")
+    return name.startswith(PREFIX) and len(parts) == 2 and all(map(NAME_PART.fullmatch, parts))
+
+
 def names() -> list[str]:
     """Every shipped agent's name, as ``--agents`` takes it."""
-    return [PREFIX + f"{d.parent.name}/{d.name}" for d in sorted(MODELS.glob("*/*")) if d.is_dir()]
+    found = (PREFIX + f"{d.parent.name}/{d.name}" for d in sorted(MODELS.glob("*/*")) if d.is_dir())
+    return [name for name in found if valid_name(name)]
 
 
 def aliases() -> dict[str, str]:
@@ -71,7 +85,7 @@ def folder(name: str) -> Path:
     alias of one)."""
     key = canonical(name).removeprefix(PREFIX)
     path = MODELS / key
-    if not name.startswith(PREFIX) or key.count("/") != 1 or not (path / "agent.json").is_file():
+    if not valid_name(PREFIX + key) or not (path / "agent.json").is_file():
         raise ConfigError(
             f"no shipped agent {name!r}; shipped: {', '.join(names()) or 'none'} "
             "(`stsf-gym agents` lists them)"
@@ -174,38 +188,34 @@ def moved(name: str, seed: int) -> bool:
     return now.shape != then.shape or not np.allclose(now, then, atol=SEEN_TOLERANCE)
 
 
-def ship(training: Path, suite: str) -> str:
-    """Copy the runs of ``training`` (``stsf-gym train --seeds N`` output: ``seed-S/``
-    folders with ``model.zip`` and ``train.json``) into the package as a shipped agent of
-    ``suite``; returns its name."""
-    runs = sorted(Path(training).glob("seed-*"), key=lambda p: int(p.name.split("-")[1]))
-    if not runs or not all((r / "model.zip").is_file() for r in runs):
-        raise ConfigError(f"{training}: no seed-S/model.zip to ship (a `train --seeds N` folder)")
-    records = [json.loads((r / "train.json").read_text()) for r in runs]
-    algo, pose_source = trained_algo(records[0]), records[0]["estimator"]
-    target = MODELS / suite / f"{algo}-{pose_source}"
-    target.mkdir(parents=True, exist_ok=True)
-    seen, val = {}, {}
-    for run, record in zip(runs, records, strict=True):
-        seed = record["seed"]
-        shutil.copyfile(run / "model.zip", target / f"seed-{seed}.zip")
-        write_json(target / f"seed-{seed}.json", record)
-        seen[str(seed)] = seen_inputs(
-            target / f"seed-{seed}.zip", suite, seen_source(pose_source)
-        ).tolist()
-        val[str(seed)] = (record.get("demonstrations") or {}).get("val_success")
-    name = PREFIX + f"{suite}/{algo}-{pose_source}"
-    write_json(
-        target / "agent.json",
-        {
-            "name": name,
-            "algo": algo,
-            "suite": suite,
-            "pose_source": pose_source,
-            "seeds": [r["seed"] for r in records],
-            "val_success": val,
-            "provenance": {str(r["seed"]): r["made_by"] for r in records},
-            "seen": seen,
-        },
+def seen_when_shipped(model: Path, suite: str, pose_source: str) -> np.ndarray:
+    """What an agent trained on ``pose_source`` is recorded seeing (:func:`seen_source`)."""
+    return seen_inputs(model, suite, seen_source(pose_source))
+
+
+def ship(training: Path, suite: str, replace: bool = False) -> str:
+    """Ship the runs of ``training`` (``stsf-gym train --seeds N`` output: ``seed-S/``
+    folders with ``model.zip`` and ``train.json``) as an agent of ``suite``, all checked first
+    and swapped in at once (:mod:`~stsf_gym.agents.pretrained.shipping`); an agent shipped
+    under the same name is replaced only with ``replace``. Returns its name."""
+    from stsf_gym.agents.pretrained.shipping import (
+        build_agent,
+        check_destination,
+        checked_runs,
+        folder_beside,
+        swap_in,
     )
+
+    training = Path(training)
+    records = checked_runs(training, suite)
+    target = MODELS / suite / f"{trained_algo(records[0])}-{records[0]['estimator']}"
+    check_destination(target, replace)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    built = folder_beside(target, "new")
+    name = PREFIX + f"{suite}/{target.name}"
+    try:
+        build_agent(name, training, suite, records, built, seen_when_shipped)
+        swap_in(built, target)
+    finally:
+        shutil.rmtree(built, ignore_errors=True)  # gone once swapped in
     return name

@@ -9,7 +9,7 @@ import time
 import warnings
 from pathlib import Path
 
-from stable_baselines3.common.callbacks import CallbackList, EvalCallback
+from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 from tqdm import tqdm
@@ -22,6 +22,7 @@ from stsf_gym.agents.training.checkpoints import (
 )
 from stsf_gym.agents.training.finetune import FinetunePPO, FreshRollouts
 from stsf_gym.agents.training.progress import RewardProgress
+from stsf_gym.agents.training.resumed_eval import ResumableEvalCallback
 from stsf_gym.agents.training.settings import RunSettings
 from stsf_gym.agents.training.training_envs import EVAL_SEED_OFFSET
 from stsf_gym.agents.training.training_log import EpisodeLog, EvalLog
@@ -43,18 +44,16 @@ def guard_the_clone(model: FinetunePPO, run: RunSettings, out: Path) -> None:
     model.guard(clone, settings.value_warmup_steps, settings.clone_kl_coef)
 
 
-class SameWorldsEval(EvalCallback):
-    """``EvalCallback`` on the same val worlds each time (the env reseeded with ``seed``), as
-    each demonstration round is evaluated, so a learning curve's points are paired; and at
-    the run's multiples of ``eval_freq`` steps, not the session's, so a resumed stage
-    evaluates where an uninterrupted one does."""
+class SameWorldsEval(ResumableEvalCallback):
+    """Evaluation on the same val worlds each time (the env reseeded with ``seed``), as each
+    demonstration round is evaluated, so a learning curve's points are paired; at the run's
+    timesteps, resumed or not (:class:`ResumableEvalCallback`)."""
 
     def __init__(self, seed: int, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.seed = seed
 
     def _on_step(self) -> bool:
-        self.n_calls = self.num_timesteps // self.training_env.num_envs  # the run's count
         if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
             self.eval_env.seed(self.seed)
         return super()._on_step()
@@ -72,6 +71,7 @@ def callbacks(model, run: RunSettings, out: Path, eval_env: VecEnv, bar: tqdm) -
         SameWorldsEval(
             run.seed + EVAL_SEED_OFFSET,
             eval_env,
+            out=out,
             n_eval_episodes=cfg.n_eval_episodes,
             eval_freq=max(cfg.eval_freq // run.n_envs, 1),
             log_path=str(out / "eval"),

@@ -40,6 +40,7 @@ from stsf_gym.agents.training.checkpoints import (
 from stsf_gym.agents.training.finetune import FinetunePPO
 from stsf_gym.agents.training.hyperparams import algorithm_class, policy_kwargs_for_sb3
 from stsf_gym.agents.training.progress import log_round, stage_bars
+from stsf_gym.agents.training.replaced_runs import keep_replaced_run
 from stsf_gym.agents.training.reward_stage import learn_from_reward
 from stsf_gym.agents.training.settings import RunSettings, resolve_run
 from stsf_gym.agents.training.stop_prior import set_stop_prior
@@ -165,6 +166,7 @@ def train(
     finished = finished_summary(out, run.meta["made_by"], run.reward_steps)
     if finished is not None:  # a campaign's rerun: this run is done, its files stay untouched
         return finished
+    keep_replaced_run(out, run.meta["made_by"])  # one finished by other code or settings: kept
     episodes = stage_episodes(run.hp.demonstrations) if run.demonstrating else 0
     bars = stage_bars(episodes, run.reward_steps, run.algo, progress_bar)  # drawn at once
     try:

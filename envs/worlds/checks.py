@@ -82,25 +82,31 @@ def check_world(world: WorldConfig) -> None:
 
 def _check_on_wall(world: WorldConfig, index: int) -> None:
     landmark = world.landmarks[index]
-    distances = [segment_distance(landmark.at, wall) for wall in world.walls]
+    check_board_on_wall(world, landmark.at, landmark.facing_deg, f"landmarks[{index}]")
+
+
+def check_board_on_wall(world: WorldConfig, at, facing_deg: float, key: str) -> None:
+    """A board (a landmark, a decoy) centred at ``at`` on a wall centre line of ``world``,
+    facing straight out of it; :class:`FieldError` naming ``key.at`` or ``key.facing_deg``."""
+    distances = [segment_distance(at, wall) for wall in world.walls]
     nearest = int(np.argmin(distances))
     require(
         distances[nearest] <= ON_WALL_TOLERANCE,
-        f"landmarks[{index}].at",
+        f"{key}.at",
         f"must lie on a wall centre line (the nearest, walls[{nearest}], is "
-        f"{distances[nearest]:.3f} m away), got {list(landmark.at)}",
+        f"{distances[nearest]:.3f} m away), got {list(at)}",
     )
     squares = []
     for wall, distance in zip(world.walls, distances, strict=True):
         if distance <= ON_WALL_TOLERANCE:
             along = math.atan2(wall[3] - wall[1], wall[2] - wall[0])
             squares += [math.degrees(math.remainder(along + s, math.tau)) for s in SIDES]
-    off = min(abs(math.remainder(landmark.facing_deg - s, 360.0)) for s in squares)
+    off = min(abs(math.remainder(facing_deg - s, 360.0)) for s in squares)
     require(
         off <= SQUARE_TOLERANCE_DEG,
-        f"landmarks[{index}].facing_deg",
+        f"{key}.facing_deg",
         f"must face straight out of its wall ({' or '.join(f'{s:g}' for s in squares)}), "
-        f"got {landmark.facing_deg:g}",
+        f"got {facing_deg:g}",
     )
 
 

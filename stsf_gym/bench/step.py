@@ -29,20 +29,23 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
+#: The suite's task as the ids had it before they carried the STOP entry (and as a baseline
+#: checkout's ids may still have it): random actions would declare arrival at every other step
+NO_STOP = {"task": {"stop_action": False}}
 #: case -> (env id, env overrides, driver)
 CASES: dict[str, tuple[str, dict, str]] = {
     "truth, camera off, follower": (
         "stsf_gym/Suite-Corridor-Truth-v0",
-        {"camera": {"enabled": False}},
+        {"camera": {"enabled": False}, **NO_STOP},
         "follower",
     ),
     "truth, camera off, random": (
         "stsf_gym/Suite-Corridor-Truth-v0",
-        {"camera": {"enabled": False}},
+        {"camera": {"enabled": False}, **NO_STOP},
         "random",
     ),
-    "stsf, fast camera, follower": ("stsf_gym/Suite-Corridor-STSF-v0", {}, "follower"),
-    "stsf, fast camera, random": ("stsf_gym/Suite-Corridor-STSF-v0", {}, "random"),
+    "stsf, fast camera, follower": ("stsf_gym/Suite-Corridor-STSF-v0", NO_STOP, "follower"),
+    "stsf, fast camera, random": ("stsf_gym/Suite-Corridor-STSF-v0", NO_STOP, "random"),
 }
 #: A step's stages, each the cumulative time of a function as both this code and a baseline
 #: checkout (from commit a543992 on) name it (file, function; its outermost call where several
@@ -67,6 +70,7 @@ STAGES: dict[str, tuple[str, str]] = {
 SEGMENT_STEPS = 100
 #: The package folders of a checkout, as ``pyproject.toml`` installs them into ``stsf_gym``.
 MAPPED_FOLDERS = ("envs", "agents", "configs")
+BASELINE_PROBE_S = 120  # s: a baseline interpreter importing stsf_gym (numba, torch) cold
 
 
 def measure(
@@ -235,15 +239,30 @@ def step_section(
 
 
 def check_baseline(baseline: Path) -> None:
-    """Refuse a ``--baseline`` that is neither a Python interpreter nor a checkout."""
-    if baseline.is_file() and os.access(baseline, os.X_OK):
-        return
-    if not (baseline / "stsf_gym" / "__init__.py").is_file():
-        from stsf_gym.envs.config import ConfigError
+    """Refuse a ``--baseline`` that is neither a Python interpreter that imports ``stsf_gym``
+    nor a checkout (``stsf_gym/`` and the folders :data:`MAPPED_FOLDERS`), naming what it
+    lacks, before any case runs."""
+    from stsf_gym.envs.config import ConfigError
 
+    if baseline.is_file() and os.access(baseline, os.X_OK):
+        probe = [str(baseline), "-c", "import stsf_gym"]
+        try:
+            imported = subprocess.run(probe, capture_output=True, timeout=BASELINE_PROBE_S)
+        except (OSError, subprocess.TimeoutExpired) as err:
+            raise ConfigError(f"--baseline {baseline}: cannot run it as Python ({err})") from None
+        if imported.returncode != 0:
+            raise ConfigError(
+                f"--baseline {baseline}: not a Python interpreter with stsf-gym installed "
+                f"(`{baseline} -c 'import stsf_gym'` exited {imported.returncode})"
+            )
+        return
+    missing = [
+        name for name in ("stsf_gym/__init__.py", *MAPPED_FOLDERS) if not (baseline / name).exists()
+    ]
+    if missing:
         raise ConfigError(
             f"--baseline {baseline}: neither a Python interpreter nor a checkout of stsf-gym "
-            "(no stsf_gym/__init__.py in it)"
+            f"(it lacks {', '.join(missing)})"
         )
 
 

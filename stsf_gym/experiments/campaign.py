@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from stsf_gym.experiments.cache import Crash, JobsFailed
+from stsf_gym.validation import ConfigError
 
 #: The arguments of :func:`~stsf_gym.agents.training.train.train` a campaign's runs share.
 Job = dict[str, Any]
@@ -52,6 +53,8 @@ def run_campaign(
     exits 1; a rerun retries them)."""
     done: dict[int, dict] = {}
     if backend == "local":
+        if address is not None:  # as every other command: not ignored
+            raise ConfigError("--address is only for --backend ray (a campaign on a cluster)")
         for index, job in enumerate(jobs):
             done[index] = train_job(job)
             if on_done is not None:

@@ -17,6 +17,7 @@ coverage), ``leaderboard.md`` and ``leaderboard.png``.
 from __future__ import annotations
 
 import itertools
+import json
 from pathlib import Path
 
 from stsf_gym.agents.registry import trained_on
@@ -100,6 +101,8 @@ def benchmark(
         test_worlds, range(seed, seed + worlds), f"--seed {seed} --worlds {worlds}"
     )
     seeds = list(range(seed, seed + worlds))
+    request = {"agents": list(agents), "estimators": estimators, "worlds": worlds, "seed": seed}
+    check_same_request(out / "results.json", request)
     cells = benchmark_cells(loaded, list(agents), estimators, seeds)
     if record:
         cells = [{**cell, "record": record} for cell in cells]
@@ -122,12 +125,34 @@ def benchmark(
     }
     summary = summarise_benchmark(loaded, cells, results, own_sources)
     summary["worlds"] = worlds_summary(loaded, seeds)
+    summary["request"] = request
     summary["provenance"] = provenance(by_digest(configs), seeds)
     check_rows(summary["rows"])
     write_json(out / "results.json", summary)
     write_atomic(out / "leaderboard.md", leaderboard_markdown(summary))
     summary["figures"] = [str(plot_leaderboard(summary, out / "leaderboard.png"))]
     return summary
+
+
+def check_same_request(results: Path, request: dict) -> None:
+    """Refuse to write over ``results`` (an earlier run's ``results.json``) the report of
+    another benchmark: other agents, pose sources, worlds or first seed. The same request
+    resumes or reruns it; a report from before requests were recorded is not compared."""
+    if not results.is_file():
+        return
+    try:
+        earlier = json.loads(results.read_text()).get("request")
+    except (ValueError, AttributeError):
+        return  # unreadable: nothing to keep; the run writes it anew
+    if earlier is not None and earlier != request:
+        differ = [key for key in request if earlier.get(key) != request[key]]
+        said = "; ".join(
+            f"{key} {earlier.get(key)!r} there, {request[key]!r} now" for key in differ
+        )
+        raise ConfigError(
+            f"{results.parent} holds the report of another benchmark ({said}); give another "
+            "--out (its cells/ folder may be copied there: finished cells are reused)"
+        )
 
 
 def summarise_benchmark(

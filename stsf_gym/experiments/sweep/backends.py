@@ -9,6 +9,7 @@ the run's provenance lists the code that ran on either backend.
 
 from __future__ import annotations
 
+import socket
 from collections.abc import Callable, Iterator
 
 from stsf_gym.envs.config import ConfigError
@@ -17,6 +18,7 @@ from stsf_gym.experiments.sweep.cells import failure
 from stsf_gym.results.provenance import run_reporting_modules, worker_result
 
 BACKENDS = ("local", "ray")
+RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head answers a TCP connection in well under this
 
 
 def make_runner(
@@ -31,8 +33,27 @@ def make_runner(
             raise ConfigError("--address is only for --backend ray")
         return process_runner(workers)
     if backend == "ray":
+        check_ray_address(address)
         return ray_runner(address, workers, cpus_per_job)
     raise ConfigError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
+
+
+def check_ray_address(address: str | None, timeout_s: float = RAY_CONNECT_TIMEOUT_S) -> None:
+    """Fail at once when ``address`` names a host and port (``head:6379``,
+    ``ray://head:10001``) where nothing answers within ``timeout_s``: ``ray.init`` would retry
+    there for minutes without a word. ``auto``, ``local`` and None are Ray's to resolve."""
+    if address in (None, "auto", "local"):
+        return
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not (sep and host and port.isdigit()):
+        raise ConfigError(f"--address {address!r}: give host:port or ray://host:port (or auto)")
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout_s).close()
+    except OSError as err:
+        raise ConfigError(
+            f"--address {address}: nothing answers there ({err.strerror or err}); start the "
+            "cluster (`ray start --head`) or leave --address out for a local Ray"
+        ) from None
 
 
 def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int = 1) -> Runner:

@@ -158,10 +158,17 @@ def _with_run_folder(cell: dict, out: Path) -> dict:
 
 
 def forget_failures(cells: list[dict], folder: Path) -> None:
-    """Delete the files of failed cells, so that this run retries them."""
+    """Delete the files of failed cells, and of cells whose file cannot be read (cut short by
+    a kill, edited), so that this run redoes them."""
     for cell in cells:
         file = folder / f"{cell_name(cell)}.json"
-        if file.is_file() and "error" in json.loads(file.read_text())["result"]:
+        if not file.is_file():
+            continue
+        try:
+            failed = "error" in json.loads(file.read_text())["result"]
+        except (ValueError, KeyError, TypeError):  # not JSON, or not a cell's record
+            failed = True
+        if failed:
             file.unlink()
 
 

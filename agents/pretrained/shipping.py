@@ -1,0 +1,151 @@
+"""``stsf-gym agents --ship``: a training folder shipped whole, checked, and swapped in at once.
+
+Every check runs before anything in the package changes: each ``seed-S/`` finished
+(:func:`~stsf_gym.agents.training_folder.seed_runs`), each model readable to its weights, and
+each model's own metadata (algorithm, pose source, suite, seed, the fingerprint of its settings)
+agreeing with its ``train.json``, with the other seeds and with ``--suite``. The agent is then
+built in a temporary folder beside its destination and renamed into place; an agent already
+shipped under that name is replaced only when asked (``replace``), and then as a whole (the old
+folder renamed aside, the new one renamed in, the old one removed): a failure at any point
+leaves the shipped agent as it was, never half replaced, and no seed of the old agent behind.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import shutil
+from pathlib import Path
+
+from stsf_gym.agents.sb3_agent import trained_algo
+from stsf_gym.agents.training_folder import MODEL, seed_runs
+from stsf_gym.io import check_folder, write_json
+from stsf_gym.validation import ConfigError
+
+#: What a model's ``stsf_meta`` and its run's ``train.json`` must both say, and alike.
+AGREED_KEYS = ("algo", "estimator", "suite", "seed", "made_by")
+#: What every seed of one shipped agent shares.
+SHARED_KEYS = ("algo", "estimator", "suite")
+
+
+def checked_runs(training: Path, suite: str) -> list[dict]:
+    """The ``train.json`` record of each seed of ``training``, checked against its model and
+    ``suite`` (:data:`AGREED_KEYS`, :data:`SHARED_KEYS`); ConfigError naming the first
+    disagreement."""
+    from stsf_gym.agents.sb3_agent import check_weights, model_metadata
+
+    runs = seed_runs(training)
+    if not runs:
+        raise ConfigError(f"{training}: no seed-S/{MODEL} to ship (a `train --seeds N` folder)")
+    records = []
+    for seed, run in runs:
+        record = _train_record(run / "train.json")
+        meta = model_metadata(check_weights(run / MODEL))
+        for key in AGREED_KEYS:
+            if record.get(key) != meta.get(key):
+                raise ConfigError(
+                    f"{run}: train.json says {key} {record.get(key)!r}, its model "
+                    f"{meta.get(key)!r}; a shipped agent is what its models are"
+                )
+        if meta["seed"] != seed:
+            raise ConfigError(f"{run}: its model was trained with seed {meta['seed']}, not {seed}")
+        if meta["suite"] != suite:
+            raise ConfigError(
+                f"{run}: trained on suite {meta['suite']!r}, not --suite {suite!r}"
+                if meta["suite"]
+                else f"{run}: trained on world {meta['world']!r}, not on suite {suite!r}"
+            )
+        records.append(record)
+    first = records[0]
+    for record in records[1:]:
+        for key in SHARED_KEYS:
+            if record[key] != first[key]:
+                raise ConfigError(
+                    f"{training}: seed {record['seed']} has {key} {record[key]!r}, seed "
+                    f"{first['seed']} {first[key]!r}; one shipped agent is one kind of run"
+                )
+    return records
+
+
+def _train_record(path: Path) -> dict:
+    """A run's ``train.json``, readable."""
+    try:
+        record = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ConfigError(f"{path} not found: the run is unfinished or not from `train`") from None
+    except (OSError, ValueError) as err:
+        raise ConfigError(f"{path} cannot be read as JSON: {err}") from None
+    if not isinstance(record, dict):
+        raise ConfigError(f"{path} holds no train.json record (a mapping)")
+    return record
+
+
+def check_destination(target: Path, replace: bool) -> None:
+    """Fail before any work when ``target`` (a shipped agent's folder) exists and ``replace``
+    was not asked for, or its suite folder cannot be written."""
+    if target.exists() and not replace:
+        raise ConfigError(
+            f"an agent is already shipped as {target.parent.name}/{target.name} ({target}); "
+            "add --replace to replace it whole"
+        )
+    check_folder(target.parent, "the shipping destination")
+
+
+def folder_beside(target: Path, tag: str) -> Path:
+    """A new, empty folder beside ``target`` (``.<name>.<tag>.<random>``), made as ``mkdir``
+    makes one (mode 0o777 less the user's umask; ``tempfile.mkdtemp`` makes it 0o700, which a
+    shipped agent renamed from it would keep)."""
+    while True:
+        folder = target.parent / f".{target.name}.{tag}.{secrets.token_hex(4)}"
+        try:
+            folder.mkdir()
+            return folder
+        except FileExistsError:
+            continue
+
+
+def swap_in(built: Path, target: Path) -> None:
+    """Put folder ``built`` at ``target`` by renames: the old agent (if any) set aside first,
+    removed only once the new one is in place; restored if the second rename fails."""
+    aside = None
+    if target.exists():
+        aside = folder_beside(target, "old")
+        os.replace(target, aside / target.name)
+    try:
+        os.replace(built, target)
+    except BaseException:
+        if aside is not None:
+            os.replace(aside / target.name, target)
+            shutil.rmtree(aside, ignore_errors=True)
+        raise
+    if aside is not None:
+        shutil.rmtree(aside, ignore_errors=True)
+
+
+def build_agent(
+    name: str, training: Path, suite: str, records: list[dict], folder: Path, seen_inputs
+) -> None:
+    """Write shipped agent ``name`` into the empty ``folder``: per seed its model and
+    ``train.json``, and ``agent.json`` (``seen_inputs(model, suite, pose source)`` the inputs
+    each model sees)."""
+    algo, pose_source = trained_algo(records[0]), records[0]["estimator"]
+    seen, val = {}, {}
+    for record in records:
+        seed = record["seed"]
+        model = folder / f"seed-{seed}.zip"
+        shutil.copyfile(training / f"seed-{seed}" / MODEL, model)
+        write_json(folder / f"seed-{seed}.json", record)
+        seen[str(seed)] = seen_inputs(model, suite, pose_source).tolist()
+        val[str(seed)] = (record.get("demonstrations") or {}).get("val_success")
+    summary = {
+        "name": name,
+        "algo": algo,
+        "suite": suite,
+        "pose_source": pose_source,
+        "seeds": [r["seed"] for r in records],
+        "val_success": val,
+        "provenance": {str(r["seed"]): r["made_by"] for r in records},
+        "seen": seen,
+    }
+    write_json(folder / "agent.json", summary)
