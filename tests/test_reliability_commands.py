@@ -15,7 +15,7 @@ import pytest
 from stsf_gym.agents import pretrained
 from stsf_gym.experiments.sweep.run import cell_name, forget_failures
 
-SHIPPED = pretrained.MODELS / "corridor" / "ppo-truth"  # trained on the corridor suite, truth
+SHIPPED = pretrained.MODELS / "corridor" / "dagger-truth"  # trained on the corridor suite, truth
 
 
 def finished_run(out: Path, with_record: bool = True) -> dict[str, bytes]:

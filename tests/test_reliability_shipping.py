@@ -17,8 +17,8 @@ import pytest
 from stsf_gym.agents import pretrained
 from stsf_gym.validation import ConfigError
 
-SOURCE = pretrained.MODELS / "corridor" / "ppo-truth"  # 3 seeds, trained on the corridor suite
-STSF = pretrained.MODELS / "corridor" / "ppo-stsf"  # seed 0, the same suite on STSF
+SOURCE = pretrained.MODELS / "corridor" / "dagger-truth"  # 3 seeds, trained on the corridor suite
+STSF = pretrained.MODELS / "corridor" / "dagger-stsf"  # seed 0, the same suite on STSF
 
 
 def training_folder(root: Path, seeds=(0, 1), source: Path = SOURCE) -> Path:
@@ -50,9 +50,9 @@ def test_a_ship_writes_the_agent_whole_and_its_listing(models, tmp_path, run_cli
         "agents", "--ship", str(training_folder(tmp_path / "t")), "--suite", "corridor"
     )
     assert code == 0, err
-    record = json.loads((models / "corridor" / "ppo-truth" / "agent.json").read_text())
+    record = json.loads((models / "corridor" / "dagger-truth" / "agent.json").read_text())
     assert record["seeds"] == [0, 1] and set(record["seen"]) == {"0", "1"}
-    assert sorted(p.name for p in (models / "corridor").iterdir()) == ["ppo-truth"]  # no temp
+    assert sorted(p.name for p in (models / "corridor").iterdir()) == ["dagger-truth"]  # no temp
 
 
 def test_a_ship_over_a_shipped_name_is_refused_without_replace(models, tmp_path, run_cli):
@@ -64,7 +64,7 @@ def test_a_ship_over_a_shipped_name_is_refused_without_replace(models, tmp_path,
     code, err = run_cli(
         "agents", "--ship", str(training_folder(tmp_path / "b", (2,))), "--suite", "corridor"
     )
-    assert code == 2 and "already shipped as corridor/ppo-truth" in err and "--replace" in err
+    assert code == 2 and "already shipped as corridor/dagger-truth" in err and "--replace" in err
     assert shipped_files(models) == before
 
 
@@ -79,7 +79,7 @@ def test_a_replacing_ship_leaves_no_orphan_seeds(models, tmp_path, run_cli):
     ]
     code, err = run_cli("agents", *argv)
     assert code == 0, err
-    folder = models / "corridor" / "ppo-truth"
+    folder = models / "corridor" / "dagger-truth"
     assert sorted(p.name for p in folder.iterdir()) == ["agent.json", "seed-2.json", "seed-2.zip"]
     assert json.loads((folder / "agent.json").read_text())["seeds"] == [2]
 
@@ -109,7 +109,7 @@ def test_a_ship_failing_part_way_leaves_the_shipped_agent_as_it_was(
     with pytest.raises(OSError, match="disk gone"):
         run_cli("agents", *argv)
     assert shipped_files(models) == before
-    assert sorted(p.name for p in (models / "corridor").iterdir()) == ["ppo-truth"]
+    assert sorted(p.name for p in (models / "corridor").iterdir()) == ["dagger-truth"]
 
 
 @pytest.mark.parametrize(
@@ -270,4 +270,4 @@ def test_a_shipped_agents_folder_is_readable_as_any_other(models, tmp_path, run_
         )
     finally:
         os.umask(umask)
-    assert (models / "corridor" / "ppo-truth").stat().st_mode & 0o777 == 0o755
+    assert (models / "corridor" / "dagger-truth").stat().st_mode & 0o777 == 0o755

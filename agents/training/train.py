@@ -166,6 +166,7 @@ def train(
     finished = finished_summary(out, run.meta["made_by"], run.reward_steps)
     if finished is not None:  # a campaign's rerun: this run is done, its files stay untouched
         return finished
+    check_training_env(run.world, run.estimator, run.train_env, run.seed)  # before any output
     keep_replaced_run(out, run.meta["made_by"])  # one finished by other code or settings: kept
     episodes = stage_episodes(run.hp.demonstrations) if run.demonstrating else 0
     bars = stage_bars(episodes, run.reward_steps, run.algo, progress_bar)  # drawn at once
@@ -183,7 +184,6 @@ def run_stages(run: RunSettings, out: Path, bars: tuple) -> dict:
     import torch
 
     torch.set_num_threads(1)
-    check_training_env(run.world, run.estimator, run.train_env, run.seed)
     out.mkdir(parents=True, exist_ok=True)
     machine = {"reference_ms_before": reference_ms(), "load_average_before": os.getloadavg()}
     train_env = make_vec_env(run.n_envs, out, "train", **run.env_spec(True))
