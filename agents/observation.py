@@ -2,7 +2,8 @@
 
 :class:`PolicyObservation` sits on top of a :class:`stsf_gym.wrappers.PoseEstimateWrapper`
 and turns its ``Dict`` observation into one flat ``Box``. Everything comes from the pose
-estimate, the sensors and the world's path (public map knowledge), never from ``info``.
+estimate, the sensors, the world's path and the task's goals in the observation (public map
+knowledge), never from ``info`` or the env's task.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from stsf_gym.validation import Positive
 
 STD_FLOOR, STD_CEIL = 1e-3, 10.0  # clip range of a standard deviation before its log
 TANGENT_STEP = 0.1  # m, arc length over which the path's direction is measured
+TASK_KEYS = ("goal", "goal_arc", "goals_left", "goal_count")  # read from the observation
 FEATURE_LIMIT = 100.0  # every entry is clipped to +-this (only far-off lookahead points reach it)
 
 
@@ -75,8 +77,11 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         # recorded as plain values, so the env's spec survives EnvSpec.to_json/from_json
         gym.utils.RecordConstructorArgs.__init__(self, config=asdict(config))
         gym.ObservationWrapper.__init__(self, env)
-        if "pose" not in env.observation_space.spaces:
+        missing = sorted({"pose", *TASK_KEYS} - set(env.observation_space.spaces))
+        if "pose" in missing:
             raise ValueError("PolicyObservation needs obs['pose']: wrap in PoseEstimateWrapper")
+        if missing:
+            raise ValueError(f"PolicyObservation needs the task's obs keys {missing}")
         self.config = config
         cfg = env.unwrapped.config
         self._world, self.path = cfg.world, Polyline(cfg.world.path)
@@ -113,10 +118,8 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         position_var = np.diag(to_robot @ cov[:2, :2] @ to_robot.T)
         stds = np.sqrt(np.maximum([*position_var, cov[2, 2]], 0.0))
         low, high = self.sonar_range
-        task = self.env.unwrapped.task
-        goal = (task.goal - (x, y)) @ to_robot.T
-        goal_arc = task.goal_arcs[min(task.goal_index, len(task.goals) - 1)]
-        left = goal_arc - here
+        goal = (np.asarray(obs["goal"], dtype=float) - (x, y)) @ to_robot.T
+        left = float(obs["goal_arc"][0]) - here
         horizon = self.config.goal_horizon
         if horizon is not None and self.config.far_goal == "route" and left > horizon:
             goal = (self.path.point_at(here + horizon) - (x, y)) @ to_robot.T
@@ -129,7 +132,7 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
                 points.ravel(),
                 [left / self.config.scale],
                 goal / self.config.scale,
-                [task.goals_left / len(task.goals)],
+                [int(obs["goals_left"][0]) / int(obs["goal_count"][0])],
                 [math.sin(heading_error), math.cos(heading_error)],
                 np.log10(np.clip(stds, STD_FLOOR, STD_CEIL)) / 3.0,
                 (np.asarray(obs["sonar"], dtype=float) - low) / (high - low),

@@ -88,6 +88,18 @@ class CorridorEnv(gym.Env):
     - ``encoders_time``: ``Box((1,))``, the end of the interval the tick deltas cover (the
       step's end).
 
+    The task's public map knowledge (:meth:`stsf_gym.envs.task.PathTask.observation`), as the
+    task stands after the step (a goal reached at it is already the next one):
+
+    - ``goal``: ``Box(-1e4, 1e4, (2,), float64)``, the current goal ``[x, y]`` (world frame,
+      m): the route's next goal (``declare``), or the path's end (``reach``); the last goal
+      once every goal is reached;
+    - ``goal_arc``: ``Box(0, 1e9, (1,), float64)``, that goal's arc length along the path (m);
+    - ``goals_left``: ``Box(0, 2**31 - 1, (1,), int64)``, the goals still to reach or declare
+      (0 once every goal is reached);
+    - ``goal_count``: ``Box(0, 2**31 - 1, (1,), int64)``, the goals of this episode's route
+      (one on a training leg).
+
     ## Reward
     ``reward.progress`` per metre gained along the path (``declare``: up to the current goal;
     past it nothing), ``reward.time`` per second,
@@ -324,6 +336,7 @@ class CorridorEnv(gym.Env):
                 "sonar_time": spaces.Box(0.0, end, (cfg.sonar.count,), np.float64),
                 "encoders": spaces.Box(-self._max_ticks, self._max_ticks, (2,), np.int64),
                 "encoders_time": spaces.Box(0.0, end, (1,), np.float64),
+                **PathTask.observation_space(),
             }
         )
 
@@ -463,6 +476,7 @@ class CorridorEnv(gym.Env):
             "sonar_time": self._sonar_time.copy(),
             "encoders": bounded(ticks, -self._max_ticks, self._max_ticks).astype(np.int64),
             "encoders_time": np.array([self._time]),
+            **self.task.observation(),
         }
 
     def _camera_stream(self) -> np.random.Generator:

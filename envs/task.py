@@ -8,8 +8,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from gymnasium import spaces
 
 from stsf_gym.envs.config import RewardConfig, TaskConfig, WorldConfig
+from stsf_gym.validation import WORLD_EXTENT_M
+
+MAX_GOALS = 2**31 - 1  # the bound of the goal counts' Box: a route lists any number of goals
+MAX_ARC_M = 1e9  # the goal's arc length's bound: beyond any path (finite, as checkers ask)
 
 
 class Polyline:
@@ -152,6 +157,31 @@ class PathTask:
     def goals_left(self) -> int:
         """Goals of the route still to declare (0 once every goal is reached)."""
         return len(self.goals) - self.goal_index
+
+    @staticmethod
+    def observation_space() -> dict[str, spaces.Space]:
+        """The spaces of :meth:`observation`: a goal's position is a world coordinate, its arc
+        length any length of path (float64, as the task holds them, so a policy reading them
+        computes the same numbers it did from the task itself)."""
+        count = spaces.Box(0, MAX_GOALS, (1,), np.int64)
+        return {
+            "goal": spaces.Box(-WORLD_EXTENT_M, WORLD_EXTENT_M, (2,), np.float64),
+            "goal_arc": spaces.Box(0.0, MAX_ARC_M, (1,), np.float64),
+            "goals_left": count,
+            "goal_count": count,
+        }
+
+    def observation(self) -> dict[str, np.ndarray]:
+        """The task's public map knowledge: the current goal (world frame, m; the last one once
+        every goal is reached), its arc length along the path (m), the goals still to declare
+        and the goals of this episode's route."""
+        index = min(self.goal_index, len(self.goals) - 1)
+        return {
+            "goal": self.goals[index].copy(),
+            "goal_arc": np.array([self.goal_arcs[index]]),
+            "goals_left": np.array([self.goals_left], np.int64),
+            "goal_count": np.array([len(self.goals)], np.int64),
+        }
 
     def distance_to_goal(self, xy: np.ndarray) -> float:
         """Distance (m) from ``xy`` to the current goal."""

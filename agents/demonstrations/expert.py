@@ -4,8 +4,8 @@
 and writes the follower's action for the state just reached into ``info["expert_action"]``
 at every reset and step, whoever drives. The follower is privileged (it sees the true pose from
 ``info``, as a teacher may: Chen et al. 2019, "Learning by cheating") and heads for the task's
-current goal, wherever the driver's own stops left it, so it labels any state the learner
-reaches: DAgger's requirement.
+current goal (read from the observation: ``goal_count`` minus ``goals_left``), wherever the
+driver's own stops left it, so it labels any state the learner reaches: DAgger's requirement.
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ class ExpertLabel(gym.Wrapper):
         return obs, reward, terminated, truncated, self._label(obs, info)
 
     def _label(self, obs: dict, info: dict) -> dict:
-        self.expert.follow_goal(self.env.unwrapped.task.goal_index)
+        self.expert.follow_goal(int(obs["goal_count"][0]) - int(obs["goals_left"][0]))
         info["expert_action"] = self.expert.act(info["true_pose"], obs["sonar"])
         if self.features is not None:
             self._samples.append((self.features(obs), info["expert_action"]))

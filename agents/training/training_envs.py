@@ -16,7 +16,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 
 import stsf_gym
 from stsf_gym.agents.demonstrations.expert import ExpertLabel
-from stsf_gym.agents.observation import ObservationConfig
+from stsf_gym.agents.observation import ObservationConfig, PolicyObservation
 from stsf_gym.agents.policy_stack import policy_stack
 from stsf_gym.agents.training.worker_envs import FailFastSubprocVecEnv
 from stsf_gym.envs.generated_env import generated_label, parse_world
@@ -67,10 +67,10 @@ def make_training_env(
     if in_worker:  # Ctrl-C is the parent's to handle: it saves a checkpoint, then closes us
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     estimating = make_episode_env(world, estimator, env, {})
-    labelled = ExpertLabel(estimating) if expert else estimating
-    policy_env = policy_stack(labelled, observation, decision_steps)
+    labelled = estimating
     if expert:  # the expert labels every control step in the policy's features
-        labelled.features = policy_env.get_wrapper_attr("observation")
+        labelled = ExpertLabel(estimating, PolicyObservation(estimating, observation).observation)
+    policy_env = policy_stack(labelled, observation, decision_steps)
     fresh = not Path(f"{monitor_file}.{Monitor.EXT}").is_file()
     monitored = Monitor(
         policy_env, monitor_file, info_keywords=("is_success",), override_existing=fresh
