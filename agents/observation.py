@@ -55,10 +55,11 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     - ``2 K`` lookahead points: ``(x, y)`` of the path points ``lookahead`` metres ahead of the
       path point nearest the estimated pose, in the estimated robot frame, over ``scale``;
     - the path length left to the current goal (negative past it), over ``scale``;
-    - the current goal of the route (the task's, ``declare``: where to stop next) in the
+    - the current goal of the route (``obs["goal"]``, ``declare``: where to stop next) in the
       estimated robot frame, over ``scale`` (Habitat's GPS+compass goal vector, from the
-      estimate), and the share of the route's goals still to declare; the path left is cut
-      at ``goal_horizon`` and the goal vector beyond it as ``far_goal`` says;
+      estimate), and the share of the route's goals still to declare (``obs["goals_left"]``
+      over ``obs["goal_count"]``); the path left (to ``obs["goal_arc"]``) is cut at
+      ``goal_horizon`` and the goal vector beyond it as ``far_goal`` says;
     - ``sin`` and ``cos`` of the heading error (path direction minus estimated yaw);
     - ``log10`` of the standard deviations of the estimate along and across the robot's
       heading and of its yaw (each clipped to 1 mm..10 m or rad), over 3;
