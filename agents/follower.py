@@ -85,8 +85,12 @@ class PathFollower:
         self._goal, self._holding, self._declared = 0, 0, False
 
     @classmethod
-    def for_env(cls, env, config: str | Path | None = None, **overrides) -> PathFollower:
-        """A follower of ``env``'s world path, scaled to its action space, reading its sonar."""
+    def for_env(
+        cls, env, config: str | Path | None = None, *, goals: list[float] | None = None, **overrides
+    ) -> PathFollower:
+        """A follower of ``env``'s world path, scaled to its action space, reading its sonar;
+        under ``declare`` it stops at ``goals`` (arc lengths; default: the task's route, or this
+        episode's training leg's)."""
         env_cfg = env.unwrapped.config
         cfg = load_follower_config(config, **overrides)
         avoidance = None
@@ -97,13 +101,16 @@ class PathFollower:
                 env_cfg.robot.body_radius,
                 env_cfg.sonar.max_range,
             )
-        goals, hold = None, 0
         stop_action = "stop" in env.get_wrapper_attr("action_layout")
-        if env_cfg.task.protocol == "declare":
+        declare = env_cfg.task.protocol == "declare"
+        if not declare:
+            goals = None
+        elif goals is None:
             task = env.unwrapped.task  # the route's goals, or this episode's training leg's
             goals = [task.path.project(goal) for goal in task.goals]
-            if not stop_action:
-                hold = math.ceil(env_cfg.task.stop_seconds / env_cfg.sim.control_dt - 1e-9) + 1
+        hold = 0
+        if declare and not stop_action:
+            hold = math.ceil(env_cfg.task.stop_seconds / env_cfg.sim.control_dt - 1e-9) + 1
         return cls(
             env_cfg.world.path,
             cfg,
@@ -115,10 +122,11 @@ class PathFollower:
             stop_action,
         )
 
-    def follow_goal(self, index: int) -> None:
-        """Head for goal ``index`` of the route (an expert labelling another agent's states
-        follows the task's current goal, wherever that agent's own stops left it)."""
-        self._goal, self._holding = index, 0
+    def head_for(self, goal_arc: float | None) -> None:
+        """Head for the goal ``goal_arc`` metres along the path (None: no goal left), afresh: an
+        expert labelling another agent's states follows the task's current goal as the
+        observation gives it, wherever that agent's own stops left it."""
+        self.goals, self._goal, self._holding = [] if goal_arc is None else [goal_arc], 0, 0
 
     def explore(self, sonar: np.ndarray | None = None) -> np.ndarray:
         """Action [v, w] that wanders without a pose: ahead, around what the sonar sees."""

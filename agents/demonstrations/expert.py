@@ -4,8 +4,8 @@
 and writes the follower's action for the state just reached into ``info["expert_action"]``
 at every reset and step, whoever drives. The follower is privileged (it sees the true pose from
 ``info``, as a teacher may: Chen et al. 2019, "Learning by cheating") and heads for the task's
-current goal (read from the observation: ``goal_count`` minus ``goals_left``), wherever the
-driver's own stops left it, so it labels any state the learner reaches: DAgger's requirement.
+current goal (the observation's ``goal_arc``, while ``goals_left``), wherever the driver's
+own stops left it, so it labels any state the learner reaches: DAgger's requirement.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ class ExpertLabel(gym.Wrapper):
     def reset(self, *, seed=None, options=None):
         """Reset, and label the first state with a follower of the episode's goals."""
         obs, info = self.env.reset(seed=seed, options=options)
-        self.expert = PathFollower.for_env(self.env)  # the episode's world and goals
+        self.expert = PathFollower.for_env(self.env, goals=[])  # goals: the observation's
         return obs, self._label(obs, info)
 
     def step(self, action):
@@ -55,7 +55,7 @@ class ExpertLabel(gym.Wrapper):
         return obs, reward, terminated, truncated, self._label(obs, info)
 
     def _label(self, obs: dict, info: dict) -> dict:
-        self.expert.follow_goal(int(obs["goal_count"][0]) - int(obs["goals_left"][0]))
+        self.expert.head_for(float(obs["goal_arc"][0]) if obs["goals_left"][0] else None)
         info["expert_action"] = self.expert.act(info["true_pose"], obs["sonar"])
         if self.features is not None:
             self._samples.append((self.features(obs), info["expert_action"]))
