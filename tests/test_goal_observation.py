@@ -1,13 +1,16 @@
 """The task's public map knowledge in the observation (``goal``, ``goal_arc``, ``goals_left``,
-``goal_count``), and the policy's input read from it alone, never from ``env.unwrapped.task``."""
+``goal_count``), and the policy's input and the DAgger expert's goal read from it alone, never
+from ``env.unwrapped.task``."""
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
 import stsf_gym  # noqa: F401 - registers the ids
+from stsf_gym.agents.demonstrations.expert import ExpertLabel
 from stsf_gym.agents.observation import PolicyObservation
 from stsf_gym.agents.registry import make_agent
+from stsf_gym.envs.task import Polyline
 
 TWO_GOALS = ("stsf_gym/Suite-Sparse-Truth-v0", 1)  # (id, seed): a generated route of two goals
 
@@ -85,3 +88,20 @@ def test_an_observation_without_the_task_keys_is_refused(episode):
     keys = [k for k in env.observation_space.spaces if k not in ("goal_arc", "goal_count")]
     with pytest.raises(ValueError, match=r"task's obs keys \['goal_arc', 'goal_count'\]"):
         PolicyObservation(NoTask(env, keys))
+
+
+class GoalAtStart(gym.ObservationWrapper):
+    """Says the current goal lies where the robot was put, whatever the task holds."""
+
+    def observation(self, obs):
+        env = self.env.unwrapped
+        start = Polyline(env.config.world.path).project(env.start_pose)
+        return dict(obs, goal_arc=np.array([start]))
+
+
+def test_the_expert_heads_for_the_observations_goal(make_env):
+    env = make_env("stsf_gym/Suite-Corridor-Truth-v0", camera__enabled=False)  # with STOP
+    _, info = ExpertLabel(env).reset(seed=0)
+    assert info["expert_action"][-1] == -1.0  # the route's goal lies far ahead: drive on
+    _, info = ExpertLabel(GoalAtStart(env)).reset(seed=0)
+    assert info["expert_action"][-1] == 1.0  # the observation's goal is here: declare
