@@ -112,7 +112,7 @@ def test_an_env_unlike_the_models_settings_is_refused(make_env):
     with pytest.raises(ConfigError, match="drives on a pose estimate"):
         wrap_for_model(make_env("stsf_gym/Straight10m-v0", camera__enabled=False), model)
     with pytest.raises(ConfigError, match="task__stop_action=True"):
-        wrap_for_model(_estimating(make_env), model)
+        wrap_for_model(_estimating(make_env, task__stop_action=False), model)
     with pytest.raises(ConfigError, match=r"sim\.control_dt"):
         wrap_for_model(_estimating(make_env, task__stop_action=True, sim__control_dt=0.2), model)
     env = _estimating(make_env, task__stop_action=True)
