@@ -126,3 +126,26 @@ def tiny_learner(tmp_path_factory):
     its summary."""
     out = tmp_path_factory.mktemp("tiny-learner")
     return out, train_tiny_learner(out)
+
+
+def run_rl_zoo3(env_id: str, folder, *arguments: str):
+    """``python -m rl_zoo3.train`` as its users run it: PPO on ``env_id`` with the package's
+    zoo file, 128 steps in updates of 64, logs under ``folder``; the finished process."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", env_id]
+    command += ["--gym-packages", "stsf_gym", "--conf-file", "stsf_gym.agents.zoo", "-n", "128"]
+    command += ["--seed", "0", "-f", str(folder), *arguments]
+    command += ["-params", "n_envs:1", "n_steps:64", "batch_size:32"]
+    root = Path(__file__).resolve().parents[1]
+    return subprocess.run(
+        command,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=folder,
+        env={**os.environ, "PYTHONPATH": str(root)},
+    )

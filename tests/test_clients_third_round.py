@@ -5,15 +5,13 @@ own JSON spec; the MCL and smoother ids pass the env checkers."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import run_rl_zoo3
 from gymnasium.envs.registration import EnvSpec
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
@@ -109,20 +107,10 @@ def test_rl_zoo3_trains_a_suite_id_with_evaluation_during_training(tmp_path):
     """rl-zoo3's evaluation env is built from ``--eval-env-kwargs`` alone and ``--env-kwargs``
     replaces the zoo file's: both keep the STOP entry, from the registration."""
     env_id = "stsf_gym/Suite-Corridor-Truth-v0"
-    command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", env_id]
-    command += ["--gym-packages", "stsf_gym", "--conf-file", "stsf_gym.agents.zoo", "-n", "128"]
-    command += ["--seed", "0", "--eval-freq", "64", "--eval-episodes", "1", "-f", str(tmp_path)]
-    command += ["-params", "n_envs:1", "n_steps:64", "batch_size:32"]
-    command += ["--env-kwargs", "camera:{'enabled':False}"]
-    command += ["--eval-env-kwargs", "camera:{'enabled':False}", "sim:{'max_episode_seconds':10.0}"]
-    result = subprocess.run(
-        command,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=tmp_path,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-    )
+    evaluation = ["--eval-freq", "64", "--eval-episodes", "1"]
+    kwargs = ["--env-kwargs", "camera:{'enabled':False}"]
+    kwargs += ["--eval-env-kwargs", "camera:{'enabled':False}", "sim:{'max_episode_seconds':10.0}"]
+    result = run_rl_zoo3(env_id, tmp_path, *evaluation, *kwargs)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     (run,) = tmp_path.glob(f"ppo/{env_id.replace('/', '-')}_1")
     evaluations = np.load(run / "evaluations.npz")

@@ -1,13 +1,10 @@
 """rl-zoo3 runs on the registered ids with ``--conf-file stsf_gym.agents.zoo``."""
 
-import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from conftest import id_matrix
+from conftest import id_matrix, run_rl_zoo3
 
 import stsf_gym
 from stsf_gym.agents.training.hyperparams import load_hyperparams
@@ -79,28 +76,8 @@ def test_rl_zoo3_builds_the_agent_on_every_estimating_id(tmp_path, env_id):
     "env_id", ["stsf_gym/Straight10m-Truth-v0", "stsf_gym/Suite-Corridor-STSF-v0"]
 )
 def test_rl_zoo3_trains_ppo_through_gym_packages(tmp_path, env_id):
-    command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo"]
-    command += ["--env", env_id, "--gym-packages", "stsf_gym"]
-    command += [
-        "--conf-file",
-        "stsf_gym.agents.zoo",
-        "-n",
-        "128",
-        "--seed",
-        "0",
-        "--eval-freq",
-        "-1",
-    ]
-    command += ["-f", str(tmp_path), "-params", "n_envs:1", "n_steps:64", "batch_size:32"]
-    command += ["--eval-env-kwargs", "camera:{'enabled':False}"]
-    result = subprocess.run(
-        command,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=tmp_path,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-    )
+    eval_env = ["--eval-env-kwargs", "camera:{'enabled':False}"]
+    result = run_rl_zoo3(env_id, tmp_path, "--eval-freq", "-1", *eval_env)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     assert re.search(r"total_timesteps\s*\|\s*128\b", result.stdout), result.stdout[-2000:]
     (model,) = tmp_path.glob(f"ppo/{env_id.replace('/', '-')}_1/*.zip")
