@@ -346,27 +346,29 @@ def _train(args: argparse.Namespace) -> dict:
 def _check_training_runs(args: argparse.Namespace) -> None:
     """Before any training: the seeds in range, and each run's folder free of another kind
     of run's trained work (:mod:`stsf_gym.agents.training.preflight`)."""
-    from stsf_gym.agents.training.preflight import (
-        check_out,
-        check_policy_settings,
-        check_seeds,
-        run_kind,
-    )
+    from stsf_gym.agents.training.preflight import check_out, check_seeds, run_kind
+    from stsf_gym.agents.training.settings import resolve_run
 
     check_seeds(args.seed, args.seeds)
     seeds = range(args.seed, args.seed + args.seeds)
     if args.estimators is not None:
         runs = [
-            (e, args.out / e / f"seed-{s}") for e in _pose_sources(args.estimators) for s in seeds
+            (e, s, args.out / e / f"seed-{s}")
+            for e in _pose_sources(args.estimators)
+            for s in seeds
         ]
     else:
         runs = [
-            (args.estimator, args.out / f"seed-{s}" if args.seeds > 1 else args.out) for s in seeds
+            (args.estimator, s, args.out / f"seed-{s}" if args.seeds > 1 else args.out)
+            for s in seeds
         ]
-    for estimator, out in runs:
-        kind = run_kind(args.algo, estimator, args.world, args.suite)
-        check_policy_settings(kind, args.config, parse_overrides(args.overrides))
-        check_out(out, kind)
+    overrides = parse_overrides(args.overrides)
+    for estimator, seed, out in runs:
+        run = resolve_run(  # every setting checked; the algorithm as the run will record it
+            args.algo, estimator, args.timesteps, seed, args.world, args.config, overrides,
+            args.n_envs, args.suite,
+        )  # fmt: skip
+        check_out(out, run_kind(run.algo, estimator, args.world, args.suite))
 
 
 def _campaign(args: argparse.Namespace, shared: dict, seeds: range) -> dict:

@@ -33,18 +33,6 @@ def check_seeds(first: int, count: int) -> None:
         )
 
 
-def check_policy_settings(kind: dict, config: str | None, overrides: dict) -> None:
-    """The policy's observation settings of a run of ``kind`` (hyper-parameter file, ``--set``)
-    checked here: ``train`` reads them after making its folder."""
-    from stsf_gym.agents.observation import observation_config
-    from stsf_gym.agents.training.hyperparams import load_hyperparams
-    from stsf_gym.agents.training.train import env_id_for
-
-    env_id = env_id_for(kind["world"], kind["estimator"], kind["suite"])
-    hp = load_hyperparams(kind["algo"], env_id, config, overrides, kind["suite"] is not None)
-    observation_config(hp.training.observation)
-
-
 def run_kind(algo: str, estimator: str, world: str, suite: str | None) -> dict:
     """The :data:`KIND_KEYS` of a run of ``stsf-gym train`` with these options (a suite's runs
     train on its generated train worlds)."""
