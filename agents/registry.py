@@ -32,13 +32,10 @@ from typing import Protocol
 import gymnasium as gym
 import numpy as np
 
-from stsf_gym.agents.cautious_follower import CautiousFollowerAgent
 from stsf_gym.agents.follower_agent import FOLLOWER, FollowerAgent
-from stsf_gym.agents.resolve import resolve_agent
-from stsf_gym.agents.trained_agent import SB3Agent
 from stsf_gym.validation import ConfigError
 
-CAUTIOUS_FOLLOWER = CautiousFollowerAgent.name
+CAUTIOUS_FOLLOWER = "cautious-follower"
 
 
 class Agent(Protocol):
@@ -67,10 +64,18 @@ class Agent(Protocol):
         """A short name for file names and tables."""
 
 
+def _cautious_follower(**options) -> Agent:
+    """``cautious-follower``, imported when asked for: the follower's module loads the
+    simulator's config, which a replay (no simulator) never needs."""
+    from stsf_gym.agents.cautious_follower import CautiousFollowerAgent
+
+    return CautiousFollowerAgent(**options)
+
+
 #: Agents registered by name: name -> factory(**options).
 AGENTS: dict[str, Callable[..., Agent]] = {
     FOLLOWER: FollowerAgent,
-    CAUTIOUS_FOLLOWER: CautiousFollowerAgent,
+    CAUTIOUS_FOLLOWER: _cautious_follower,
 }
 
 
@@ -97,6 +102,11 @@ def make_agent(name: str, options: dict | None = None) -> Agent:
 def make_agents(name: str, options: dict | None = None) -> list[Agent]:
     """One agent per model ``name`` stands for (:func:`~stsf_gym.agents.resolve.resolve_agent`:
     each training seed of a shipped agent or a training folder), or the one agent by name."""
+    # imported when a name needs them: the resolver reads shipped agents' models (SB3, torch),
+    # which a command driving the follower, or a replay, never loads
+    from stsf_gym.agents.resolve import resolve_agent
+    from stsf_gym.agents.trained_agent import SB3Agent
+
     options = options or {}
     if name in AGENTS:  # before the resolver: a folder of that name is not read as a run
         return [AGENTS[name](**options)]

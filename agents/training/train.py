@@ -116,6 +116,7 @@ def demonstrate(model, run: RunSettings, out: Path, eval_env, bar: tqdm) -> None
 
 
 def curve_title(run: RunSettings) -> str:
+    """The learning curve's title: what ran, on which pose source."""
     return f"{run.algo} on {run.estimator}"
 
 
