@@ -15,7 +15,8 @@ from stable_baselines3 import PPO
 
 from stsf_gym.agents.demonstrations.cloning import CloningConfig, clone
 from stsf_gym.agents.demonstrations.dagger import demonstration_config, kept_round
-from stsf_gym.agents.registry import SB3Agent, make_agent
+from stsf_gym.agents.registry import make_agent
+from stsf_gym.agents.trained_agent import SB3Agent
 from stsf_gym.agents.training.train import train
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.suite import load_suite

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from stsf_gym.agents.decision_interval import DecisionInterval
-from stsf_gym.agents.registry import FollowerAgent, SB3Agent, make_agent
+from stsf_gym.agents.registry import FollowerAgent, make_agent
+from stsf_gym.agents.trained_agent import SB3Agent
 from stsf_gym.envs.action_layout import ActionLayout
 from stsf_gym.envs.config import ConfigError, load_config
 from stsf_gym.envs.start_pose import draw_leg
@@ -193,11 +194,11 @@ def test_training_and_evaluation_build_the_same_policy_stack(make_env, tmp_path,
 def test_a_registered_agent_is_made_by_its_name():
     from stsf_gym.agents.registry import AGENTS, register_agent
 
-    register_agent("cautious-follower", lambda **o: FollowerAgent(decision_steps=2, **o))
+    register_agent("slow-follower", lambda **o: FollowerAgent(decision_steps=2, **o))
     try:
-        agent = make_agent("cautious-follower")
+        agent = make_agent("slow-follower")
         assert isinstance(agent, FollowerAgent) and agent.label() == "follower-k2"
     finally:
-        del AGENTS["cautious-follower"]
+        del AGENTS["slow-follower"]
     with pytest.raises(ValueError, match="may not contain"):
         register_agent("pkg.mod:Class", FollowerAgent)
