@@ -14,7 +14,12 @@ from conftest import TINY_LEARNER, train_tiny_learner
 from stable_baselines3 import PPO
 
 from stsf_gym.agents.sb3_agent import model_metadata
-from stsf_gym.agents.training.finetune import FinetunePPO, actor_parameters
+from stsf_gym.agents.training.finetune import (
+    FinetunePPO,
+    actor_parameters,
+    mean_divergence,
+    widen_exploration,
+)
 from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.agents.training.stop_prior import declaring_share, set_stop_prior
 from stsf_gym.agents.training.training_log import EpisodeLog, curve_points
@@ -100,6 +105,25 @@ def test_the_pull_toward_the_clone_lowers_the_divergence():
     first = model.logger.name_to_value.get("finetune/clone_kl")
     model.learn(32 * 20, reset_num_timesteps=False)
     assert model.logger.name_to_value["finetune/clone_kl"] < first or first is None
+
+
+def test_a_clones_exploration_is_widened_and_the_pull_moves_only_the_mean():
+    model = FinetunePPO("MlpPolicy", _Layout(), n_steps=32, batch_size=16, seed=0)
+    with torch.no_grad():
+        model.policy.log_std.copy_(torch.log(torch.tensor([0.03, 0.05, 0.3])))
+    clone = FinetunePPO("MlpPolicy", _Layout(), seed=0).policy
+    clone.load_state_dict(model.policy.state_dict())
+    widen_exploration(model.policy, 0.1)
+    assert model.policy.log_std.exp().tolist() == pytest.approx([0.1, 0.1, 0.3])
+    observations = torch.zeros((4, 3))
+    same_means = mean_divergence(
+        clone.get_distribution(observations).distribution,
+        model.policy.get_distribution(observations).distribution,
+    )
+    assert torch.equal(same_means, torch.zeros(4))  # the deviations differ, the means do not
+    model.guard(clone, warmup_until=0, clone_kl_coef=1.0)
+    model.learn(64)
+    assert model.policy.log_std.exp().min() > 0.08  # no pull back to the clone's 0.03
 
 
 def test_a_fresh_policy_declares_at_its_prior_share_of_decisions():

@@ -94,20 +94,35 @@ class FinetunePPO(PPO):
             self.logger.record("finetune/clone_kl", self._pull_toward_clone())
 
     def _pull_toward_clone(self) -> float:
-        """One pass over the rollout in minibatches lowering ``clone_kl_coef`` KL(clone ||
-        policy); the mean KL before each step."""
+        """One pass over the rollout in minibatches lowering ``clone_kl_coef`` times
+        :func:`mean_divergence` from the clone; its mean before each step."""
         divergences = []
         for batch in self.rollout_buffer.get(self.batch_size):
             with torch.no_grad():
                 target = self.clone.get_distribution(batch.observations).distribution
             current = self.policy.get_distribution(batch.observations).distribution
-            kl = torch.distributions.kl_divergence(target, current).sum(-1).mean()
+            kl = mean_divergence(target, current).mean()
             self.policy.optimizer.zero_grad()
             (self.clone_kl_coef * kl).backward()
             torch.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
             self.policy.optimizer.step()
             divergences.append(float(kl.detach()))
         return float(np.mean(divergences))
+
+
+def widen_exploration(policy, std: float) -> None:
+    """Raise each action entry's standard deviation of ``policy``'s Gaussian to at least
+    ``std`` (entries already wider keep theirs)."""
+    with torch.no_grad():
+        policy.log_std.clamp_(min=float(np.log(std)))
+
+
+def mean_divergence(reference, current) -> torch.Tensor:
+    """KL(reference || current) with both Gaussians at ``current``'s deviation, per state
+    summed over the entries: sum_i (mu_ref,i - mu_i)^2 / (2 sigma_i^2), the deviation taken
+    as fixed; it moves the mean toward the reference's in units of the exploration noise."""
+    sigma = current.stddev.detach()
+    return ((reference.mean - current.mean) ** 2 / (2 * sigma**2)).sum(-1)
 
 
 def stream_seed(seed: int, timesteps: int) -> int:

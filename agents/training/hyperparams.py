@@ -114,13 +114,16 @@ class FinetuneConfig:
     ``timesteps`` of PPO (decisions summed over the envs; ``--timesteps`` overrides) whose
     first ``value_warmup_steps`` train the value function alone, the actor frozen (a critic
     fresh from cloning would otherwise steer the first updates with noise), at
-    ``learning_rate`` (None: the algorithm's), each update followed by a pull toward the
-    clone: ``clone_kl_coef`` times KL(clone || policy) on the rollout's states."""
+    ``learning_rate`` (None: the algorithm's), each update followed by a pull of the mean
+    action toward the clone's (``clone_kl_coef``, agents/training/finetune.py), and each
+    action entry's standard deviation at least ``exploration_std`` from the start (None: the
+    clone's)."""
 
     timesteps: Annotated[int, Range(ge=0)] = 0
     value_warmup_steps: Annotated[int, Range(ge=0)] = 0
     learning_rate: Positive | None = None
     clone_kl_coef: NonNegative = 0.0
+    exploration_std: Annotated[float, Range(gt=0, le=1)] | None = None
 
 
 @dataclass(frozen=True)

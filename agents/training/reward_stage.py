@@ -20,7 +20,7 @@ from stsf_gym.agents.training.checkpoints import (
     save_atomic,
     save_checkpoint,
 )
-from stsf_gym.agents.training.finetune import FinetunePPO, FreshRollouts
+from stsf_gym.agents.training.finetune import FinetunePPO, FreshRollouts, widen_exploration
 from stsf_gym.agents.training.progress import RewardProgress
 from stsf_gym.agents.training.resumed_eval import ResumableEvalCallback
 from stsf_gym.agents.training.settings import RunSettings
@@ -32,11 +32,14 @@ CLONE = "finetune/clone.zip"  # the policy the fine-tuning starts from (and is p
 
 def guard_the_clone(model: FinetunePPO, run: RunSettings, out: Path) -> None:
     """The fine-tuning's guards (:class:`FinetunePPO`): its learning rate, and the clone,
-    saved when the stage first starts (a resumed stage reads it back)."""
+    saved when the stage first starts (a resumed stage reads it back); the exploration
+    widened before the first update (:func:`widen_exploration`)."""
     settings = run.hp.finetune
     path = out / CLONE
     if not path.is_file():
         save_atomic(model.save, path)
+    if model.num_timesteps == 0 and settings.exploration_std is not None:
+        widen_exploration(model.policy, settings.exploration_std)
     clone = type(model).load(path, device="cpu").policy
     if settings.learning_rate is not None:
         model.learning_rate = settings.learning_rate
