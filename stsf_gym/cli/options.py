@@ -1,0 +1,81 @@
+"""The options several commands share: the common ones, recording, the backend, the world."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+DEFAULT_WORLD = "irl_corridor"  # --world when none is given
+DEFAULT_POSE_SOURCE = "truth"  # train --estimator when none is given
+ALL_ESTIMATORS = "odometry,conventional,stsf,ekf"  # --estimators when none is given
+
+
+def common(
+    parser: argparse.ArgumentParser,
+    out: str,
+    config_help: str = "YAML config (env: merged over configs/default.yaml)",
+    out_help: str = "output folder",
+) -> None:
+    """``--seed``, ``--out`` (default ``out``), ``--config``, ``--set``, ``--json``,
+    ``--verbose``."""
+    parser.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
+    parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} ({out})")
+    parser.add_argument("--config", help=config_help)
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override one config value, e.g. camera.width=640",
+    )
+    parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    parser.add_argument(
+        "--verbose", action="store_true", help="show PyBullet's C banners (quiet by default)"
+    )
+
+
+def record(parser: argparse.ArgumentParser) -> None:
+    """``--record`` and ``--record-frames``: each episode as an MCAP log or Rerun recording."""
+    parser.add_argument(
+        "--record",
+        choices=["mcap", "rerun"],
+        help="record each episode to OUT/recordings/: mcap (replayable by stsf-gym replay; "
+        "Foxglove, ros2 bag, evo) or rerun (.rrd for the Rerun viewer)",
+    )
+    parser.add_argument(
+        "--record-frames",
+        choices=["raw", "png", "jpeg"],
+        help="with --record mcap: camera frames as raw or png (lossless: a replay gives the "
+        "live estimates bit for bit; png is a little smaller and slow to encode) or jpeg "
+        "(about 8x smaller; its replay is approximate). Default raw",
+    )
+
+
+def backend(
+    parser: argparse.ArgumentParser, workers_help: str = "processes or local Ray CPUs (2)"
+) -> None:
+    """Where cells run: ``--backend``, ``--address``, ``--workers``."""
+    parser.add_argument(
+        "--backend",
+        choices=["local", "ray"],
+        default="local",
+        help="where cells run: local processes or Ray tasks (local)",
+    )
+    parser.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
+    parser.add_argument("--workers", type=int, default=2, help=workers_help)
+
+
+def world(parser: argparse.ArgumentParser) -> None:
+    """``--world`` (a name, a YAML path or ``generated``) and ``--split``."""
+    parser.add_argument(
+        "--world", help=f"world name, YAML path, or generated (default {DEFAULT_WORLD})"
+    )
+    parser.add_argument(
+        "--split", help="with --world generated: the world-seed split, train or test"
+    )
+
+
+def workers(parser: argparse.ArgumentParser) -> None:
+    """``--workers``: parallel processes."""
+    parser.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
