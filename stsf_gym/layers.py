@@ -26,10 +26,9 @@ import ast
 import sys
 from pathlib import Path
 
+from stsf_gym.package_dirs import PACKAGE_DIRS
+
 ROOT = Path(__file__).resolve().parent.parent
-#: The folders of the repository that make the one import namespace (pyproject's package-dir);
-#: an installed wheel holds them all under ``stsf_gym/``.
-PACKAGE_DIRS = {"stsf_gym": "stsf_gym", "stsf_gym.envs": "envs", "stsf_gym.agents": "agents"}
 EXTERNAL = ("pybullet", "pybullet_utils")  # third-party layers the rules name
 LEAVES = (
     "stsf_gym.geometry",
@@ -39,6 +38,7 @@ LEAVES = (
     "stsf_gym.camera_model",
     "stsf_gym.video",
     "stsf_gym.terminal_table",
+    "stsf_gym.package_dirs",
 )
 #: What the simulator side may use of the library, and its folders by idea.
 ENV_SHARED = ("stsf_gym.geometry", "stsf_gym.vision.landmarks", *LEAVES[1:])
@@ -94,11 +94,11 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.estimators.references": ESTIMATION,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
     "stsf_gym.metrics": ("stsf_gym.geometry",),
-    "stsf_gym.results": (),
+    "stsf_gym.results": ("stsf_gym.package_dirs",),
     "stsf_gym.tum": ("stsf_gym.io",),
     "stsf_gym.vision": ("stsf_gym.vision.landmarks", "stsf_gym.geometry"),
     "stsf_gym.vision.landmarks": (),
-    "stsf_gym.yaml_layers": ("stsf_gym.validation",),
+    "stsf_gym.yaml_layers": ("stsf_gym.validation", "stsf_gym.package_dirs"),
     "stsf_gym.geometry": ("stsf_gym.validation",),  # ranges of the odometry calibration
     "stsf_gym.validation": (),
     "stsf_gym.io": (),
@@ -106,7 +106,8 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.camera_model": ("stsf_gym.validation", "stsf_gym.geometry"),
     "stsf_gym.video": ("stsf_gym.io",),  # written atomically with the umask's mode
     "stsf_gym.terminal_table": (),
-    "stsf_gym.layers": (),
+    "stsf_gym.layers": ("stsf_gym.package_dirs",),
+    "stsf_gym.package_dirs": (),  # the one written mapping of the repository's folders
 }
 
 

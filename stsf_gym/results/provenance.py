@@ -39,6 +39,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from stsf_gym.package_dirs import PACKAGE_DIRS
 from stsf_gym.results.behaviour import behaviour, code_digest, versions_digest
 
 #: Distributions whose versions shape results (those installed are listed).
@@ -54,7 +55,7 @@ RESULT_PACKAGES = (
     "gtsam",
 )
 #: The import packages whose files make the code (``stsf_gym`` and the folders mapped into it).
-CODE_PACKAGES = ("stsf_gym", "stsf_gym.envs", "stsf_gym.agents", "stsf_gym.configs")
+CODE_PACKAGES = tuple(PACKAGE_DIRS)
 CODE_SUFFIXES = (".py", ".yaml")
 
 T = TypeVar("T")
