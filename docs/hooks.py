@@ -1,7 +1,7 @@
 """MkDocs hooks: the API reference, generated from the package's folders, and the docstring check.
 
 The repository keeps ``envs/``, ``agents/`` and ``configs/`` beside ``stsf_gym/`` and maps them
-into the one namespace (:data:`stsf_gym.package_dirs.PACKAGE_DIRS`), which a static reader such
+into the one namespace (:data:`stsf_gym.layers.PACKAGE_DIRS`), which a static reader such
 as griffe cannot follow. The hooks therefore lay the namespace out as it is installed, in
 symbolic links under ``build/api-src/`` (read by mkdocstrings through its ``paths`` option), and
 add one page per package to the navigation: the packages and modules are
@@ -26,8 +26,7 @@ from pathlib import Path
 import griffe
 from mkdocs.structure.files import File
 
-from stsf_gym.layers import ROOT, packages
-from stsf_gym.package_dirs import PACKAGE_DIRS
+from stsf_gym.layers import PACKAGE_DIRS, ROOT, packages
 
 log = logging.getLogger("mkdocs.plugins.stsf_gym")
 STAGE = ROOT / "build" / "api-src"

@@ -16,7 +16,6 @@ from typing import Any
 
 import yaml
 
-from stsf_gym.package_dirs import PACKAGE_DIRS
 from stsf_gym.validation import ConfigError
 
 #: The package's configs (package data: ``configs/`` of the repository, ``stsf_gym/configs`` of an
@@ -49,8 +48,7 @@ def shown(path: str | Path) -> str:
     """``path`` as errors show it: ``configs/...`` for the package's own configs."""
     path = Path(path)
     try:
-        inside = path.resolve().relative_to(CONFIG_DIR.resolve())
-        return str(Path(PACKAGE_DIRS["stsf_gym.configs"]) / inside)
+        return str(Path(CONFIG_DIR.name) / path.resolve().relative_to(CONFIG_DIR.resolve()))
     except ValueError:
         return str(path)
 

@@ -19,7 +19,7 @@ import pytest
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
-from stsf_gym.package_dirs import PACKAGE_DIRS
+from stsf_gym.layers import PACKAGE_DIRS
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Repository folder -> the import package's folder in the wheel (the package-dir mapping).

@@ -239,11 +239,11 @@ def step_section(
 def check_baseline(baseline: Path) -> None:
     """Refuse a ``--baseline`` that is neither a Python interpreter that imports ``stsf_gym``
     nor a checkout (``stsf_gym/`` and the folders
-    :data:`~stsf_gym.package_dirs.MAPPED_FOLDERS`), naming what it lacks, before any case runs.
+    :data:`~stsf_gym.layers.MAPPED_FOLDERS`), naming what it lacks, before any case runs.
     """
     # this process's own helpers: the file also runs as a script on a baseline's package
     from stsf_gym.envs.config import ConfigError
-    from stsf_gym.package_dirs import MAPPED_FOLDERS
+    from stsf_gym.layers import MAPPED_FOLDERS
 
     if baseline.is_file() and os.access(baseline, os.X_OK):
         probe = [str(baseline), "-c", "import stsf_gym"]
@@ -271,7 +271,7 @@ def _interpreter(baseline: Path, staged: Path) -> list[str]:
     """The command that runs Python on the baseline's code: the interpreter itself, or this one
     with the checkout's folders laid out as installed (``stsf_gym`` with ``envs``, ``agents``
     and ``configs`` inside it) first on ``sys.path``."""
-    from stsf_gym.package_dirs import MAPPED_FOLDERS
+    from stsf_gym.layers import MAPPED_FOLDERS
 
     check_baseline(baseline)
     if baseline.is_file():

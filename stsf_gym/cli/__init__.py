@@ -10,7 +10,7 @@ import json
 import os
 import sys
 
-from stsf_gym.cli.preflight import preflight
+from stsf_gym.cli.options import preflight
 from stsf_gym.cli.reports import NothingFinished
 from stsf_gym.config import ConfigError
 from stsf_gym.experiments.cache import JobsFailed

@@ -39,7 +39,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from stsf_gym.package_dirs import PACKAGE_DIRS
+from stsf_gym.layers import PACKAGE_DIRS
 from stsf_gym.results.behaviour import behaviour, code_digest, versions_digest
 
 #: Distributions whose versions shape results (those installed are listed).
