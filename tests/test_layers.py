@@ -153,3 +153,10 @@ def test_a_cycle_of_type_only_imports_is_a_cycle(tmp_path):
         found
     )
     assert not [v for v in found if "is not allowed" in v]  # the rules count runtime imports
+
+
+def test_a_long_module_is_refused_unless_listed_with_its_reason(tmp_path):
+    long = "x = 1\n" * (layers.MODULE_LIMIT + 1)
+    found = layers.violations(_tree(tmp_path, {"envs/corridor_env.py": long, "envs/big.py": long}))
+    assert any(v.startswith("stsf_gym.envs.big holds 401 lines") for v in found)
+    assert not any("corridor_env" in v for v in found)  # listed in LONG_MODULES, with why
