@@ -13,6 +13,7 @@ import sys
 from stsf_gym.cli.options import preflight
 from stsf_gym.cli.reports import NothingFinished
 from stsf_gym.config import ConfigError
+from stsf_gym.envs.quiet import VERBOSE_ENV
 from stsf_gym.experiments.cache import JobsFailed
 from stsf_gym.results.provenance import set_command
 from stsf_gym.validation import FieldError
@@ -86,8 +87,6 @@ def main(argv: list[str] | None = None) -> int:
     try:
         preflight(args)
         if args.verbose:
-            from stsf_gym.envs.quiet import VERBOSE_ENV
-
             os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
         else:
             _silence_c_stdout()

@@ -12,6 +12,7 @@ from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.envs.config import deep_merge, load_config, overrides_to_tree, read_yaml
 from stsf_gym.envs.generated_env import GENERATED, generated_label, parse_world
 from stsf_gym.io import check_folder
+from stsf_gym.recording import require_recording
 from stsf_gym.wrappers import check_pose_source
 
 
@@ -76,8 +77,6 @@ def recording(args: argparse.Namespace, out: Path | None = None) -> dict | None:
     recordings path that cannot be a folder: bad input, before any episode runs."""
     if args.record is None:
         return None
-    from stsf_gym.recording import require_recording
-
     require_recording(f"--record {args.record}")
     folder = ((out or args.out) / "recordings").absolute()
     check_folder(folder, "--record")

@@ -14,7 +14,7 @@ class NothingFinished(RuntimeError):
 
 def print_markdown(args: argparse.Namespace, path: Path) -> None:
     """The report ``path`` as a table on the terminal (nothing with ``--json``)."""
-    if not args.json:
+    if not args.json:  # rich loads here: stsf-gym --help and --json runs never need it
         from rich.console import Console
 
         from stsf_gym.terminal_table import print_markdown as print_table
