@@ -10,7 +10,6 @@ from pathlib import Path
 from stsf_gym.cli.options import DEFAULT_WORLD
 from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.envs.config import deep_merge, load_config, overrides_to_tree, read_yaml
-from stsf_gym.envs.generated_env import GENERATED, generated_label, parse_world
 from stsf_gym.io import check_folder
 from stsf_gym.recording import require_recording
 from stsf_gym.wrappers import check_pose_source
@@ -54,6 +53,8 @@ def env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
     if "world" in env:
         where = "use --world" if hasattr(args, "world") else "it uses its own world"
         raise ConfigError(f"--config/--set cannot change the world of this command ({where})")
+    from stsf_gym.envs.generated_env import parse_world  # the simulator: never for a replay
+
     generated = world is not None and parse_world(world) is not None
     load_config(args.config, world=None if generated else world, **overrides)
     return env
@@ -61,6 +62,8 @@ def env_overrides(args: argparse.Namespace, world: str | None = None) -> dict:
 
 def world(args: argparse.Namespace) -> str:
     """``--world``, or ``generated:<split>`` for ``--world generated --split NAME``."""
+    from stsf_gym.envs.generated_env import GENERATED, generated_label  # the simulator, as above
+
     name = args.world or DEFAULT_WORLD
     if name == GENERATED:
         if args.split is None:
