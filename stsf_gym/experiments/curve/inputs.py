@@ -17,9 +17,8 @@ SUITE_WORLDS = "test"  # the split a suite's curve drives on
 
 
 def check_request(agents: list[str], levels: list[float], dial: dict) -> None:
-    """Every agent made once, every level a scale (at least 0; 0 itself is refused with the
-    curve's other levels), and the dial's options those of :data:`DIAL` without its scale
-    (each level sets it)."""
+    """Every level a positive scale of the dial's errors, the dial's options those of
+    :data:`DIAL` without its scale (each level sets it), and every agent made once."""
     for level in levels:
         check_number(level, "--levels", Range(ge=0))
     if not levels or any(not level > 0 for level in levels):
