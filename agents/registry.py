@@ -99,6 +99,13 @@ def make_agent(name: str, options: dict | None = None) -> Agent:
     return make_agents(name, options)[0]
 
 
+def check_agents(names: list[str]) -> None:
+    """Make each agent of ``names`` once, so a missing model file or an unknown name fails
+    before any work."""
+    for name in names:
+        make_agent(name)
+
+
 def make_agents(name: str, options: dict | None = None) -> list[Agent]:
     """One agent per model ``name`` stands for (:func:`~stsf_gym.agents.resolve.resolve_agent`:
     each training seed of a shipped agent or a training folder), or the one agent by name."""

@@ -3,7 +3,7 @@
     python benchmarks/generated_worlds.py --count 1000 --out out/bench/generated_worlds.json
 
 For each world seed (from ``--first``): generate it; build the env config from its YAML tree
-(the world checks and the clearance checks of :mod:`stsf_gym.envs.worlds.checks`); recheck that
+(the world checks and the clearance checks of :mod:`stsf_gym.envs.worlds.spec`); recheck that
 every path point sees a landmark (:mod:`stsf_gym.envs.worlds.visibility`) and that the path is
 passable; build its bodies in a PyBullet simulator. Then the rebuild cost in the env:
 ``reset(seed=k)`` of ``stsf_gym/Generated-v0`` onto a new world each time (generation and build),

@@ -1,12 +1,12 @@
 """MkDocs hooks: the API reference, generated from the package's folders, and the docstring check.
 
-The repository keeps ``envs/`` and ``agents/`` beside ``stsf_gym/`` and maps them into the one
-namespace (``pyproject.toml``, ``package-dir``), which a static reader such as griffe cannot
-follow. the hooks therefore lay the namespace out as it is installed, in symbolic links
-under ``build/api-src/`` (read by mkdocstrings through its ``paths`` option), and add one page per
-package to the navigation: the packages and modules are :func:`stsf_gym.layers.packages`, the
-same that ``python -m stsf_gym.layers --tree`` prints, so a new module or folder is documented
-without an edit here.
+The repository keeps ``envs/``, ``agents/`` and ``configs/`` beside ``stsf_gym/`` and maps them
+into the one namespace (:data:`stsf_gym.layers.PACKAGE_DIRS`), which a static reader such
+as griffe cannot follow. The hooks therefore lay the namespace out as it is installed, in
+symbolic links under ``build/api-src/`` (read by mkdocstrings through its ``paths`` option), and
+add one page per package to the navigation: the packages and modules are
+:func:`stsf_gym.layers.packages`, the same that ``python -m stsf_gym.layers --tree`` prints, so
+a new module or folder is documented without an edit here.
 
 :func:`on_pre_build` fails a strict build (a warning) for every public module, class, function
 or method without a docstring. A method that overrides a documented method of a base class in

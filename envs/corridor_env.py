@@ -29,8 +29,8 @@ from stsf_gym.envs.sensors.sonar_firing import FiringSchedule
 from stsf_gym.envs.simulator import Simulator
 from stsf_gym.envs.start_pose import draw_leg, draw_start_pose, legs
 from stsf_gym.envs.task import PathTask
-from stsf_gym.envs.worlds.checks import check_start_pose
 from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
+from stsf_gym.envs.worlds.spec import check_start_pose
 from stsf_gym.geometry import OdometryCalibration, bounded
 from stsf_gym.validation import reset_options
 

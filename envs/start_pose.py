@@ -25,7 +25,7 @@ import numpy as np
 
 from stsf_gym.envs.config import TaskConfig, WorldConfig
 from stsf_gym.envs.task import Polyline
-from stsf_gym.envs.worlds.checks import check_start_pose
+from stsf_gym.envs.worlds.spec import check_start_pose
 from stsf_gym.validation import FieldError, require
 
 MAX_DRAWS = 100

@@ -48,7 +48,7 @@ def shown(path: str | Path) -> str:
     """``path`` as errors show it: ``configs/...`` for the package's own configs."""
     path = Path(path)
     try:
-        return str(Path("configs") / path.resolve().relative_to(CONFIG_DIR.resolve()))
+        return str(Path(CONFIG_DIR.name) / path.resolve().relative_to(CONFIG_DIR.resolve()))
     except ValueError:
         return str(path)
 

@@ -2,8 +2,9 @@
 
 import pytest
 
-from stsf_gym.bench import targets, to_markdown
+from stsf_gym.bench.report import to_markdown
 from stsf_gym.bench.speed import run_case
+from stsf_gym.bench.targets import targets
 
 
 @pytest.fixture(scope="module")

@@ -119,3 +119,44 @@ def test_layers_command_prints_the_graph():
         done.stdout,
     )
     assert done.stdout.rstrip().endswith("violations:\n  none")
+
+
+def test_the_committed_picture_is_what_the_code_draws():
+    """docs/reference/layers.svg is redrawn by ``python -m stsf_gym.layers --picture``."""
+    committed = (ROOT / "docs" / "reference" / "layers.svg").read_text()
+    assert committed == layers.picture(), (
+        "the layers changed: python -m stsf_gym.layers --picture > docs/reference/layers.svg"
+    )
+
+
+def test_the_package_dir_mapping_is_written_once_for_the_code():
+    """pyproject's package-dir, which setuptools reads, is the copy of layers.PACKAGE_DIRS."""
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11+
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert pyproject["tool"]["setuptools"]["package-dir"] == layers.PACKAGE_DIRS
+
+
+def test_a_cycle_of_type_only_imports_is_a_cycle(tmp_path):
+    root = _tree(
+        tmp_path,
+        {
+            "envs/config.py": "from stsf_gym.envs.checks import check\n",
+            "envs/checks.py": (
+                "from typing import TYPE_CHECKING\n"
+                "if TYPE_CHECKING:\n    from stsf_gym.envs.config import World\n"
+                "def check(world: 'World'): ...\n"
+            ),
+        },
+    )
+    found = layers.violations(root)
+    assert "import cycle: stsf_gym.envs.checks -> stsf_gym.envs.config -> stsf_gym.envs.checks" in (
+        found
+    )
+    assert not [v for v in found if "is not allowed" in v]  # the rules count runtime imports
+
+
+def test_a_long_module_is_refused_unless_listed_with_its_reason(tmp_path):
+    long = "x = 1\n" * (layers.MODULE_LIMIT + 1)
+    found = layers.violations(_tree(tmp_path, {"envs/corridor_env.py": long, "envs/big.py": long}))
+    assert any(v.startswith("stsf_gym.envs.big holds 401 lines") for v in found)
+    assert not any("corridor_env" in v for v in found)  # listed in LONG_MODULES, with why

@@ -19,9 +19,11 @@ import pytest
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
+from stsf_gym.layers import PACKAGE_DIRS
+
 ROOT = Path(__file__).resolve().parent.parent
-#: Repository folder -> the import package it installs as (pyproject's package-dir).
-FOLDERS = {"stsf_gym": "stsf_gym", "envs": "stsf_gym/envs", "agents": "stsf_gym/agents"}
+#: Repository folder -> the import package's folder in the wheel (the package-dir mapping).
+FOLDERS = {folder: package.replace(".", "/") for package, folder in PACKAGE_DIRS.items()}
 
 USER_SCRIPT = """
 import json, sys

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.envs.generated_env import generated_label
 from stsf_gym.validation import ConfigError
 
@@ -21,6 +22,20 @@ from stsf_gym.validation import ConfigError
 MAX_SEED = 2**32 - 1
 #: What makes two training runs the same kind: a rerun of one into the other's folder resumes.
 KIND_KEYS = ("algo", "estimator", "world", "suite")
+
+
+def check_runs(runs: list[dict]) -> None:
+    """Before any training: each of ``runs`` (the keyword arguments of
+    :func:`~stsf_gym.agents.training.train.train`: ``algo``, ``estimator``, ``out``, ...) with
+    every setting checked, and its folder free of another kind of run's trained work, the
+    algorithm compared as the run will record it."""
+    for run in runs:
+        settings = resolve_run(
+            run["algo"], run["estimator"], run["timesteps"], run["seed"], run["world"],
+            run["config"], run["overrides"], run["n_envs"], run["suite"],
+        )  # fmt: skip
+        kind = run_kind(settings.algo, run["estimator"], run["world"], run["suite"])
+        check_out(Path(run["out"]), kind)
 
 
 def check_seeds(first: int, count: int) -> None:

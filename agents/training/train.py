@@ -39,6 +39,7 @@ from stsf_gym.agents.training.checkpoints import (
 )
 from stsf_gym.agents.training.finetune import FinetunePPO
 from stsf_gym.agents.training.hyperparams import algorithm_class, policy_kwargs_for_sb3
+from stsf_gym.agents.training.preflight import check_out, check_seeds, run_kind
 from stsf_gym.agents.training.progress import log_round, stage_bars
 from stsf_gym.agents.training.replaced_runs import keep_replaced_run
 from stsf_gym.agents.training.reward_stage import learn_from_reward
@@ -162,8 +163,10 @@ def train(
     :mod:`~stsf_gym.agents.training.settings`) until its reward budget (``timesteps``, or the
     file's); return the summary in train.json. With ``suite`` the agent trains on the suite's
     train worlds under its task and is evaluated on its ``val`` worlds."""
+    check_seeds(seed, 1)
     run = resolve_run(algo, estimator, timesteps, seed, world, config, overrides, n_envs, suite)
     out = Path(out)
+    check_out(out, run_kind(run.algo, estimator, world, suite))  # another kind's work: refused
     finished = finished_summary(out, run.meta["made_by"], run.reward_steps)
     if finished is not None:  # a campaign's rerun: this run is done, its files stay untouched
         return finished

@@ -28,10 +28,10 @@ import math
 import numpy as np
 
 from stsf_gym.envs.config import ConfigError, EnvConfig, WorldConfig, build
-from stsf_gym.envs.worlds.checks import obstacle_distance
 from stsf_gym.envs.worlds.coverage import board_centres, coverage_of
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig
 from stsf_gym.envs.worlds.layout import DIRECTIONS, Rect, boundary_walls
+from stsf_gym.envs.worlds.spec import obstacle_distance
 from stsf_gym.envs.worlds.visibility import (
     CameraView,
     choose_landmarks,

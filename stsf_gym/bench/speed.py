@@ -44,6 +44,7 @@ CASES: dict[str, tuple[dict, str]] = {
 }
 #: The cases whose env is cheap: a longer, steadier span of simulated time.
 FAST_CASES = ("a:", "g:", "h:", "i:", "j:")
+PROFILED_CASE = "e: camera + detector + STSF"  # the case whose cProfile bench.md shows
 RENDERERS = ("gl", "egl", "tiny")
 RENDER_SIZES = ((320, 240), (640, 480))
 PER_STEP_STAGES = ("odometry",)  # estimator stages that run every step, not per frame

@@ -68,8 +68,6 @@ STAGES: dict[str, tuple[str, str]] = {
 #: summed, is its cost with the least interference: a shared machine's load comes and goes
 #: within a run, and seldom slows one segment in every round.
 SEGMENT_STEPS = 100
-#: The package folders of a checkout, as ``pyproject.toml`` installs them into ``stsf_gym``.
-MAPPED_FOLDERS = ("envs", "agents", "configs")
 BASELINE_PROBE_S = 120  # s: a baseline interpreter importing stsf_gym (numba, torch) cold
 
 
@@ -240,9 +238,12 @@ def step_section(
 
 def check_baseline(baseline: Path) -> None:
     """Refuse a ``--baseline`` that is neither a Python interpreter that imports ``stsf_gym``
-    nor a checkout (``stsf_gym/`` and the folders :data:`MAPPED_FOLDERS`), naming what it
-    lacks, before any case runs."""
+    nor a checkout (``stsf_gym/`` and the folders
+    :data:`~stsf_gym.layers.MAPPED_FOLDERS`), naming what it lacks, before any case runs.
+    """
+    # this process's own helpers: the file also runs as a script on a baseline's package
     from stsf_gym.envs.config import ConfigError
+    from stsf_gym.layers import MAPPED_FOLDERS
 
     if baseline.is_file() and os.access(baseline, os.X_OK):
         probe = [str(baseline), "-c", "import stsf_gym"]
@@ -270,6 +271,8 @@ def _interpreter(baseline: Path, staged: Path) -> list[str]:
     """The command that runs Python on the baseline's code: the interpreter itself, or this one
     with the checkout's folders laid out as installed (``stsf_gym`` with ``envs``, ``agents``
     and ``configs`` inside it) first on ``sys.path``."""
+    from stsf_gym.layers import MAPPED_FOLDERS
+
     check_baseline(baseline)
     if baseline.is_file():
         return [str(baseline)]

@@ -14,9 +14,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from stsf_gym.agents.registry import trained_on
+from stsf_gym.agents.registry import check_agents, trained_on
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.episode_env import estimator_options
+from stsf_gym.experiments.benchmark.trained import expand_agents
+from stsf_gym.experiments.compare import compare
 from stsf_gym.experiments.episodes import (
     EpisodeResult,
     EpisodeSpec,
@@ -95,3 +97,34 @@ def evaluate(
         str(plot_nees(by_estimator, out / "nees.png")),
     ]
     return summary, by_estimator
+
+
+def evaluate_agents(
+    out: str | Path,
+    agents: list[str],
+    estimators: list[str],
+    seeds: int,
+    seed: int = 0,
+    world: str = "irl_corridor",
+    workers: int = 2,
+    env: dict | None = None,
+    faults: list[str | Path] | None = None,
+    record: dict | None = None,
+) -> tuple[dict, Path]:
+    """``stsf-gym evaluate``: one agent on every pose source (:func:`evaluate`), or, for several
+    agents or a name with ``{estimator}`` (replaced by each pose source), the comparison table
+    (:func:`~stsf_gym.experiments.compare.compare`). Every agent is made once first, so an
+    unknown name or a missing model fails before any episode. Returns the summary and the
+    Markdown report written."""
+    expanded = expand_agents(agents)
+    check_agents(sorted({a.replace("{estimator}", e) for a in expanded for e in estimators}))
+    out = Path(out)
+    if len(expanded) > 1 or any("{estimator}" in agent for agent in agents):
+        if record:
+            raise ConfigError("--record records one agent's episodes, not a comparison")
+        summary = compare(out, expanded, estimators, seeds, seed, world, workers, env)
+        return summary, out / "comparison.md"
+    summary, _ = evaluate(
+        out, estimators, seeds, seed, world, agents[0], workers, env, faults, record=record
+    )
+    return summary, out / "results.md"

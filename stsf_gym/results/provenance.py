@@ -39,6 +39,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from stsf_gym.layers import PACKAGE_DIRS
 from stsf_gym.results.behaviour import behaviour, code_digest, versions_digest
 
 #: Distributions whose versions shape results (those installed are listed).
@@ -54,7 +55,7 @@ RESULT_PACKAGES = (
     "gtsam",
 )
 #: The import packages whose files make the code (``stsf_gym`` and the folders mapped into it).
-CODE_PACKAGES = ("stsf_gym", "stsf_gym.envs", "stsf_gym.agents", "stsf_gym.configs")
+CODE_PACKAGES = tuple(PACKAGE_DIRS)
 CODE_SUFFIXES = (".py", ".yaml")
 
 T = TypeVar("T")
@@ -152,7 +153,7 @@ def file_digest(path: Path) -> str:
 
 def loaded_modules() -> list[str]:
     """The package's module files imported in this process (``sys.modules``), as relative
-    paths (``stsf_gym/cli.py``, ``envs/simulator.py``), sorted."""
+    paths (``stsf_gym/wrappers.py``, ``envs/simulator.py``), sorted."""
     folders = _package_folders()
     files = {getattr(module, "__file__", None) for module in list(sys.modules.values())}
     found = {_relative(Path(os.path.abspath(f)), folders) for f in files if f and f.endswith(".py")}

@@ -18,10 +18,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from stsf_gym.envs.config import ConfigError, deep_merge, load_config
+from stsf_gym.envs.config import deep_merge, load_config
 from stsf_gym.envs.generated_env import parse_world
 from stsf_gym.episode_env import NOT_CONFIG, estimator_options
 from stsf_gym.experiments.cache import run_cached
+from stsf_gym.experiments.curve.inputs import DIAL, check_request, curve_world
 from stsf_gym.experiments.curve.plot import plot_curve
 from stsf_gym.experiments.sweep.backends import make_runner
 from stsf_gym.experiments.sweep.cells import cell_config, run_cell
@@ -30,7 +31,6 @@ from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
 from stsf_gym.results.provenance import by_digest, provenance
 
-DIAL = "degraded-truth"
 DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
 DEFAULT_ESTIMATORS = ("odometry", "conventional", "stsf", "ekf")
 REQUIRED_SUCCESS = 0.9
@@ -95,7 +95,7 @@ def _cells(agent, world, seeds, estimator, env, options, level=None) -> list[dic
 def accuracy_curve(
     out: str | Path,
     agents: list[str],
-    world: str = "irl_corridor",
+    world: str | None = None,
     seeds: int = 3,
     seed: int = 0,
     levels: list[float] = DEFAULT_LEVELS,
@@ -108,10 +108,12 @@ def accuracy_curve(
     suite: str | None = None,
 ) -> dict:
     """Run (or resume) every cell of the curve; write curve.json, curve.md and curve.png.
-    ``suite`` names the benchmark suite whose worlds and task ``world`` and ``env`` hold."""
-    out, env, dial = Path(out), env or {}, dial or {}
-    if not levels or any(not level > 0 for level in levels):
-        raise ConfigError(f"levels must be positive numbers, got {levels!r}")
+    ``world`` (default ``irl_corridor``), or ``suite``: the benchmark suite whose test worlds
+    and task the curve drives on (``env`` over its episode env). Bad input is refused before
+    any cell runs (:mod:`~stsf_gym.experiments.curve.inputs`)."""
+    out, dial = Path(out), dial or {}
+    check_request(agents, list(levels), dial)
+    world, env = curve_world(world, env or {}, suite, seed, seeds)
     generated = parse_world(world) is not None
     config = {k: v for k, v in env.items() if k not in NOT_CONFIG}
     # a bad world or env key fails before anything runs

@@ -1,27 +1,91 @@
-"""Geometry checks of a world config: landmarks on walls, start and path clear of walls.
+"""A world's schema and the geometry that makes it valid: :class:`WorldConfig` (walls, path,
+route, start, landmarks, clutter), and the checks its construction runs (landmarks on walls,
+start and path clear of walls, the route on the path).
 
 :func:`check_start_pose` also checks ``reset(options={"start_pose": ...})``.
 
-They raise :class:`~stsf_gym.validation.FieldError` naming the key relative to the config being
-checked (``landmarks[2].at`` in a world, ``world.start`` in the whole env config), so
+The checks raise :class:`~stsf_gym.validation.FieldError` naming the key relative to the config
+being checked (``landmarks[2].at`` in a world, ``world.start`` in the whole env config), so
 :func:`~stsf_gym.validation.build` reports the full key path.
 """
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from typing import Annotated, Literal
 
 import numpy as np
 
-from stsf_gym.validation import FieldError, require
-
-if TYPE_CHECKING:
-    from stsf_gym.envs.config import ObstacleSpec, WorldConfig
+from stsf_gym.validation import (
+    WORLD_EXTENT_M,
+    Coordinate,
+    Degrees,
+    FieldError,
+    Range,
+    WorldLength,
+    require,
+)
+from stsf_gym.vision.landmarks import LandmarkPattern
 
 ON_WALL_TOLERANCE = 1e-3  # m: how far a landmark's ``at`` may be off a wall centre line
 SQUARE_TOLERANCE_DEG = 1.0  # how far a landmark's normal may be off square to its wall
 SIDES = (-math.pi / 2, math.pi / 2)  # the two normals of a wall, from its direction
+
+
+@dataclass(frozen=True)
+class LandmarkSpec:
+    """One landmark board of a world: its id, where it hangs on a wall and which way it faces."""
+
+    id: Annotated[int, Range(ge=0)]
+    at: tuple[Coordinate, Coordinate]  # a point on the wall centre line it hangs on (m)
+    facing_deg: Degrees  # world yaw of the landmark's outward normal
+
+
+@dataclass(frozen=True)
+class ObstacleSpec:
+    """One clutter obstacle: a box or a cylinder standing on the floor."""
+
+    shape: Literal["box", "cylinder"]
+    position: tuple[Coordinate, Coordinate]
+    size: tuple[WorldLength, ...]  # box: (length, width, height) / cylinder: (radius, height)
+    yaw_deg: Degrees = 0.0
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """A world (``configs/worlds/*.yaml`` or a generated one): walls, path, start, goal and
+    landmarks, checked on construction (the functions below).
+    """
+
+    name: str
+    walls: tuple[tuple[Coordinate, Coordinate, Coordinate, Coordinate], ...]  # x1, y1, x2, y2
+    wall_height: WorldLength
+    wall_thickness: WorldLength
+    path: tuple[tuple[Coordinate, Coordinate], ...]
+    start: tuple[Coordinate, Coordinate, float]
+    goal_radius: WorldLength
+    landmark_height: Annotated[float, Range(ge=0, le=WORLD_EXTENT_M)]
+    landmark_pattern: LandmarkPattern
+    landmarks: tuple[LandmarkSpec, ...]
+    obstacles: tuple[ObstacleSpec, ...] = ()
+    #: goals visited in order, each on the path (the last one its end); empty: the path's end
+    route: tuple[tuple[Coordinate, Coordinate], ...] = ()
+
+    def __post_init__(self) -> None:
+        require(len(self.walls) > 0, "walls", "must list at least one wall segment")
+        require(len(self.path) >= 2, "path", f"must have at least 2 points, got {len(self.path)}")
+        check_world(self)
+        check_route(self)
+
+    @property
+    def goal(self) -> tuple[float, float]:
+        return self.path[-1]
+
+    @property
+    def goals(self) -> tuple[tuple[float, float], ...]:
+        """The goals in visiting order: the route, or the path's end alone."""
+        return self.route or (self.path[-1],)
 
 
 def segment_distance(point, segment) -> float:

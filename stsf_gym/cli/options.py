@@ -1,0 +1,133 @@
+"""The options several commands share (the common ones, recording, the backend, the world), and
+the checks every command's options pass before any work (:func:`preflight`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from stsf_gym.io import check_file, check_folder, remove_partial_writes
+from stsf_gym.validation import ConfigError
+from stsf_gym.yaml_layers import read_yaml
+
+DEFAULT_WORLD = "irl_corridor"  # --world when none is given
+DEFAULT_POSE_SOURCE = "truth"  # train --estimator when none is given
+ALL_ESTIMATORS = "odometry,conventional,stsf,ekf"  # --estimators when none is given
+
+
+def common(
+    parser: argparse.ArgumentParser,
+    out: str,
+    config_help: str = "YAML config (env: merged over configs/default.yaml)",
+    out_help: str = "output folder",
+) -> None:
+    """``--seed``, ``--out`` (default ``out``), ``--config``, ``--set``, ``--json``,
+    ``--verbose``."""
+    parser.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
+    parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} ({out})")
+    parser.add_argument("--config", help=config_help)
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override one config value, e.g. camera.width=640",
+    )
+    parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    parser.add_argument(
+        "--verbose", action="store_true", help="show PyBullet's C banners (quiet by default)"
+    )
+
+
+def record(parser: argparse.ArgumentParser) -> None:
+    """``--record`` and ``--record-frames``: each episode as an MCAP log or Rerun recording."""
+    parser.add_argument(
+        "--record",
+        choices=["mcap", "rerun"],
+        help="record each episode to OUT/recordings/: mcap (replayable by stsf-gym replay; "
+        "Foxglove, ros2 bag, evo) or rerun (.rrd for the Rerun viewer)",
+    )
+    parser.add_argument(
+        "--record-frames",
+        choices=["raw", "png", "jpeg"],
+        help="with --record mcap: camera frames as raw or png (lossless: a replay gives the "
+        "live estimates bit for bit; png is a little smaller and slow to encode) or jpeg "
+        "(about 8x smaller; its replay is approximate). Default raw",
+    )
+
+
+def backend(
+    parser: argparse.ArgumentParser, workers_help: str = "processes or local Ray CPUs (2)"
+) -> None:
+    """Where cells run: ``--backend``, ``--address``, ``--workers``."""
+    parser.add_argument(
+        "--backend",
+        choices=["local", "ray"],
+        default="local",
+        help="where cells run: local processes or Ray tasks (local)",
+    )
+    parser.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
+    parser.add_argument("--workers", type=int, default=2, help=workers_help)
+
+
+def world(parser: argparse.ArgumentParser) -> None:
+    """``--world`` (a name, a YAML path or ``generated``) and ``--split``."""
+    parser.add_argument(
+        "--world", help=f"world name, YAML path, or generated (default {DEFAULT_WORLD})"
+    )
+    parser.add_argument(
+        "--split", help="with --world generated: the world-seed split, train or test"
+    )
+
+
+def workers(parser: argparse.ArgumentParser) -> None:
+    """``--workers``: parallel processes."""
+    parser.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
+
+
+#: Options that mean nothing without another (refused rather than ignored): option, needed
+#: option (argparse destinations), and why.
+NEEDS = (
+    (
+        "record_frames",
+        "record",
+        "--record-frames sets how --record stores camera frames; without --record nothing is "
+        "recorded: add --record mcap",
+    ),
+)
+#: Options that would silently override one another: option, other option, and why.
+EXCLUDES = (
+    ("suite", "world", "--suite picks the worlds (the suite's splits): drop --world/--split"),
+    ("suite", "split", "--suite picks the worlds (the suite's splits): drop --world/--split"),
+)
+
+
+def preflight(args: argparse.Namespace) -> None:
+    """Every command's checks before any work: the seed, the option combinations of
+    :data:`NEEDS` and :data:`EXCLUDES`, and ``--out`` (a folder, or the file a command writes);
+    then temporary files a killed run left in ``--out`` are removed."""
+
+    def given(option: str) -> bool:
+        return getattr(args, option, None) is not None
+
+    if getattr(args, "seed", 0) < 0:  # seeds seed a numpy SeedSequence: non-negative
+        raise ConfigError(f"--seed must be at least 0, got {args.seed}")
+    if getattr(args, "config", None) is not None and not read_yaml(args.config):
+        raise ConfigError(  # missing, unreadable or malformed: named by read_yaml
+            f"--config {args.config}: the file is empty, it sets nothing; give the "
+            "settings it should hold, or leave --config out"
+        )
+    for option, needed, reason in NEEDS:
+        if given(option) and not given(needed):
+            raise ConfigError(reason)
+    for option, other, reason in EXCLUDES:
+        if given(option) and given(other):
+            raise ConfigError(reason)
+    if not hasattr(args, "out"):
+        return
+    if getattr(args, "out_is_file", False):
+        check_file(args.out, "--out")
+    else:
+        check_folder(args.out, "--out")
+        remove_partial_writes(args.out)  # left by a run killed mid-write: nothing to resume
