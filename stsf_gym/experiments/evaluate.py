@@ -44,18 +44,22 @@ def evaluate(
     faults: list[str | Path] | None = None,
     agent_options: dict | None = None,
     record: dict | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> tuple[dict, dict[str, list[EpisodeResult]]]:
     """Run ``seeds`` episodes per estimator; write the table and figures to ``out``.
 
     Returns the summary (as written to results.json) and the episodes per estimator. With
     ``faults`` (fault files), the episodes run per fault set and estimator instead. With
     ``record`` (:func:`~stsf_gym.experiments.episodes.run_episode`) every episode is recorded.
+    The episodes run in ``workers`` local processes or as Ray tasks (``backend`` ``ray``, on
+    the cluster at ``address`` or a local instance).
     """
     if faults:
         if record:
             raise ConfigError("recording (--record) is not available with --faults")
         return evaluate_faults(
-            out, estimators, seeds, seed, world, agent, workers, env or {}, faults
+            out, estimators, seeds, seed, world, agent, workers, env or {}, faults, backend, address
         )
     out = Path(out)
     specs = [
@@ -65,7 +69,8 @@ def evaluate(
         for estimator in estimators
         for s in range(seed, seed + seeds)
     ]
-    results = run_episodes(specs, out / "episodes", workers, f"evaluate {world}", record)
+    desc = f"evaluate {world}"
+    results = run_episodes(specs, out / "episodes", workers, desc, record, backend, address)
     by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
     rows = [summarise(name, episodes, agent) for name, episodes in by_estimator.items()]
     summary = {
