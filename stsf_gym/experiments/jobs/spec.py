@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class JobKind:
-    """A kind of job: ``run`` one, its ``key``, and what it ``resolve``\\ s to (None: a job
-    whose result depends on nothing but the job and the code)."""
+    """A kind of job: how to ``run`` one, its ``key``, and ``resolve``: its resolved
+    configuration (None: a result that depends on nothing but the job and the code)."""
 
     run: Callable[[dict], object]
     key: Callable[[dict], str]
