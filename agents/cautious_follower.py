@@ -82,8 +82,8 @@ class CautiousFollower(PathFollower):
         left when it began)."""
         if self._sure():
             return True
-        if self._waiting_for != self._goal:
-            self._waiting_for, self._waited = self._goal, 0.0
+        if self._waiting_for != self.goals_left:  # a goal it has not waited at yet
+            self._waiting_for, self._waited = self.goals_left, 0.0
             self._budget = min(MAX_WAIT_S, 0.5 * max(self.time_limit - self.time, 0.0))
         return self._waited >= self._budget - 1e-9  # counted in control periods
 
@@ -105,7 +105,7 @@ class CautiousFollowerAgent(FollowerAgent):
     name = "cautious-follower"
 
     def begin(self, env: gym.Env) -> None:
-        """A cautious follower of this episode's path and goals, told the task's numbers."""
+        """A cautious follower of this episode's path, told the task's settings."""
         cfg = env.unwrapped.config
         self.follower = CautiousFollower.for_env(env, **self.options)
         self.follower.configure_caution(
@@ -118,7 +118,7 @@ class CautiousFollowerAgent(FollowerAgent):
     def act(self, obs) -> np.ndarray:
         """The follower's action, waiting while ``obs["pose_cov"]`` is unsure at a goal."""
         self.follower.observe(obs["pose_cov"], float(np.asarray(obs["encoders_time"]).ravel()[0]))
-        return self.follower.act(obs["pose"], obs["sonar"])
+        return super().act(obs)
 
     def config(self) -> dict:
         """The follower's settings and the caution's constants."""

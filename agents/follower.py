@@ -54,13 +54,15 @@ class PathFollower:
     config) may bend or slow that command around obstacles. Actions are scaled to the env's ``[-1,
     1]`` box by the robot's ``max_speed`` and ``max_yaw_rate``.
 
-    Given ``goals`` (arc lengths along the path, in order; the ``declare`` task), the follower
-    declares arrival where its pose says the goal is: the lookahead point stops at the current
-    goal, the speed falls as ``approach_gain`` times the distance its estimate has left (at least
-    ``min_speed``), and once that is within ``arrival.tolerance`` (or the estimate has passed
-    the goal) it commands ``[0, 0]`` for ``hold_steps`` steps (the task's ``stop_seconds``),
-    or once with its ``stop`` entry raised (``task.stop_action``), then heads for the next
-    goal. It turns where its estimate says the turn is, as always.
+    Under the ``declare`` task (``declares``) the follower heads for the task's current goal as
+    the observation gives it (:meth:`see_goal`: its arc length along the path while goals are
+    left) and declares arrival where its pose says the goal is: the lookahead point stops at
+    the goal, the speed falls as ``approach_gain`` times the distance its estimate has left (at
+    least ``min_speed``), and once that is within ``arrival.tolerance`` (or the estimate has
+    passed the goal) it commands ``[0, 0]`` for ``hold_steps`` steps (the task's
+    ``stop_seconds``), or once with its ``stop`` entry raised (``task.stop_action``), then
+    heads for the next goal the observation shows. It turns where its estimate says the turn
+    is, as always.
 
     Before its pose is known (an unknown start the estimator has not localized yet), a path
     follower has nowhere to steer to: :meth:`explore` wanders instead, straight ahead at
@@ -74,23 +76,21 @@ class PathFollower:
         max_speed: float,
         max_yaw_rate: float,
         avoidance: SonarAvoidance | None = None,
-        goals: list[float] | None = None,
+        declares: bool = False,
         hold_steps: int = 0,
         stop_action: bool = False,
     ) -> None:
         self.path, self.cfg, self.avoidance = Polyline(path), cfg, avoidance
         self.scale = np.array([max_speed, max_yaw_rate])
-        self.goals, self.hold_steps = list(goals or []), hold_steps
-        self.stop_action = stop_action
+        self.declares, self.hold_steps, self.stop_action = declares, hold_steps, stop_action
+        self.goals: list[float] = []  # the goal headed for (arc length), or none
         self._goal, self._holding, self._declared = 0, 0, False
+        self.goals_left: int | None = None  # the observation's count when last seen: the goal's id
 
     @classmethod
-    def for_env(
-        cls, env, config: str | Path | None = None, *, goals: list[float] | None = None, **overrides
-    ) -> PathFollower:
+    def for_env(cls, env, config: str | Path | None = None, **overrides) -> PathFollower:
         """A follower of ``env``'s world path, scaled to its action space, reading its sonar;
-        under ``declare`` it stops at ``goals`` (arc lengths; default: the task's route, or this
-        episode's training leg's)."""
+        under ``declare`` it stops at the goals its observations give (:meth:`see_goal`)."""
         env_cfg = env.unwrapped.config
         cfg = load_follower_config(config, **overrides)
         avoidance = None
@@ -103,11 +103,6 @@ class PathFollower:
             )
         stop_action = "stop" in env.get_wrapper_attr("action_layout")
         declare = env_cfg.task.protocol == "declare"
-        if not declare:
-            goals = None
-        elif goals is None:
-            task = env.unwrapped.task  # the route's goals, or this episode's training leg's
-            goals = [task.path.project(goal) for goal in task.goals]
         hold = 0
         if declare and not stop_action:
             hold = math.ceil(env_cfg.task.stop_seconds / env_cfg.sim.control_dt - 1e-9) + 1
@@ -117,10 +112,18 @@ class PathFollower:
             env_cfg.robot.max_speed,
             env_cfg.robot.max_yaw_rate,
             avoidance,
-            goals,
+            declare,
             hold,
             stop_action,
         )
+
+    def see_goal(self, goal_arc: float, goals_left: int) -> None:
+        """The task's current goal as the observation gives it (``obs["goal_arc"]`` and
+        ``obs["goals_left"]``): a new goal is headed for; the one it has declared stays declared
+        until the task moves on. Nothing without the ``declare`` task."""
+        if self.declares and goals_left != self.goals_left:
+            self.goals_left = goals_left
+            self.goals, self._goal = [goal_arc] if goals_left else [], 0
 
     def head_for(self, goal_arc: float | None) -> None:
         """Head for the goal ``goal_arc`` metres along the path (None: no goal left), afresh: an

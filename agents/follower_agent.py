@@ -27,13 +27,15 @@ class FollowerAgent:
         return env if self.decision_steps == 1 else DecisionInterval(env, self.decision_steps)
 
     def begin(self, env: gym.Env) -> None:
-        """A follower of this episode's path and goals."""
+        """A follower of this episode's path."""
         from stsf_gym.agents.follower import PathFollower
 
         self.follower = PathFollower.for_env(env, **self.options)
 
     def act(self, obs) -> np.ndarray:
-        """Pure pursuit on ``obs["pose"]``, bent by the sonar."""
+        """Pure pursuit on ``obs["pose"]``, bent by the sonar, to the goal the observation
+        gives (``obs["goal_arc"]`` while ``obs["goals_left"]``)."""
+        self.follower.see_goal(float(obs["goal_arc"][0]), int(obs["goals_left"][0]))
         return self.follower.act(obs["pose"], obs["sonar"])
 
     def env_overrides(self) -> dict:

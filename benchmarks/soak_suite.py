@@ -29,7 +29,7 @@ from stsf_gym.envs.suite import load_suite
 from stsf_gym.estimators import ESTIMATORS
 from stsf_gym.experiments.benchmark.run import benchmark_cells
 from stsf_gym.experiments.fault_runs import load_fault_set
-from stsf_gym.experiments.sweep.cells import run_cell
+from stsf_gym.experiments.jobs.cells import run_cell
 from stsf_gym.yaml_layers import CONFIG_DIR
 
 FAULTS = CONFIG_DIR / "faults" / "soak.yaml"

@@ -135,14 +135,6 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
 }
 
 
-#: Import cycles the code still has (type-only imports), each with the change that removes it:
-#: one more is a violation, and so is one of these gone but still listed.
-KNOWN_CYCLES = {
-    frozenset({"stsf_gym.experiments.sweep.report", "stsf_gym.experiments.sweep.run"}): (
-        "the sweep's spec moves out of its runner, into the one job engine"
-    ),
-}
-
 #: Modules (``__init__`` included) one package folder may hold side by side.
 FOLDER_LIMIT = 16
 #: Lines one module may hold; a longer one is listed in :data:`LONG_MODULES` with the reason.
@@ -252,15 +244,7 @@ def violations(root: Path = ROOT) -> list[str]:
             if name.startswith("_") and not name.startswith("__") and target != module:
                 found.append(f"{module} imports the private name {target}.{name}")
     every = module_imports(root, type_only=True)  # a cycle of type-only imports is one too
-    cycles = import_cycles(every)
-    known = [cycle for cycle in cycles if frozenset(cycle) in KNOWN_CYCLES]
-    found += [f"import cycle: {' -> '.join(cycle)}" for cycle in cycles if cycle not in known]
-    found += [
-        f"the known import cycle of {', '.join(sorted(members))} is gone: remove it from "
-        "stsf_gym.layers.KNOWN_CYCLES"
-        for members in KNOWN_CYCLES
-        if all(frozenset(cycle) != members for cycle in known)
-    ]
+    found += [f"import cycle: {' -> '.join(cycle)}" for cycle in import_cycles(every)]
     for module, path in module_files(root).items():
         lines = len(path.read_text().splitlines())
         if lines > MODULE_LIMIT and module not in LONG_MODULES:

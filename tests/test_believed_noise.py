@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from stsf_gym.estimators import estimator_settings
-from stsf_gym.experiments.sweep.run import load_sweep
+from stsf_gym.experiments.sweep.spec import load_sweep
 from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import PoseEstimateWrapper
 

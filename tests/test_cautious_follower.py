@@ -19,9 +19,10 @@ MAX_SPEED, MAX_YAW = 0.5, 1.0
 
 def follower(stop_action: bool = True, hold_steps: int = 0) -> cf.CautiousFollower:
     f = cf.CautiousFollower(
-        PATH, load_follower_config(), MAX_SPEED, MAX_YAW, None, [GOAL], hold_steps, stop_action
+        PATH, load_follower_config(), MAX_SPEED, MAX_YAW, None, True, hold_steps, stop_action
     )
     f.configure_caution(RADIUS, LIMIT, 0.1, DT)
+    f.see_goal(GOAL, 1)  # the observation's one goal left
     return f
 
 

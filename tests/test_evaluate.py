@@ -134,3 +134,22 @@ def test_unknown_estimator_rejected(tmp_path):
         timeout=120,
     )
     assert result.returncode == 2 and "'magic'" in result.stderr
+
+
+@pytest.mark.slow
+def test_evaluate_on_ray_gives_the_local_rows(tmp_path):
+    ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'stsf-gym[ray]')")
+    args = (["odometry"],)
+    kwargs = {"seeds": 2, "world": "straight_10m", "workers": 1, "env": FAST}
+    local, _ = evaluate(tmp_path / "local", *args, **kwargs)
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        on_ray, _ = evaluate(tmp_path / "ray", *args, **kwargs, backend="ray")
+    finally:
+        ray.shutdown()
+
+    def untimed(rows):  # wall-clock timings differ from run to run
+        return [{k: v for k, v in row.items() if k != "ms_per_step"} for row in rows]
+
+    assert untimed(on_ray["rows"]) == untimed(local["rows"])
+    assert len(list((tmp_path / "ray" / "episodes").glob("*.json"))) == 2

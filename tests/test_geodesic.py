@@ -15,7 +15,7 @@ from stsf_gym.envs.task import Polyline
 from stsf_gym.envs.worlds.generator import generate_world
 from stsf_gym.envs.worlds.geodesic import arc_error_bound, route_geodesic_length
 from stsf_gym.experiments.benchmark.scores import episode_scores
-from stsf_gym.experiments.sweep.cells import route_geodesic_m
+from stsf_gym.experiments.jobs.cells import route_geodesic_m
 from stsf_gym.validation import build
 
 RADIUS = 0.25  # robot.body_radius in configs/default.yaml

@@ -105,3 +105,16 @@ def test_the_expert_heads_for_the_observations_goal(make_env):
     assert info["expert_action"][-1] == -1.0  # the route's goal lies far ahead: drive on
     _, info = ExpertLabel(GoalAtStart(env)).reset(seed=0)
     assert info["expert_action"][-1] == 1.0  # the observation's goal is here: declare
+
+
+def test_the_follower_heads_for_the_observations_goal(make_env, monkeypatch):
+    env = make_env("stsf_gym/Suite-Corridor-Truth-v0", camera__enabled=False)  # with STOP
+    follower = make_agent("follower")
+    for wrapped, declares in ((env, -1.0), (GoalAtStart(env), 1.0)):
+        obs, _ = wrapped.reset(seed=0)
+        with monkeypatch.context() as blind:  # built without reading the task
+            blind.setattr(
+                type(env.unwrapped), "task", property(lambda _: pytest.fail("task")), raising=False
+            )
+            follower.begin(wrapped)
+        assert follower.act(obs)[-1] == declares  # the goal far ahead, or here: declare

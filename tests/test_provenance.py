@@ -19,7 +19,7 @@ import stsf_gym.results.provenance as provenance
 from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.training.train import latest_checkpoint, train
 from stsf_gym.experiments.evaluate import evaluate
-from stsf_gym.experiments.sweep.backends import make_runner
+from stsf_gym.experiments.jobs.backends import make_runner
 from stsf_gym.yaml_layers import CONFIG_DIR
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -12,7 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stsf_gym.experiments.cache import JobsFailed, run_cached
+from stsf_gym.experiments.jobs.cache import JobsFailed
+from stsf_gym.experiments.jobs.engine import run_jobs
+from stsf_gym.experiments.jobs.spec import JobKind
 from stsf_gym.validation import ConfigError, Positive, build
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -166,12 +168,15 @@ def _name(job: dict) -> str:
     return f"job{job['n']}"
 
 
+FLAKY = JobKind(flaky_job, _name)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("workers", [1, 2])
 def test_crashed_jobs_are_reported_and_rerun(tmp_path, capsys, workers):
     crashes = {1: "raise"} if workers == 1 else {1: "raise", 3: "exit"}
-    results = run_cached(flaky_job, _jobs(tmp_path, crashes), tmp_path / "out", _name, workers)
-    assert results == [{"double": 2 * n} for n in range(5)]
+    ran = run_jobs(FLAKY, _jobs(tmp_path, crashes), tmp_path / "out", workers=workers)
+    assert ran.results == [{"double": 2 * n} for n in range(5)]
     err = capsys.readouterr().err
     assert "job1 failed: RuntimeError: job 1 fails once; running it again" in err
     if workers > 1:
@@ -184,13 +189,13 @@ def test_crashed_jobs_are_reported_and_rerun(tmp_path, capsys, workers):
 def test_job_failing_twice_keeps_the_others_and_a_rerun_resumes(tmp_path, capsys):
     out = tmp_path / "out"
     with pytest.raises(JobsFailed, match="job2: the worker process died") as failed:
-        run_cached(flaky_job, _jobs(tmp_path, {2: "always"}), out, _name, workers=2)
+        run_jobs(FLAKY, _jobs(tmp_path, {2: "always"}), out, workers=2)
     assert list(failed.value.failures) == ["job2"]
     assert "job2 failed: the worker process died" in capsys.readouterr().err
     assert sorted(p.name for p in out.glob("*.json")) == [f"job{n}.json" for n in (0, 1, 3, 4)]
     (out / "job4.json").write_text('{"job": {"n": 4')  # a file cut short: redone, not trusted
-    results = run_cached(flaky_job, _jobs(tmp_path, {}), out, _name, workers=2)
-    assert results == [{"double": 2 * n} for n in range(5)]
+    ran = run_jobs(FLAKY, _jobs(tmp_path, {}), out, workers=2)
+    assert ran.results == [{"double": 2 * n} for n in range(5)]
     runs = [(tmp_path / f"marker{n}.runs").read_text() for n in range(5)]
     assert runs == ["x", "x", "x", "x", "xx"]  # only the failed and the corrupt job ran again
 

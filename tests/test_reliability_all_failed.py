@@ -11,9 +11,9 @@ from typing import ClassVar
 import numpy as np
 import pytest
 
-import stsf_gym.experiments.curve.run as curve_run
 from stsf_gym.estimators.base import PoseEstimator
-from stsf_gym.experiments.sweep.cells import failure
+from stsf_gym.experiments.jobs import cells
+from stsf_gym.experiments.jobs.spec import failure
 from stsf_gym.io import markdown_table
 
 
@@ -75,7 +75,7 @@ def test_an_accuracy_curve_whose_every_cell_fails_reports_them(run_cli, tmp_path
     def broken_agent(cell: dict) -> dict:  # e.g. a user's agent that raises on every episode
         return failure(RuntimeError("my estimator's bug"))
 
-    monkeypatch.setattr(curve_run, "run_cell", broken_agent)
+    monkeypatch.setitem(cells.CELL_KINDS, "evaluate", cells.CellKind(broken_agent))
     out = tmp_path / "out"
     argv = ["accuracy-curve", "--levels", "1,2", "--seeds", "1", "--estimators", "odometry"]
     code, err = run_cli(*argv, "--workers", "1", "--out", str(out))

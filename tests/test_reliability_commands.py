@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 
 from stsf_gym.agents import pretrained
-from stsf_gym.experiments.sweep.run import cell_name, forget_failures
+from stsf_gym.experiments.jobs.cells import cell_name
+from stsf_gym.experiments.jobs.engine import forget_failures
 
 SHIPPED = pretrained.MODELS / "corridor" / "dagger-truth"  # trained on the corridor suite, truth
 
@@ -121,7 +122,7 @@ def test_a_cut_short_cell_file_is_redone_not_raised(tmp_path):
     cut.write_text('{"job": {"kind": "eval')
     failed.write_text(json.dumps({"job": cells[1], "result": {"error": "RuntimeError: bug"}}))
     finished.write_text(json.dumps({"job": cells[2], "result": {"metrics": {}}}))
-    forget_failures(cells, folder)
+    forget_failures(cells, folder, cell_name)
     assert not cut.exists() and not failed.exists() and finished.exists()
 
 

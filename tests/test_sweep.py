@@ -13,9 +13,10 @@ import yaml
 
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.estimators import estimator_settings
-from stsf_gym.experiments.sweep import cells as sweep_cells
-from stsf_gym.experiments.sweep.cells import CellKind
-from stsf_gym.experiments.sweep.run import load_sweep, run_sweep
+from stsf_gym.experiments.jobs import cells as sweep_cells
+from stsf_gym.experiments.jobs.cells import CellKind
+from stsf_gym.experiments.sweep.run import run_sweep
+from stsf_gym.experiments.sweep.spec import load_sweep
 from stsf_gym.results import check_rows
 
 TINY = {  # 2 estimators x 1 noise key x 2 levels x 1 seed, 12 s episodes, fast camera

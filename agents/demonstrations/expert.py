@@ -46,7 +46,7 @@ class ExpertLabel(gym.Wrapper):
     def reset(self, *, seed=None, options=None):
         """Reset, and label the first state with a follower of the episode's goals."""
         obs, info = self.env.reset(seed=seed, options=options)
-        self.expert = PathFollower.for_env(self.env, goals=[])  # goals: the observation's
+        self.expert = PathFollower.for_env(self.env)  # its goal: the observation's (head_for)
         return obs, self._label(obs, info)
 
     def step(self, action):

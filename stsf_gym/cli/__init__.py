@@ -14,7 +14,7 @@ from stsf_gym.cli.options import preflight
 from stsf_gym.cli.reports import NothingFinished
 from stsf_gym.config import ConfigError
 from stsf_gym.envs.quiet import VERBOSE_ENV
-from stsf_gym.experiments.cache import JobsFailed
+from stsf_gym.experiments.jobs.cache import JobsFailed
 from stsf_gym.results.provenance import set_command
 from stsf_gym.validation import FieldError
 

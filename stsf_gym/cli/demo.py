@@ -19,7 +19,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     options.common(parser, "out/demo")
     parser.add_argument("--seconds", type=float, help="simulated time limit per episode")
     parser.add_argument("--seeds", type=int, default=1, help="episodes per estimator (1)")
-    options.workers(parser)
+    options.backend(parser)
     parser.add_argument(
         "--video-seconds",
         type=float,
@@ -52,6 +52,8 @@ def run(args: argparse.Namespace) -> dict:
         args.video_seconds,
         args.seeds,
         inputs.recording(args),
+        args.backend,
+        args.address,
     )
     if not args.json:
         console = Console()

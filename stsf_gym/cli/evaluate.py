@@ -31,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     options.world(parser)
     parser.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")
-    options.workers(parser)
+    options.backend(parser)
     parser.add_argument(
         "--faults",
         nargs="+",
@@ -58,6 +58,8 @@ def run(args: argparse.Namespace) -> dict:
         inputs.env_overrides(args, world),
         args.faults,
         inputs.recording(args),
+        args.backend,
+        args.address,
     )
     print_markdown(args, report)
     return summary

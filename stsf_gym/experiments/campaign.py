@@ -4,10 +4,11 @@
 each run in ``OUT/<pose source>/seed-<s>/``. A run that the same code and settings finished is
 skipped (:func:`~stsf_gym.agents.training.train.train` returns its summary untouched), and an
 unfinished one resumes from its last checkpoint, so a campaign killed at any point is rerun
-with the same command. Locally the runs go one after another in this process (each already
-uses ``n_envs`` worker processes); on Ray (the sweeps' backend,
-:func:`~stsf_gym.experiments.sweep.backends.ray_runner`) they run side by side, ``n_envs`` CPUs
-each, on a local instance of ``--workers`` CPUs or on a cluster (``--address``), unchanged.
+with the same command: the runs are jobs of the engine
+(:func:`~stsf_gym.experiments.jobs.engine.run_jobs`) that keep their own state, not its cache.
+Locally the runs go one after another in this process (each already uses ``n_envs`` worker
+processes); on Ray they run side by side, ``n_envs`` CPUs each, on a local instance of
+``--workers`` CPUs or on a cluster (``--address``), unchanged.
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from stsf_gym.experiments.cache import Crash, JobsFailed
-from stsf_gym.validation import ConfigError
+from stsf_gym.experiments.jobs.engine import run_jobs
+from stsf_gym.experiments.jobs.spec import JobKind
 
 #: The arguments of :func:`~stsf_gym.agents.training.train.train` a campaign's runs share.
 Job = dict[str, Any]
@@ -47,37 +48,15 @@ def run_campaign(
     on_done: Callable[[Job, dict], None] | None = None,
 ) -> list[dict]:
     """Every job's summary, in job order. ``on_done(job, summary)`` is called as each finishes
-    (a progress bar, a line of output). A job that raises ends a local campaign at once (its
-    checkpoint kept); on Ray the other jobs go on and the failures are raised together as
-    :class:`~stsf_gym.experiments.cache.JobsFailed` once every job has finished (the command
-    exits 1; a rerun retries them)."""
-    done: dict[int, dict] = {}
-    if backend == "local":
-        if address is not None:  # as every other command: not ignored
-            raise ConfigError("--address is only for --backend ray (a campaign on a cluster)")
-        for index, job in enumerate(jobs):
-            done[index] = train_job(job)
-            if on_done is not None:
-                on_done(job, done[index])
-        return [done[index] for index in range(len(jobs))]
-    from stsf_gym.experiments.sweep.backends import make_runner
-
-    cpus = max(map(_cpus, jobs), default=1)
-    runner = make_runner(backend, workers, address, cpus_per_job=cpus)
-    numbered = [{**job, "_index": index} for index, job in enumerate(jobs)]
-    failures: dict[str, str] = {}
-    for job, result in runner(_numbered_job, numbered):
-        index, job = job["_index"], {k: v for k, v in job.items() if k != "_index"}
-        if isinstance(result, Crash) or (isinstance(result, dict) and "error" in result):
-            error = result.error if isinstance(result, Crash) else result["error"]
-            failures[f"{job['estimator']} seed {job['seed']}"] = error
-            continue
-        done[index] = result
-        if on_done is not None:
-            on_done(job, result)
-    if failures:
-        raise JobsFailed(failures, Path(jobs[0]["out"]).parent.parent, attempts=1)
-    return [done[index] for index in range(len(jobs))]
+    (a progress bar, a line of output). A run that raises is run once more (resuming from its
+    checkpoint); one failing twice is raised with the others as
+    :class:`~stsf_gym.experiments.jobs.cache.JobsFailed` once every job has finished (the
+    command exits 1; a rerun retries them)."""
+    cpus = max(map(_cpus, jobs), default=1) if backend == "ray" else 1
+    local_workers = workers if backend == "ray" else 1  # a local run's envs are its processes
+    # no bar of the engine's: the caller shows the runs as they finish (on_done)
+    ran = run_jobs(TRAINING_RUNS, jobs, None, "", backend, local_workers, address, cpus, on_done)
+    return ran.results
 
 
 def _cpus(job: Job) -> int:
@@ -96,6 +75,10 @@ def _cpus(job: Job) -> int:
     return hp.training.n_envs
 
 
-def _numbered_job(job: Job) -> dict:
-    """:func:`train_job` of a job that carries its place in the campaign (``_index``)."""
-    return train_job({k: v for k, v in job.items() if k != "_index"})
+def _run_name(job: Job) -> str:
+    """A run's name: its pose source and seed (its folder below the campaign's)."""
+    return f"{job['estimator']} seed {job['seed']}"
+
+
+#: A campaign's runs as jobs of the engine (each resumes from its own folder).
+TRAINING_RUNS = JobKind(train_job, _run_name)

@@ -139,8 +139,11 @@ def compare(
     world: str = "irl_corridor",
     workers: int = 2,
     env: dict | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> dict:
-    """Run every agent on every pose source; write the table and the figure to ``out``."""
+    """Run every agent on every pose source (in ``workers`` local processes or as Ray tasks:
+    ``backend``, ``address``); write the table and the figure to ``out``."""
     out = Path(out)
     env = judged_alike(agents, estimators, env or {})
     pairs = [(a, e) for a in agents for e in estimators]
@@ -149,7 +152,8 @@ def compare(
         for a, e in pairs
         for s in range(seed, seed + seeds)
     ]
-    results = run_episodes(specs, out / "episodes", workers, desc=f"compare {world}")
+    desc = f"compare {world}"
+    results = run_episodes(specs, out / "episodes", workers, desc, backend=backend, address=address)
     by_pair = {  # each model its own row, under the name the benchmark gives it
         (agent_for(a, e), e): [
             r for r in results if r.spec["agent"] == agent_for(a, e) and r.spec["estimator"] == e

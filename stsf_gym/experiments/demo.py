@@ -39,11 +39,15 @@ def run_demo(
     video_seconds: float | None = None,
     seeds: int = 1,
     record: dict | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> dict:
     """``seeds`` episodes per estimator on the IRL corridor; results.md/json, trajectories.png,
     errors.png, nees.png and, unless ``video_seconds`` is 0, a video of each estimator's first
     episode in ``videos/``, the whole of it (or its first ``video_seconds``); with ``record``
-    each episode recorded (:func:`~stsf_gym.experiments.episodes.run_episode`)."""
+    each episode recorded (:func:`~stsf_gym.experiments.episodes.run_episode`). The episodes
+    run in ``workers`` local processes or as Ray tasks (``backend``, ``address``); the videos
+    locally."""
     summary, _ = evaluate(
         out,
         DEMO_ESTIMATORS,
@@ -54,6 +58,8 @@ def run_demo(
         env=env,
         agent_options=PATH_ONLY,
         record=record,
+        backend=backend,
+        address=address,
     )
     if video_seconds is None or video_seconds > 0:
         specs = [

@@ -2,8 +2,8 @@
 the same trajectory) while the env's top-down map (``render.view: map``) is recorded, the
 whole episode sped up (:data:`SPEED_UP`) so the turns, the drift and the arrival all show.
 
-Each video is a job of :func:`~stsf_gym.experiments.cache.run_cached`: recorded in worker
-processes, and skipped when rerun with the same output folder."""
+Each video is a job of the engine (:func:`~stsf_gym.experiments.jobs.engine.run_jobs`):
+recorded in worker processes, and skipped when rerun with the same output folder."""
 
 from __future__ import annotations
 
@@ -15,8 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.agents.registry import make_agent
-from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.episodes import EpisodeSpec, make_episode_env
+from stsf_gym.experiments.jobs.engine import run_jobs
+from stsf_gym.experiments.jobs.spec import JobKind
 from stsf_gym.video import VideoWriter
 from stsf_gym.yaml_layers import deep_merge
 
@@ -74,6 +75,14 @@ def _record(job: dict) -> dict:
     return {"file": record_episode(spec, stem, job["seconds"], job["speed_up"]).name}
 
 
+#: Videos as jobs of the engine: keyed and resolved as their episode.
+VIDEO_JOBS = JobKind(
+    _record,
+    lambda job: EpisodeSpec(**job["spec"]).key,
+    lambda job: EpisodeSpec(**job["spec"]).resolved(),
+)
+
+
 def record_videos(
     specs: list[EpisodeSpec],
     folder: str | Path,
@@ -88,13 +97,5 @@ def record_videos(
         {"spec": asdict(s), "folder": str(folder), "seconds": seconds, "speed_up": speed_up}
         for s in specs
     ]
-    results = run_cached(
-        _record,
-        jobs,
-        folder / "jobs",
-        lambda job: EpisodeSpec(**job["spec"]).key,
-        workers,
-        "videos",
-        config=lambda job: EpisodeSpec(**job["spec"]).resolved(),
-    )
-    return {spec.estimator: result["file"] for spec, result in zip(specs, results, strict=True)}
+    ran = run_jobs(VIDEO_JOBS, jobs, folder / "jobs", "videos", workers=workers)
+    return {spec.estimator: done["file"] for spec, done in zip(specs, ran.results, strict=True)}

@@ -2,9 +2,10 @@
 
 The agent sees the wrapped observation (``obs["pose"]`` is the estimate); the true pose from
 ``info`` is used only to score the run. Every step is recorded (time, distance, true pose,
-estimate and covariance), and the estimator's innovations (NIS). A run of many episodes keeps
-each finished episode in its own JSON file, so an interrupted run resumes where it stopped,
-and writes each episode's true and estimated trajectories as TUM files.
+estimate and covariance), and the estimator's innovations (NIS). A run of many episodes (jobs of
+:data:`EPISODE_JOBS`) keeps each finished episode in its own JSON file, so an interrupted run
+resumes where it stopped, and writes each episode's true and estimated trajectories as TUM
+files.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from stsf_gym.agents.registry import make_agent
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
-from stsf_gym.experiments.cache import run_cached
+from stsf_gym.experiments.jobs.engine import run_jobs
+from stsf_gym.experiments.jobs.spec import JobKind
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import TruePose, sensor_model
@@ -286,17 +288,15 @@ def _spec(job: dict) -> EpisodeSpec:
     return EpisodeSpec(**{k: v for k, v in job.items() if k not in ("version", "record")})
 
 
-def _run(job: dict) -> EpisodeResult:
+def run_job(job: dict) -> EpisodeResult:
+    """The episode of a job (:func:`run_jobs`'s worker): the spec's fields, the result's
+    version and, optionally, how to ``record`` it."""
     record = job.get("record")
     return run_episode(_spec(job), record) if record else run_episode(_spec(job))
 
 
-def _name(job: dict) -> str:
-    return _spec(job).key
-
-
-def _resolved(job: dict) -> dict:
-    return _spec(job).resolved()
+#: Episodes as jobs of the engine: keyed by the spec's key, resolved by the spec.
+EPISODE_JOBS = JobKind(run_job, lambda job: _spec(job).key, lambda job: _spec(job).resolved())
 
 
 def specs_config(specs: list[EpisodeSpec]) -> dict:
@@ -316,15 +316,17 @@ def run_episodes(
     workers: int = 1,
     desc: str = "episodes",
     record: dict | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> list[EpisodeResult]:
-    """Run ``specs`` (in ``workers`` processes), reusing episodes already in ``folder``; the
-    TUM trajectories of each go to ``folder/trajectories/<episode>/``. With ``record`` (see
-    :func:`run_episode`) each episode is recorded too: a saved episode without that recording
-    is run again."""
+    """Run ``specs`` (in ``workers`` processes, or on Ray: :func:`run_jobs`), reusing episodes
+    already in ``folder``; the TUM trajectories of each go to
+    ``folder/trajectories/<episode>/``. With ``record`` (see :func:`run_episode`) each episode
+    is recorded too: a saved episode without that recording is run again."""
     extra = {"record": record} if record else {}
     jobs = [{"version": RESULT_VERSION, **asdict(spec), **extra} for spec in specs]
-    done = run_cached(_run, jobs, folder, _name, workers, desc, config=_resolved)
-    results = [EpisodeResult(**r) for r in done]
+    ran = run_jobs(EPISODE_JOBS, jobs, folder, desc, backend, workers, address)
+    results = [EpisodeResult(**r) for r in ran.results]
     for episode in results:
         write_trajectories(episode, Path(folder) / "trajectories")
     return results

@@ -46,18 +46,22 @@ def evaluate(
     faults: list[str | Path] | None = None,
     agent_options: dict | None = None,
     record: dict | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> tuple[dict, dict[str, list[EpisodeResult]]]:
     """Run ``seeds`` episodes per estimator; write the table and figures to ``out``.
 
     Returns the summary (as written to results.json) and the episodes per estimator. With
     ``faults`` (fault files), the episodes run per fault set and estimator instead. With
     ``record`` (:func:`~stsf_gym.experiments.episodes.run_episode`) every episode is recorded.
+    The episodes run in ``workers`` local processes or as Ray tasks (``backend`` ``ray``, on
+    the cluster at ``address`` or a local instance).
     """
     if faults:
         if record:
             raise ConfigError("recording (--record) is not available with --faults")
         return evaluate_faults(
-            out, estimators, seeds, seed, world, agent, workers, env or {}, faults
+            out, estimators, seeds, seed, world, agent, workers, env or {}, faults, backend, address
         )
     out = Path(out)
     specs = [
@@ -67,7 +71,8 @@ def evaluate(
         for estimator in estimators
         for s in range(seed, seed + seeds)
     ]
-    results = run_episodes(specs, out / "episodes", workers, f"evaluate {world}", record)
+    desc = f"evaluate {world}"
+    results = run_episodes(specs, out / "episodes", workers, desc, record, backend, address)
     by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
     rows = [summarise(name, episodes, agent) for name, episodes in by_estimator.items()]
     summary = {
@@ -110,21 +115,37 @@ def evaluate_agents(
     env: dict | None = None,
     faults: list[str | Path] | None = None,
     record: dict | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> tuple[dict, Path]:
     """``stsf-gym evaluate``: one agent on every pose source (:func:`evaluate`), or, for several
     agents or a name with ``{estimator}`` (replaced by each pose source), the comparison table
     (:func:`~stsf_gym.experiments.compare.compare`). Every agent is made once first, so an
     unknown name or a missing model fails before any episode. Returns the summary and the
-    Markdown report written."""
+    Markdown report written. The episodes run in ``workers`` local processes or as Ray tasks
+    (``backend``, ``address``)."""
     expanded = expand_agents(agents)
     check_agents(sorted({a.replace("{estimator}", e) for a in expanded for e in estimators}))
     out = Path(out)
     if len(expanded) > 1 or any("{estimator}" in agent for agent in agents):
         if record:
             raise ConfigError("--record records one agent's episodes, not a comparison")
-        summary = compare(out, expanded, estimators, seeds, seed, world, workers, env)
+        summary = compare(
+            out, expanded, estimators, seeds, seed, world, workers, env, backend, address
+        )
         return summary, out / "comparison.md"
     summary, _ = evaluate(
-        out, estimators, seeds, seed, world, agents[0], workers, env, faults, record=record
+        out,
+        estimators,
+        seeds,
+        seed,
+        world,
+        agents[0],
+        workers,
+        env,
+        faults,
+        record=record,
+        backend=backend,
+        address=address,
     )
     return summary, out / "results.md"

@@ -66,6 +66,8 @@ def evaluate_faults(
     workers: int,
     env: dict,
     fault_files: list[str | Path],
+    backend: str = "local",
+    address: str | None = None,
 ) -> tuple[dict, dict[str, list[EpisodeResult]]]:
     """Run ``seeds`` episodes per fault set and estimator; write the table and error plots.
 
@@ -83,7 +85,8 @@ def evaluate_faults(
             for e in estimators
             for s in range(seed, seed + seeds)
         ]
-        results = run_episodes(specs, out / "episodes" / name, workers, desc=f"faults {name}")
+        folder, desc = out / "episodes" / name, f"faults {name}"
+        results = run_episodes(specs, folder, workers, desc, backend=backend, address=address)
         configs[name] = specs_config(specs)
         by_estimator = {e: [r for r in results if r.spec["estimator"] == e] for e in estimators}
         for estimator, episodes in by_estimator.items():

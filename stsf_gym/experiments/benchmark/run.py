@@ -4,11 +4,11 @@ Agents: the follower on each pose source, and trained models (or training folder
 seeds) on their own pose source, aggregated over training seeds
 (:mod:`~stsf_gym.experiments.benchmark.trained`).
 
-Every episode is a sweep cell (``kind: evaluate``, :mod:`stsf_gym.experiments.sweep.cells`) on
+Every episode is a cell (``kind: evaluate``, :mod:`stsf_gym.experiments.jobs.cells`) on
 world ``generated:test`` with the suite's generator and env (the declared-stop task, the fast
 sensor mode): episode seed ``s`` drives test world ``first + s``, the same world and seed for
 every agent and pose source, so pose sources are compared **paired**. The cells run on the
-sweep's local or Ray backend and resume (each finished cell is a JSON file in
+job engine's local or Ray backend and resume (each finished cell is a JSON file in
 ``<out>/cells/``). Writes ``results.json`` (the results schema: one row per agent and pose
 source, per-episode values kept; the paired differences; the worlds' measured landmark
 coverage), ``leaderboard.md`` and ``leaderboard.png``.
@@ -38,10 +38,8 @@ from stsf_gym.experiments.benchmark.trained import (
     expand_agents,
     paired_across_sources,
 )
-from stsf_gym.experiments.cache import run_cached
-from stsf_gym.experiments.sweep.backends import make_runner
-from stsf_gym.experiments.sweep.cells import cell_config, run_cell
-from stsf_gym.experiments.sweep.run import cell_name, forget_failures
+from stsf_gym.experiments.jobs.cells import CELL_JOBS
+from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
 from stsf_gym.results.provenance import by_digest, provenance
@@ -106,27 +104,17 @@ def benchmark(
     cells = benchmark_cells(loaded, list(agents), estimators, seeds)
     if record:
         cells = [{**cell, "record": record} for cell in cells]
-    forget_failures(cells, out / "cells")
-    configs = {cell_name(cell): cell_config(cell) for cell in cells}
-    results = run_cached(
-        run_cell,
-        cells,
-        out / "cells",
-        cell_name,
-        workers,
-        f"benchmark {loaded.name}",
-        make_runner(backend, workers, address),
-        config=lambda cell: configs[cell_name(cell)],
-    )
+    desc = f"benchmark {loaded.name}"
+    ran = run_jobs(CELL_JOBS, cells, out / "cells", desc, backend, workers, address)
     own_sources = {
         agent: record["estimator"]
         for agent in dict.fromkeys(cell["agent"] for cell in cells)
         if (record := trained_on(agent))
     }
-    summary = summarise_benchmark(loaded, cells, results, own_sources)
+    summary = summarise_benchmark(loaded, cells, ran.results, own_sources)
     summary["worlds"] = worlds_summary(loaded, seeds)
     summary["request"] = request
-    summary["provenance"] = provenance(by_digest(configs), seeds)
+    summary["provenance"] = provenance(by_digest(ran.configs), seeds)
     check_rows(summary["rows"])
     write_json(out / "results.json", summary)
     write_atomic(out / "leaderboard.md", leaderboard_markdown(summary))

@@ -9,7 +9,7 @@ same axes as points. The reading is the agent's **tolerated ATE**: the largest m
 of the dial's levels up to which the agent reaches the goal in at least
 :data:`REQUIRED_SUCCESS` of episodes at every level.
 
-Every episode is a sweep cell (:mod:`stsf_gym.experiments.sweep.cells`), run on the sweep's
+Every episode is a cell (:mod:`stsf_gym.experiments.jobs.cells`), run on the job engine's
 local or Ray backend with its resume: each finished cell is a JSON file in ``<out>/cells/``.
 Writes ``curve.json`` (numbers, the results schema), ``curve.md`` and ``curve.png``.
 """
@@ -21,12 +21,10 @@ from pathlib import Path
 from stsf_gym.envs.config import deep_merge, load_config
 from stsf_gym.envs.generated_env import parse_world
 from stsf_gym.episode_env import NOT_CONFIG, estimator_options
-from stsf_gym.experiments.cache import run_cached
 from stsf_gym.experiments.curve.inputs import DIAL, check_request, curve_world
 from stsf_gym.experiments.curve.plot import plot_curve
-from stsf_gym.experiments.sweep.backends import make_runner
-from stsf_gym.experiments.sweep.cells import cell_config, run_cell
-from stsf_gym.experiments.sweep.run import cell_name, forget_failures
+from stsf_gym.experiments.jobs.cells import CELL_JOBS
+from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
 from stsf_gym.results.provenance import by_digest, provenance
@@ -58,7 +56,7 @@ def curve_cells(
     env: dict,
     dial: dict,
 ) -> list[dict]:
-    """The sweep cells of the curve: each agent on each dial level and on each estimator."""
+    """The cells of the curve: each agent on each dial level and on each estimator."""
     cells = []
     for agent in agents:
         agent = str(Path(agent).resolve()) if agent.endswith(".zip") else agent
@@ -121,20 +119,8 @@ def accuracy_curve(
     cells = curve_cells(
         agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
     )
-    forget_failures(cells, out / "cells")
-    runner = make_runner(backend, workers, address)
-    configs = {cell_name(cell): cell_config(cell) for cell in cells}
-    results = run_cached(
-        run_cell,
-        cells,
-        out / "cells",
-        cell_name,
-        workers,
-        "accuracy curve",
-        runner,
-        config=lambda cell: configs[cell_name(cell)],
-    )
-    summary = summarise_curve(cells, results)
+    ran = run_jobs(CELL_JOBS, cells, out / "cells", "accuracy curve", backend, workers, address)
+    summary = summarise_curve(cells, ran.results)
     summary.update(
         schema_version=SCHEMA_VERSION,
         world=world,
@@ -144,7 +130,7 @@ def accuracy_curve(
         seeds=[seed, seed + seeds - 1],
         dial={**estimator_options(DIAL), **dial},
     )
-    summary["provenance"] = provenance(by_digest(configs), (cell["seed"] for cell in cells))
+    summary["provenance"] = provenance(by_digest(ran.configs), (cell["seed"] for cell in cells))
     write_json(out / "curve.json", summary)
     write_atomic(out / "curve.md", curve_markdown(summary))
     summary["figures"] = [str(plot_curve(summary, out / "curve.png"))]

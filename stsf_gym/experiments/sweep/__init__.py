@@ -1,1 +1,1 @@
-"""``stsf-gym sweep``: cells over config keys, where they run, and the summary."""
+"""``stsf-gym sweep``: a sweep file read into cells, their run, and the summary."""

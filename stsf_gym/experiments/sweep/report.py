@@ -15,17 +15,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from stsf_gym.experiments.sweep.paired import paired_differences
+from stsf_gym.experiments.sweep.spec import Sweep
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
 from stsf_gym.results import METRICS, SCHEMA_VERSION, render, stats
 from stsf_gym.results.provenance import by_digest, provenance
-
-if TYPE_CHECKING:
-    from stsf_gym.experiments.sweep.run import Sweep
 
 FINAL, RMS = "final_error_m", "ate_rmse_m"
 FIGURE = "errors.png"

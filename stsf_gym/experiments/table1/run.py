@@ -30,7 +30,8 @@ from stsf_gym.envs.config import (
     read_yaml,
 )
 from stsf_gym.episode_env import estimator_options
-from stsf_gym.experiments.cache import run_cached
+from stsf_gym.experiments.jobs.engine import run_jobs
+from stsf_gym.experiments.jobs.spec import JobKind
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.statistics import rms
 from stsf_gym.experiments.table1.joint import joint_rows
@@ -158,16 +159,9 @@ def run_table1(
     out = Path(out)
     jobs = [{"config": cfg.__dict__, "seed": s} for s in range(seed, seed + cfg.seeds)]
     resolved = resolved_table1(cfg)
-    done = run_cached(
-        _run_seed,
-        jobs,
-        out / "seeds",
-        lambda job: f"seed_{job['seed']}",
-        workers,
-        "table1",
-        config=lambda job: resolved,
-    )
-    results = [SeedResult(**r) for r in done]
+    kind = JobKind(_run_seed, lambda job: f"seed_{job['seed']}", lambda job: resolved)
+    ran = run_jobs(kind, jobs, out / "seeds", "table1", workers=workers)
+    results = [SeedResult(**r) for r in ran.results]
     rows = summarise(cfg, results)
     summary = {
         "schema_version": SCHEMA_VERSION,

@@ -1,4 +1,4 @@
-"""What one sweep cell runs: a small registry of cell kinds, and failures kept as results.
+"""Cells: the episode and training jobs the sweep, the benchmark and the accuracy curve run.
 
 A cell is a JSON-friendly dict (``kind``, ``world``, ``estimator``, ``agent``, ``seed``,
 ``env`` overrides, the estimator's ``options``, the swept ``values``; training cells also
@@ -6,17 +6,22 @@ A cell is a JSON-friendly dict (``kind``, ``world``, ``estimator``, ``agent``, `
 whose ``metrics`` (numbers or booleans) the sweep summarises over seeds; its optional
 ``check`` raises ConfigError on a bad cell before anything runs. :func:`run_cell` never
 raises: an error becomes a result with the error's text, so one failed cell does not stop
-the rest.
+the rest. :data:`CELL_JOBS` is the cells' kind of job for
+:func:`~stsf_gym.experiments.jobs.engine.run_jobs`: keyed by :func:`cell_name`, resolved by
+:func:`cell_config`.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import traceback
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, deep_merge
+from stsf_gym.experiments.jobs.spec import JobKind, failure
 
 #: ``train`` keys that are arguments of ``stsf_gym.agents.training.train.train`` (with their
 #: defaults in a sweep: one env per cell); every other ``train`` key is a hyper-parameter
@@ -47,11 +52,10 @@ def run_cell(cell: dict) -> dict:
         return failure(err, traceback.format_exc())
 
 
-def failure(err: BaseException, details: str = "") -> dict:
-    """The result recorded for a cell that raised ``err``: the first line of its message, and
-    the traceback (or the whole message, for a Ray error, which holds the remote traceback)."""
-    message = (str(err).strip().splitlines() or [""])[0]
-    return {"error": f"{type(err).__name__}: {message}", "traceback": details or str(err)}
+def cell_name(cell: dict) -> str:
+    """File name of a cell: readable prefix, digest of its swept values."""
+    digest = hashlib.sha1(json.dumps(cell["values"], sort_keys=True).encode()).hexdigest()
+    return f"{cell['kind']}-{cell['estimator']}-seed{cell['seed']}-{digest[:10]}"
 
 
 def evaluate_cell(cell: dict) -> dict:
@@ -169,3 +173,6 @@ CELL_KINDS: dict[str, CellKind] = {
     "evaluate": CellKind(evaluate_cell),
     "train": CellKind(train_cell, check_train_cell),
 }
+
+#: Cells as jobs of the engine.
+CELL_JOBS = JobKind(run_cell, cell_name, cell_config)

@@ -1,21 +1,26 @@
-"""Where sweep cells run: local processes (the default) or Ray tasks, one env per cell.
+"""Where jobs run: local processes (the default) or Ray tasks.
 
-Both are runners for :func:`stsf_gym.experiments.cache.run_cached`: they yield each cell's
-result as it finishes, and ``run_cached`` writes its JSON file and moves the progress bar, so
-the cell files, resume and summary are the same whichever backend ran them. Each job's worker
-reports the package modules it loaded (:func:`~stsf_gym.results.provenance.worker_result`), so
-the run's provenance lists the code that ran on either backend.
+Both are runners (:data:`~stsf_gym.experiments.jobs.spec.Runner`): they yield each job's result
+as it finishes, or a :class:`~stsf_gym.experiments.jobs.spec.Crash` for a job that raised or
+whose worker died, and :func:`~stsf_gym.experiments.jobs.cache.run_cached` saves it and moves
+the progress bar, so the cached files, resume and summary are the same whichever backend ran
+them. Each job's worker reports the package modules it loaded
+(:func:`~stsf_gym.results.provenance.worker_result`), so the run's provenance lists the code
+that ran on either backend; its result is unchanged.
 """
 
 from __future__ import annotations
 
 import socket
+import threading
 from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from multiprocessing import get_context
 
-from stsf_gym.envs.config import ConfigError
-from stsf_gym.experiments.cache import Runner, process_runner
-from stsf_gym.experiments.sweep.cells import failure
+from stsf_gym.experiments.jobs.spec import Crash, Runner
 from stsf_gym.results.provenance import run_reporting_modules, worker_result
+from stsf_gym.validation import ConfigError
 
 BACKENDS = ("local", "ray")
 RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head answers a TCP connection in well under this
@@ -57,13 +62,13 @@ def check_ray_address(address: str | None, timeout_s: float = RAY_CONNECT_TIMEOU
 
 
 def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int = 1) -> Runner:
-    """Cells as Ray tasks (``cpus_per_job`` CPUs each), gathered with ``ray.wait`` as they
+    """Jobs as Ray tasks (``cpus_per_job`` CPUs each), gathered with ``ray.wait`` as they
     finish.
 
     Uses the Ray instance already initialised in this process, else connects to ``address``
     (a running cluster, e.g. ``ray://head:10001`` or ``auto``) or, without one, starts a local
     instance of ``workers * cpus_per_job`` CPUs (``workers`` jobs at once); an instance it
-    started is shut down when the cells are done.
+    started is shut down when the jobs are done.
     Nodes of a cluster need stsf-gym installed.
     """
     try:
@@ -89,13 +94,61 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
                 job = pending.pop(done[0])
                 try:
                     result = worker_result(ray.get(done[0]))
-                except ray.exceptions.RayError as err:  # the worker died or the task was lost
-                    result = failure(err)
+                except ray.exceptions.RayError as err:  # the job raised, its worker died...
+                    result = Crash.of(err)
                 yield job, result
         finally:
             for ref in pending:
                 ray.cancel(ref, force=True)
             if started:
                 ray.shutdown()
+
+    return run
+
+
+def process_runner(workers: int) -> Runner:
+    """Jobs in ``workers`` forkserver processes (in this process when ``workers`` is 1).
+
+    Each of the ``workers`` slots owns a one-process pool, so a worker that dies takes down
+    only the job it was running: that job is yielded as a :class:`Crash`, and the slot starts
+    a fresh process for its next job. An exception raised by ``fn`` is a :class:`Crash` too;
+    in this process (``workers`` 1) only exceptions are caught, a dying job ends the run.
+    """
+
+    def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterator[tuple[dict, object]]:
+        if not jobs:
+            return
+        if workers <= 1:
+            for job in jobs:
+                try:
+                    yield job, fn(job)
+                except Exception as err:
+                    yield job, Crash.of(err)
+            return
+        slot, pools, lock = threading.local(), [], threading.Lock()
+
+        def in_own_process(job: dict) -> object:
+            if getattr(slot, "pool", None) is None:
+                slot.pool = ProcessPoolExecutor(1, mp_context=get_context("forkserver"))
+                with lock:
+                    pools.append(slot.pool)
+            try:
+                return slot.pool.submit(run_reporting_modules, fn, job).result()
+            except BrokenProcessPool:
+                slot.pool = None  # this slot's next job gets a fresh process
+                raise
+
+        with ThreadPoolExecutor(min(workers, len(jobs))) as threads:
+            futures = {threads.submit(in_own_process, job): job for job in jobs}
+            try:
+                for future in as_completed(futures):
+                    err = future.exception()
+                    yield futures[future], Crash.of(err) if err else worker_result(future.result())
+            finally:
+                for future in futures:
+                    future.cancel()
+                with lock:
+                    for pool in pools:
+                        pool.shutdown(cancel_futures=True)
 
     return run

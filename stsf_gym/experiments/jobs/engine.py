@@ -1,0 +1,82 @@
+"""One way every command runs its jobs: :func:`run_jobs`.
+
+Evaluate, compare, demo, the sweep, the benchmark, the accuracy curve, Table I, the videos and
+the training campaign each make their own list of jobs and write their own report; between the
+two, :func:`run_jobs` forgets the failures a rerun must redo, resolves every job's
+configuration once, runs the jobs still to do on the chosen backend (local processes or Ray)
+and caches each result as it finishes.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from stsf_gym.experiments.jobs.backends import make_runner
+from stsf_gym.experiments.jobs.cache import run_cached
+from stsf_gym.experiments.jobs.spec import JobKind, failed
+
+
+@dataclass(frozen=True)
+class Ran:
+    """What :func:`run_jobs` returns: each job's result in job order, and each job's resolved
+    configuration by key (what a report's provenance records)."""
+
+    results: list
+    configs: dict[str, Mapping]
+
+
+def run_jobs(
+    kind: JobKind,
+    jobs: list[dict],
+    folder: str | Path | None,
+    desc: str = "jobs",
+    backend: str = "local",
+    workers: int = 2,
+    address: str | None = None,
+    cpus_per_job: int = 1,
+    on_done: Callable[[dict, object], None] | None = None,
+) -> Ran:
+    """Run (or resume) ``jobs`` of ``kind``, each result cached in ``folder`` (None: the jobs
+    keep their own state and are run every time).
+
+    ``backend`` ``local`` runs ``workers`` processes (this process for 1); ``ray`` runs Ray
+    tasks of ``cpus_per_job`` CPUs, on the cluster at ``address`` or a local instance of
+    ``workers * cpus_per_job`` CPUs. ``on_done(job, result)`` is called as each job finishes.
+    A job that raises (or whose worker dies) is run once more, then reported in
+    :class:`~stsf_gym.experiments.jobs.cache.JobsFailed` after the others finished.
+    """
+    runner = make_runner(backend, workers, address, cpus_per_job)
+    if folder is not None:
+        folder = Path(folder)
+        jobs = [json.loads(json.dumps(job)) for job in jobs]  # as they are saved and read back
+        forget_failures(jobs, folder, kind.key)
+    configs = {kind.key(job): kind.resolve(job) for job in jobs} if kind.resolve else {}
+    results = run_cached(
+        kind.run,
+        jobs,
+        folder,
+        kind.key,
+        runner,
+        desc,
+        config=(lambda job: configs[kind.key(job)]) if kind.resolve else None,
+        on_done=on_done,
+    )
+    return Ran(results, configs)
+
+
+def forget_failures(jobs: list[dict], folder: Path, key: Callable[[dict], str]) -> None:
+    """Delete the files of failed jobs (kept as results, :func:`~.spec.failure`), and of jobs
+    whose file cannot be read (cut short by a kill, edited), so that this run redoes them."""
+    for job in jobs:
+        file = folder / f"{key(job)}.json"
+        if not file.is_file():
+            continue
+        try:
+            forget = failed(json.loads(file.read_text())["result"])
+        except (ValueError, KeyError, TypeError):  # not JSON, or not a job's record
+            forget = True
+        if forget:
+            file.unlink()

@@ -1,0 +1,55 @@
+"""What the job engine runs: a kind of job, and what a job that failed leaves behind.
+
+A job is a JSON-friendly dict that carries its own ``version`` (bumped by its kind when its
+result changes meaning, so older cached results are rerun). Its :class:`JobKind` says how to
+run one (in a worker process or a Ray task, so it must be a module-level function), its key
+(the file name of its cached result, unique within a run) and its resolved configuration
+(every value it runs with: part of the fingerprint a cached result must match).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class JobKind:
+    """A kind of job: how to ``run`` one, its ``key``, and ``resolve``: its resolved
+    configuration (None: a result that depends on nothing but the job and the code)."""
+
+    run: Callable[[dict], object]
+    key: Callable[[dict], str]
+    resolve: Callable[[dict], Mapping] | None = None
+
+
+@dataclass(frozen=True)
+class Crash:
+    """What a runner yields for a job whose worker raised or died: the error, in words."""
+
+    error: str
+
+    @classmethod
+    def of(cls, err: BaseException) -> Crash:
+        """The crash an exception of a job stands for (a dead worker process is named as such)."""
+        if isinstance(err, BrokenProcessPool):
+            return cls("the worker process died (killed, os._exit or a crash in native code)")
+        first_line = (str(err).strip().splitlines() or [""])[0]
+        return cls(f"{type(err).__name__}: {first_line}")
+
+
+#: Runs ``fn`` on each job, yielding ``(job, result or Crash)`` in the order they finish.
+Runner = Callable[[Callable[[dict], object], list[dict]], Iterable[tuple[dict, object]]]
+
+
+def failure(err: BaseException, details: str = "") -> dict:
+    """The result a job that keeps its failures as results (a sweep cell) records for ``err``:
+    the first line of its message, and the traceback (or the whole message)."""
+    message = (str(err).strip().splitlines() or [""])[0]
+    return {"error": f"{type(err).__name__}: {message}", "traceback": details or str(err)}
+
+
+def failed(result: object) -> bool:
+    """Whether ``result`` is a failure kept as a result (:func:`failure`)."""
+    return isinstance(result, dict) and "error" in result
