@@ -95,3 +95,25 @@ def test_train_without_an_evaluation_says_so(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "no evaluation ran (fewer timesteps than eval_freq)" in result.stdout
     assert "nan" not in result.stdout
+
+
+@pytest.mark.parametrize("command", ["evaluate", "demo"])
+def test_every_episode_command_takes_the_ray_backend(command, monkeypatch, tmp_path):
+    """``--backend``/``--address`` reach the API of the commands that run episodes."""
+    import importlib
+
+    from stsf_gym import cli
+
+    handler = importlib.import_module(f"stsf_gym.cli.{command}")
+    api = {"evaluate": "evaluate_agents", "demo": "run_demo"}[command]
+    seen = {}
+
+    def record(*args):
+        seen["backend"], seen["address"] = args[-2:]
+        raise SystemExit(0)
+
+    monkeypatch.setattr(handler, api, record)
+    argv = [command, "--backend", "ray", "--address", "auto", "--out", str(tmp_path / "o")]
+    with pytest.raises(SystemExit):
+        cli.main(argv)
+    assert seen == {"backend": "ray", "address": "auto"}
