@@ -17,7 +17,8 @@ Usage::
 
     python benchmarks/learning_curves.py FOLDER [FOLDER ...] [--labels a,b] --out DIR
 
-Writes ``curves.json`` (numbers only), ``curves.md`` and ``curves-<suite>.png`` to ``DIR``.
+Writes ``curves.json`` (numbers under ``means``, and the run's provenance), ``curves.md`` and
+``curves-<suite>.png`` to ``DIR``.
 """
 
 from __future__ import annotations
@@ -31,12 +32,18 @@ import numpy as np
 from stsf_gym.agents.training.training_log import curve_points
 from stsf_gym.experiments.benchmark.intervals import seed_iqm
 from stsf_gym.io import save_figure, write_atomic, write_json
+from stsf_gym.results.provenance import provenance
 
 METRICS = {"success": ("val_episodes", "val success"), "return": ("val_returns", "val return")}
 AXES = {
     "control_steps": ("env steps (thousands of 0.1 s steps)", 1e3),
     "wall_time_s": ("wall time (min)", 60),
 }
+
+
+#: How each stage's points are drawn: the demonstration rounds dashed, learning from reward
+#: solid (its first point the round it starts from, :func:`with_stage_start`).
+STAGE_STYLES = {"demonstrations": "s--", "reward": "o-"}
 
 
 def runs_of(folder: Path) -> list[Path]:
@@ -50,11 +57,31 @@ def suite_of(run: Path) -> str:
     return record.get("suite") or record["world"]
 
 
+def with_stage_start(run: Path, points: list[dict]) -> list[dict]:
+    """``points`` of a fine-tuning run with the reward stage's start added: the demonstration
+    round the run kept (``train.json``), the policy that stage starts from, placed at the
+    demonstrations' end. Without it the reward stage's line would start at the last round,
+    which the stage never drove."""
+    demonstrations = [p for p in points if p["stage"] == "demonstrations"]
+    reward = [p for p in points if p["stage"] == "reward"]
+    record = json.loads((run / "train.json").read_text()).get("demonstrations") or {}
+    kept = record.get("kept_round")
+    if kept is None or not reward or not demonstrations:
+        return points
+    end = demonstrations[-1]
+    start = demonstrations[kept] | {
+        "stage": "reward",
+        "control_steps": end["control_steps"],
+        "wall_time_s": end["wall_time_s"],
+    }
+    return [*demonstrations, start, *reward]
+
+
 def curve(folder: Path) -> dict:
     """The means' suite and, per evaluation every run made, the median x positions and the
     IQM over seeds of val success and return with their 95 % intervals."""
     runs = runs_of(folder)
-    logs = [points for points in map(curve_points, runs) if points]
+    logs = [with_stage_start(run, points) for run in runs if (points := curve_points(run))]
     if not logs:
         raise SystemExit(f"{folder}: no evaluations logged in it or its seed-* folders")
     points = []
@@ -82,16 +109,20 @@ def plot(curves: dict[str, dict], suite: str, path: Path) -> Path:
     for label, means in curves.items():
         if means["suite"] != suite:
             continue
-        points = means["points"]
-        for row, (name, (_, ylabel)) in enumerate(METRICS.items()):
-            y = np.array([p[f"{name}_iqm"] for p in points])
-            low, high = np.array([p[f"{name}_ci95"] for p in points]).T
-            for col, (axis, (xlabel, scale)) in enumerate(AXES.items()):
-                x = np.array([p[axis] for p in points]) / scale
-                ax = axes[row, col]
-                ax.plot(x, y, "o-", label=f"{label} ({points[0]['seeds']} seeds)")
-                ax.fill_between(x, low, high, alpha=0.2)
-                ax.set(xlabel=xlabel if row else "", ylabel=f"{ylabel} (IQM, 95 % CI)")
+        seeds, colour = means["points"][0]["seeds"], f"C{list(curves).index(label)}"
+        for stage, style in STAGE_STYLES.items():
+            points = [p for p in means["points"] if p["stage"] == stage]
+            if not points:
+                continue
+            for row, (name, (_, ylabel)) in enumerate(METRICS.items()):
+                y = np.array([p[f"{name}_iqm"] for p in points])
+                low, high = np.array([p[f"{name}_ci95"] for p in points]).T
+                for col, (axis, (xlabel, scale)) in enumerate(AXES.items()):
+                    x = np.array([p[axis] for p in points]) / scale
+                    ax = axes[row, col]
+                    ax.plot(x, y, style, color=colour, label=f"{label}, {stage} ({seeds} seeds)")
+                    ax.fill_between(x, low, high, alpha=0.15, color=colour)
+                    ax.set(xlabel=xlabel if row else "", ylabel=f"{ylabel} (IQM, 95 % CI)")
     axes[0, 0].set(ylim=(-0.05, 1.05), title=f"{suite}: val worlds")
     for ax in axes.flat:
         ax.grid(alpha=0.3)
@@ -133,7 +164,7 @@ def main() -> None:
     if len(labels) != len(args.folders):
         raise SystemExit(f"--labels names {len(labels)} means for {len(args.folders)} folders")
     curves = {label: curve(folder) for label, folder in zip(labels, args.folders, strict=True)}
-    write_json(args.out / "curves.json", curves)
+    write_json(args.out / "curves.json", {"means": curves, "provenance": provenance()})
     write_atomic(args.out / "curves.md", table(curves))
     for suite in sorted({means["suite"] for means in curves.values()}):
         plot(curves, suite, args.out / f"curves-{suite}.png")

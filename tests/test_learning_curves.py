@@ -20,10 +20,19 @@ def _script():
     return module
 
 
-def _run(folder: Path, seed: int, suite: str, rounds: list[list[int]], evals: list[list[int]]):
-    """A run folder as the trainer leaves it: rounds, then evaluations of the reward stage."""
+def _run(
+    folder: Path,
+    seed: int,
+    suite: str,
+    rounds: list[list[int]],
+    evals: list[list[int]],
+    kept: int | None = None,
+):
+    """A run folder as the trainer leaves it: rounds (``kept``: the one the run kept), then
+    evaluations of the reward stage."""
     folder.mkdir(parents=True)
-    write_json(folder / "train.json", {"suite": suite, "world": "generated:train"})
+    demonstrations = {} if kept is None else {"demonstrations": {"kept_round": kept}}
+    write_json(folder / "train.json", {"suite": suite, "world": "generated:train"} | demonstrations)
     history = [
         {"round": i, "control_steps": 1000 * (i + 1), "wall_time_s": 60.0 * (i + 1) + seed,
          "val_success": sum(s) / len(s), "val_episodes": s, "val_returns": [5.0 * v for v in s]}
@@ -63,3 +72,13 @@ def test_curves_aggregate_seeds_per_evaluation_and_draw_one_figure_per_suite(tmp
     for suite in ("sparse", "corridor"):
         assert script.plot(curves, suite, tmp_path / f"{suite}.png").stat().st_size > 0
     assert "| plain | corridor | reward | 1 |" in script.table(curves)
+
+
+def test_the_reward_stage_starts_from_the_round_it_kept(tmp_path):
+    script = _script()
+    _run(tmp_path / "tuned", 0, "sparse", [[0, 0], [1, 1], [0, 1]], [[1, 0]], kept=1)
+    points = script.curve(tmp_path / "tuned")["points"]
+    assert [p["stage"] for p in points] == ["demonstrations"] * 3 + ["reward"] * 2
+    start = points[3]
+    assert start["success_iqm"] == 1.0  # the kept round's, not the last round's 0.5
+    assert start["control_steps"] == points[2]["control_steps"]  # where the stage begins
