@@ -8,11 +8,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from stsf_gym.experiments.benchmark.agent_behaviour import (
-    behaviour_row,
-    episode_behaviour,
-    position_sigma,
-)
+from stsf_gym.experiments.benchmark.agent_behaviour import behaviour_row, episode_behaviour
+from stsf_gym.experiments.episodes import full_covariances
 
 
 def _episode(speeds: list[float], stop_sigma: float, outcome: str = "goal") -> SimpleNamespace:
@@ -51,5 +48,6 @@ def test_a_wait_before_the_stop_shows_in_the_approach():
     assert row["stop_sigma_m"]["mean"] == pytest.approx(0.2)
 
 
-def test_the_position_sigma_is_the_larger_axis():
-    assert position_sigma([0.09, 0.0, 0.5, 0.01, 0.0, 9.0]) == pytest.approx(0.3)
+def test_covariances_unfold_from_their_upper_triangles():
+    full = full_covariances([[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]])[0]
+    assert full.tolist() == [[1, 2, 3], [2, 4, 5], [3, 5, 6]]

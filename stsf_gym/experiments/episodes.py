@@ -55,6 +55,13 @@ class EpisodeSpec:
         return {**config, "agent": agent_config(self.agent, self.agent_options)}
 
 
+def full_covariances(upper) -> np.ndarray:
+    """3x3 covariances ``(..., 3, 3)`` from their upper triangles ``(..., 6)``, as an
+    :class:`EpisodeResult` records them (``xx xy xt yy yt tt``)."""
+    upper = np.asarray(upper, dtype=float)
+    return upper[..., [0, 1, 2, 1, 3, 4, 2, 4, 5]].reshape(*upper.shape[:-1], 3, 3)
+
+
 @dataclass
 class EpisodeResult:
     """One episode, recorded at every control step (the estimator updates at each), starting
@@ -123,9 +130,7 @@ class EpisodeResult:
     @property
     def cov_matrices(self) -> np.ndarray:
         """The 3x3 covariance of each record, ``(N, 3, 3)``."""
-        upper = np.asarray(self.covariances)
-        full = upper[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]]
-        return full.reshape(-1, 3, 3)
+        return full_covariances(self.covariances)
 
     @property
     def nees_trace(self) -> np.ndarray:

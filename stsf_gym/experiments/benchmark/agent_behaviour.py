@@ -7,8 +7,9 @@ worlds. Every measure comes from an :class:`~stsf_gym.experiments.episodes.Episo
 (true poses, estimates and covariances at every 0.1 s control step; the declared stops):
 
 - **at each declared stop**: the true distance to the goal (m), and the estimate's position
-  standard deviation there, ``sqrt(lambda_max)`` of the 2x2 position block of its covariance
-  (m): an agent that waits for the estimate to settle declares at a smaller one;
+  standard deviation there (the cautious follower's measure, the largest axis of the
+  position block of its covariance, m): an agent that waits for the estimate to settle
+  declares at a smaller one;
 - **the approach**: the time from first coming within :data:`APPROACH_M` (true, straight line)
   of where it stopped to the declaration (s), and its mean speed over the last
   :data:`APPROACH_M` driven (m/s): slowing down or waiting near a goal shows in both;
@@ -23,20 +24,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from stsf_gym.agents.cautious_follower import position_sigma
+from stsf_gym.experiments.episodes import full_covariances
 from stsf_gym.results import stat
 
 APPROACH_M = 1.0  # the last metre before a stop: the follower's cruise speed covers it in 8 s
 
 STOP_MEASURES = ("stop_distance_m", "stop_sigma_m", "approach_time_s", "approach_speed_mps")
 EPISODE_MEASURES = ("largest_path_distance_m", "boards_in_view_share", "collision")
-
-
-def position_sigma(covariance_upper: list[float]) -> float:
-    """``sqrt`` of the largest eigenvalue of the position block of a covariance given as its
-    upper triangle ``(xx, xy, xt, yy, yt, tt)``."""
-    xx, xy, _, yy, _, _ = covariance_upper
-    block = np.array([[xx, xy], [xy, yy]], dtype=float)
-    return float(np.sqrt(max(np.linalg.eigvalsh(block)[-1], 0.0)))
 
 
 def record_at(times: np.ndarray, time: float) -> int:
@@ -56,7 +51,7 @@ def stop_measures(episode, stop: dict) -> dict[str, float]:
     span = times[at] - times[start]
     return {
         "stop_distance_m": float(stop["true_distance_m"]),
-        "stop_sigma_m": position_sigma(episode.covariances[at]),
+        "stop_sigma_m": position_sigma(full_covariances(episode.covariances[at])),
         "approach_time_s": float(times[at] - times[arrived]),
         "approach_speed_mps": float((travelled[at] - travelled[start]) / span) if span else 0.0,
     }
