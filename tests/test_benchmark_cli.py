@@ -46,6 +46,12 @@ def test_benchmark_writes_the_leaderboard(tiny_benchmark):
     assert {pair["first"], pair["second"]} == {"truth", "odometry"}
     assert pair["success_difference"]["pairs"] == 2
     assert on_disk["worlds"]["coverage"]["values"] == [1.0, 1.0]  # today's density
+    near = {row["estimator"]: row for row in on_disk["behaviour"]}  # read from the same cells
+    for source, row in rows.items():
+        assert near[source]["episodes"] == 2
+        assert near[source]["stop_distance_m"]["values"] == row["stop_distance_m"]["values"]
+        assert near[source]["success"]["mean"] == row["success_rate"]["mean"]
+    assert max(near["truth"]["stop_sigma_m"]["values"]) < 0.01  # the true pose's tiny sigma
     assert (out / "leaderboard.png").stat().st_size > 10_000
     assert "| follower | truth |" in (out / "leaderboard.md").read_text()
     assert summary["rows"] == on_disk["rows"]

@@ -37,11 +37,22 @@ SUCCEEDS = {
 
 def _result(success: bool) -> dict:
     stop = {"true_distance_m": 0.1 if success else 2.0, "success": success}
+    behaviour = {  # a careful stop where it succeeds, a hurried one where it misses
+        "stop_distance_m": [stop["true_distance_m"]],
+        "stop_sigma_m": [0.05 if success else 0.4],
+        "approach_time_s": [12.0 if success else 6.0],
+        "approach_speed_mps": [0.08 if success else 0.17],
+        "largest_path_distance_m": 0.2,
+        "boards_in_view_share": 0.5,
+        "collision": False,
+        "success": success,
+    }
     return {
         "outcome": "goal" if success else "missed",
         "distance": 12.0,
         "metrics": {"ate_rmse_m": 0.1},
         "navigation": {"goals": 1, "geodesic_length_m": 10.0, "stops": [stop]},
+        "behaviour": behaviour,
     }
 
 
@@ -102,6 +113,23 @@ def test_each_learnt_model_is_shown_beside_the_follower_with_its_paired_interval
         rate = len(SUCCEEDS[model, "truth"]) / WORLDS
         assert rows[name] == [name, "truth", f"{rate:.2f}", "1.00", interval, rows[name][5]]
     assert rows["ppo-truth/seed-0"][5] == "below" and rows["ppo-truth/seed-1"][5] == "level"
+
+
+def test_what_each_agent_does_near_its_goals_is_summarised_beside_its_success():
+    summary = _summary([("follower", "stsf"), (ON_STSF, "stsf")])
+    rows = {(r["agent"], r["estimator"]): r for r in summary["rows"]}
+    for near in summary["behaviour"]:
+        row = rows[near["agent"], near["estimator"]]
+        assert near["success"]["mean"] == row["success_rate"]["mean"]
+        assert near["stop_distance_m"]["values"] == row["stop_distance_m"]["values"]
+    follower = next(r for r in summary["behaviour"] if r["agent"] == "follower")
+    # half its stops careful (0.05 m), half hurried (0.4 m)
+    assert follower["stop_sigma_m"]["mean"] == pytest.approx(0.225)
+    table = _table(leaderboard_markdown(summary), "## Near the goals")
+    assert [line[:2] for line in table] == [["follower", "stsf"], [agent_name(ON_STSF), "stsf"]]
+    sigma = follower["stop_sigma_m"]
+    assert table[0][3] == f"{sigma['mean']:.2f} ± {sigma['std']:.2f}"
+    assert table[1][-1] == str(WORLDS)  # one stop a world
 
 
 def test_every_row_names_its_agent():

@@ -1,6 +1,6 @@
 """The Markdown leaderboard of a benchmark's results.json (``leaderboard.md``, printed in the
 terminal too): every row named by its agent, the learnt agents beside the follower, the
-paired differences."""
+paired differences, what each agent does near its goals."""
 
 from __future__ import annotations
 
@@ -101,11 +101,41 @@ def leaderboard_markdown(summary: dict) -> str:
                 }
             )
         text += markdown_table(pairs)
+    if summary.get("behaviour"):
+        text += behaviour_markdown(summary["behaviour"])
     if summary["failed"]:
         text += "\n## Cells that failed to run\n\n" + markdown_table(
             [{"cell": str(f["cell"]), "error": f["error"]} for f in summary["failed"]]
         )
     return text
+
+
+def behaviour_markdown(rows: list[dict]) -> str:
+    """What each agent does near its goals (:mod:`.agent_behaviour`): means ± standard
+    deviations, the stop measures over every declared stop, the rest over episodes."""
+    table = [
+        {
+            "agent": agent_name(r["agent"]),
+            "pose source": r["estimator"],
+            "distance at stop (m)": _stat(r["stop_distance_m"]),
+            "sigma at stop (m)": _stat(r["stop_sigma_m"]),
+            "last metre (s)": _stat(r["approach_time_s"]),
+            "speed, last metre (m/s)": _stat(r["approach_speed_mps"]),
+            "off the route (m)": _stat(r["largest_path_distance_m"]),
+            "board in view": _stat(r["boards_in_view_share"]),
+            "collisions": f"{r['collision']['mean']:.2f}",
+            "stops": r["stop_distance_m"]["count"],
+        }
+        for r in rows
+    ]
+    return (
+        "\n## Near the goals: where each agent declares and how it gets there\n\n"
+        "Per declared stop: its true distance to the goal, the estimate's position standard "
+        "deviation there, the time from first coming within 1 m of the stop, the mean speed "
+        "over the last metre driven; per episode: the largest distance from the route, the "
+        "share of frames with a board in view, the share ending in a collision.\n\n"
+        + markdown_table(table)
+    )
 
 
 def _where(pairs: list[dict]) -> str:

@@ -11,7 +11,9 @@ every agent and pose source, so pose sources are compared **paired**. The cells 
 job engine's local or Ray backend and resume (each finished cell is a JSON file in
 ``<out>/cells/``). Writes ``results.json`` (the results schema: one row per agent and pose
 source, per-episode values kept; the paired differences; the worlds' measured landmark
-coverage), ``leaderboard.md`` and ``leaderboard.png``.
+coverage; what each agent does near its goals,
+:mod:`~stsf_gym.experiments.benchmark.agent_behaviour`), ``leaderboard.md`` and
+``leaderboard.png``.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from stsf_gym.envs.task import Polyline
 from stsf_gym.envs.worlds.coverage import landmark_coverage
 from stsf_gym.envs.worlds.generator import generate_world
 from stsf_gym.episode_env import estimator_options
+from stsf_gym.experiments.benchmark.agent_behaviour import behaviour_row
 from stsf_gym.experiments.benchmark.figure import plot_leaderboard
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, paired_bootstrap
 from stsf_gym.experiments.benchmark.report import leaderboard_markdown
@@ -44,7 +47,7 @@ from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
 from stsf_gym.results.provenance import by_digest, provenance
 
-BENCHMARK_VERSION = 2  # bumped when a cell changes meaning, so older cell files are rerun
+BENCHMARK_VERSION = 3  # bumped when a cell changes meaning, so older cell files are rerun
 WORLD = "generated:test"
 
 
@@ -148,9 +151,10 @@ def summarise_benchmark(
 ) -> dict:
     """Rows per (agent, pose source), paired differences of every pair of pose sources per
     agent (on the seeds both finished), the learnt agents over their training seeds and
-    against the follower (``own_sources``: each model's training pose source), and the cells
-    that failed to run."""
+    against the follower (``own_sources``: each model's training pose source), what each
+    agent does near its goals on each pose source, and the cells that failed to run."""
     scores: dict[tuple[str, str], dict[int, dict]] = {}
+    behaviours: dict[tuple[str, str], list[dict]] = {}
     failed = []
     for cell, result in zip(cells, results, strict=True):
         if "error" in result:
@@ -158,9 +162,9 @@ def summarise_benchmark(
                 {"cell": cell["values"] | {"seed": cell["seed"]}, "error": result["error"]}
             )
             continue
-        scores.setdefault((cell["agent"], cell["estimator"]), {})[cell["seed"]] = episode_scores(
-            result
-        )
+        key = (cell["agent"], cell["estimator"])
+        scores.setdefault(key, {})[cell["seed"]] = episode_scores(result)
+        behaviours.setdefault(key, []).append(result["behaviour"])
     rows = [
         leaderboard_row(agent, estimator, list(by_seed.values()), list(by_seed))
         for (agent, estimator), by_seed in scores.items()
@@ -194,6 +198,10 @@ def summarise_benchmark(
         "trained": aggregate_runs(scores, own_sources),
         "trained_paired": paired_across_sources(scores, own_sources),
         "paired": paired,
+        "behaviour": [
+            {"agent": agent, "estimator": estimator, **behaviour_row(rows)}
+            for (agent, estimator), rows in behaviours.items()
+        ],
         "failed": failed,
     }
 

@@ -59,8 +59,10 @@ def cell_name(cell: dict) -> str:
 
 
 def evaluate_cell(cell: dict) -> dict:
-    """One episode of the agent on the estimator's pose: its outcome and the metrics of the
-    results schema (:func:`stsf_gym.experiments.statistics.episode_metrics`)."""
+    """One episode of the agent on the estimator's pose: its outcome, the metrics of the
+    results schema (:func:`stsf_gym.experiments.statistics.episode_metrics`) and what the agent
+    did near its goals (:func:`~stsf_gym.experiments.benchmark.agent_behaviour.episode_behaviour`)."""
+    from stsf_gym.experiments.benchmark.agent_behaviour import episode_behaviour
     from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
     from stsf_gym.experiments.statistics import episode_metrics
 
@@ -79,6 +81,7 @@ def evaluate_cell(cell: dict) -> dict:
             "geodesic_length_m": route_geodesic_m(cell, episode.true_poses[0][:2]),
             "stops": episode.stops,
         },
+        "behaviour": episode_behaviour(episode),
     }
 
 
