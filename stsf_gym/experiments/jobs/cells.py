@@ -61,7 +61,8 @@ def cell_name(cell: dict) -> str:
 def evaluate_cell(cell: dict) -> dict:
     """One episode of the agent on the estimator's pose: its outcome, the metrics of the
     results schema (:func:`stsf_gym.experiments.statistics.episode_metrics`) and what the agent
-    did near its goals (:func:`~stsf_gym.experiments.benchmark.agent_behaviour.episode_behaviour`)."""
+    did near its goals
+    (:func:`~stsf_gym.experiments.benchmark.agent_behaviour.episode_behaviour`)."""
     from stsf_gym.experiments.benchmark.agent_behaviour import episode_behaviour
     from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
     from stsf_gym.experiments.statistics import episode_metrics
