@@ -7,6 +7,9 @@ A name the CLI takes stands for one or more single agents, one per trained model
 - a training folder (the ``OUT`` of ``stsf-gym train``): its ``seed-*/model.zip``, or the
   ``model.zip`` of a one-seed run, taken whole (:mod:`~stsf_gym.agents.training_folder`: an
   unfinished or misnamed seed is refused by name);
+- ``clone:<training folder>``: the clone of each of its runs, the policy each reward stage
+  started from (``seed-S/finetune/clone.zip``), so a fine-tuned agent and its own start are
+  scored side by side, over the same seeds;
 - a ``.zip`` model file: itself, as an absolute path;
 - anything else (``follower``, ``cautious-follower``, a registered name, ``package.module:Class``):
   itself; :func:`~stsf_gym.agents.registry.make_agent` judges it.
@@ -20,7 +23,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.agents import pretrained
-from stsf_gym.agents.training_folder import SEED_FOLDERS, folder_models
+from stsf_gym.agents.training_folder import CLONE, SEED_FOLDERS, folder_models, seed_runs
+from stsf_gym.validation import ConfigError
+
+CLONE_PREFIX = "clone:"
 
 
 def resolve_agent(name: str) -> list[str]:
@@ -29,6 +35,8 @@ def resolve_agent(name: str) -> list[str]:
     path = Path(name)
     if name.startswith(pretrained.PREFIX):
         return [str(model) for model in pretrained.models(name)]
+    if name.startswith(CLONE_PREFIX):
+        return [str(clone.resolve()) for clone in folder_clones(name.removeprefix(CLONE_PREFIX))]
     if path.is_dir():
         return [str(model.resolve()) for model in folder_models(path)]
     if path.suffix == ".zip":
@@ -36,13 +44,36 @@ def resolve_agent(name: str) -> list[str]:
     return [name]
 
 
+def folder_clones(folder: str | Path) -> list[Path]:
+    """The clone of each run of training folder ``folder`` (``seed-S/finetune/clone.zip``, or
+    its own for one run); a run without one (trained without a reward stage, or before it)
+    raises :class:`ConfigError` naming it."""
+    runs = [run for _, run in seed_runs(folder)] or [Path(folder)]
+    clones = [run / CLONE for run in runs]
+    for clone in clones:
+        if not clone.is_file():
+            raise ConfigError(
+                f"{CLONE_PREFIX}{folder}: {clone} not found; only a run with a reward stage "
+                "(`stsf-gym train --algo dagger+ppo`) keeps the clone it started from"
+            )
+    return clones
+
+
 def training_group(agent: str) -> str | None:
-    """The agent a model file is one training seed of: its shipped name (canonical), or its
-    training folder; None for an agent by name."""
+    """The agent a model file is one training seed of: its shipped name (canonical), its
+    training folder, or ``clone:<training folder>`` for a run's clone; None for an agent by
+    name."""
     if not agent.endswith(".zip"):
         return None
     shipped = pretrained.shipped_name(agent)
     if shipped is not None:
         return shipped
-    folder = Path(agent).parent
-    return str(folder.parent if folder.match(SEED_FOLDERS) else folder)
+    path = Path(agent)
+    if path.match(f"*/{CLONE}"):
+        return CLONE_PREFIX + _run_folder(path.parent.parent)
+    return _run_folder(path.parent)
+
+
+def _run_folder(run: Path) -> str:
+    """The training folder of ``run``: its parent for a ``seed-S`` run, else itself."""
+    return str(run.parent if run.match(SEED_FOLDERS) else run)

@@ -17,6 +17,8 @@ from stsf_gym.validation import ConfigError
 SEED_FOLDERS = "seed-*"  # the glob of a folder's runs
 SEED_FOLDER = re.compile(r"seed-(0|[1-9][0-9]*)")  # seed-<integer>, as train names them
 MODEL = "model.zip"
+#: A fine-tuned run's clone: the policy its reward stage started from (and is pulled toward).
+CLONE = "finetune/clone.zip"
 
 
 def seed_runs(folder: str | Path) -> list[tuple[int, Path]]:

@@ -12,7 +12,7 @@ from stsf_gym.agents import pretrained
 from stsf_gym.agents.decision_interval import DecisionInterval
 from stsf_gym.agents.observation import PolicyObservation, observation_config
 from stsf_gym.agents.registry import make_agent, make_agents
-from stsf_gym.agents.resolve import resolve_agent
+from stsf_gym.agents.resolve import resolve_agent, training_group
 from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.agents.trained_agent import SB3Agent, wrap_for_model
 from stsf_gym.envs.config import ConfigError
@@ -60,6 +60,24 @@ def test_a_training_folder_and_its_zip_resolve_to_the_model_that_ran(tiny_learne
         assert env.action_space.contains(action)
     finally:
         env.close()
+
+
+def test_a_fine_tuned_folders_clones_are_an_agent_of_their_own(tiny_learner, tmp_path):
+    """``clone:FOLDER`` is the policy each reward stage started from: its own row and group,
+    named beside the fine-tuned model; a folder whose runs kept no clone is refused by name."""
+    folder, _ = tiny_learner
+    (clone,) = resolve_agent(f"clone:{folder}")
+    assert clone == str((folder / "finetune" / "clone.zip").resolve())
+    assert make_agent(clone).digest != make_agent(str(folder)).digest
+    (model,) = expand_agents([str(folder)])
+    assert agent_name(clone) == f"{agent_name(model)} clone"
+    assert training_group(clone) == f"clone:{training_group(model)}"
+    assert agent_name(training_group(clone)) == f"{agent_name(training_group(model))} clone"
+    run = tmp_path / "cloned" / "seed-0"
+    run.mkdir(parents=True)
+    (run / "model.zip").write_bytes(pretrained.models(SHIPPED)[0].read_bytes())
+    with pytest.raises(ConfigError, match=r"seed-0/finetune/clone.zip not found"):
+        resolve_agent(f"clone:{run.parent}")
 
 
 def test_the_benchmark_expands_names_with_the_same_resolver():

@@ -69,9 +69,10 @@ def test_agents_trained_on_two_pose_sources_are_paired_run_by_run_on_the_same_wo
     assert paired_across_sources(good) == []  # one pose source: nothing to pair
 
 
-def test_in_protocol_b_the_follower_drives_every_learnt_agents_pose_source_too():
+def test_in_protocol_b_the_follower_drives_the_learnt_agents_pose_sources():
     sources = agent_pose_sources("follower", None, ["mcl", "odometry", "mcl"])
-    assert sources == [*DEFAULT_ESTIMATORS, "mcl"]  # the defaults hold odometry already
+    assert sources == ["mcl", "odometry"]  # each once, no other
+    assert agent_pose_sources("follower", None, []) == list(DEFAULT_ESTIMATORS)  # scripts alone
     assert agent_pose_sources("follower", ["stsf"], ["mcl"]) == ["stsf"]  # protocol (a)
 
 

@@ -26,8 +26,7 @@ from stsf_gym.agents.training.resumed_eval import ResumableEvalCallback
 from stsf_gym.agents.training.settings import RunSettings
 from stsf_gym.agents.training.training_envs import EVAL_SEED_OFFSET
 from stsf_gym.agents.training.training_log import EpisodeLog, EvalLog
-
-CLONE = "finetune/clone.zip"  # the policy the fine-tuning starts from (and is pulled toward)
+from stsf_gym.agents.training_folder import CLONE
 
 
 def guard_the_clone(model: FinetunePPO, run: RunSettings, out: Path) -> None:

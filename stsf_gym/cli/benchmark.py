@@ -22,15 +22,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--agents",
         default="follower",
-        help="follower, cautious-follower, saved models, training folders (train --seeds N) "
-        "and/or shipped agents (pretrained:SUITE/ALGO-SOURCE), comma-separated; a model drives "
-        "on the pose source it was trained on",
+        help="follower, cautious-follower, saved models, training folders (train --seeds N), "
+        "their clones (clone:FOLDER: the policy each reward stage started from) and/or shipped "
+        "agents (pretrained:SUITE/ALGO-SOURCE), comma-separated; a model drives on the pose "
+        "source it was trained on",
     )
     parser.add_argument(
         "--estimators",
         help="pose sources, comma-separated: every agent drives on each (a learnt agent "
         "trained on one, deployed on each); without it, a learnt agent drives on its own and "
-        "the follower on odometry, conventional, conventional-filter, stsf and ekf",
+        "the scripts on those of the run's learnt agents (without learnt agents: odometry, "
+        "conventional, conventional-filter, stsf and ekf)",
     )
     parser.add_argument("--worlds", type=int, default=100, help="test worlds (100)")
     options.backend(parser)

@@ -1,7 +1,8 @@
 """Trained agents in the benchmark: each training seed's model, and the aggregate over seeds.
 
 An agent of ``stsf-gym benchmark --agents`` is any name :mod:`stsf_gym.agents.resolve` reads:
-``follower``, a shipped agent, a saved model (``.zip``) or a training folder (its models). A
+``follower``, a shipped agent, a saved model (``.zip``), a training folder (its models) or
+``clone:<training folder>`` (the clone each of its reward stages started from). A
 model drives on the pose source it was trained on (its ``stsf_meta``); the follower on each pose
 source asked for.
 
@@ -22,7 +23,8 @@ import numpy as np
 
 from stsf_gym.agents import pretrained
 from stsf_gym.agents.registry import FOLLOWER, trained_on
-from stsf_gym.agents.resolve import SEED_FOLDERS, resolve_agent, training_group
+from stsf_gym.agents.resolve import CLONE_PREFIX, SEED_FOLDERS, resolve_agent, training_group
+from stsf_gym.agents.training_folder import CLONE, MODEL
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
 
 __all__ = ["SEED_FOLDERS", "expand_agents", "training_group"]  # also read from here
@@ -45,9 +47,13 @@ def agent_name(agent: str) -> str:
     its training folder's or shipped agent's name with its seed (``ppo-stsf/seed-0``,
     ``ppo-truth/seed-0``), or by its file's stem when it is neither. The JSON keeps the whole
     path."""
+    if agent.startswith(CLONE_PREFIX):
+        return f"{agent_name(agent.removeprefix(CLONE_PREFIX))} clone"
     path = Path(agent)
     if path.suffix != ".zip":
         return path.name
+    if path.match(f"*/{CLONE}"):
+        return f"{agent_name(str(path.parent.parent / MODEL))} clone"
     folder = path.parent
     if folder.parent.parent.name == pretrained.MODELS.name:  # <models>/<suite>/<agent>/seed-S.zip
         return f"{folder.name}/{path.stem}"
@@ -61,15 +67,15 @@ def agent_pose_sources(
 ) -> list[str]:
     """The pose sources ``agent`` drives on: those of ``estimators`` when given (a learnt agent
     trained on one, deployed on each: protocol (a)); without, a learnt agent its own (protocol
-    (b)) and any other :data:`DEFAULT_ESTIMATORS` followed by ``learnt_sources``, the pose
-    sources the run's learnt agents drive on, so each is paired with the follower on its
-    own."""
+    (b)) and any other agent ``learnt_sources``, the pose sources the run's learnt agents
+    drive on, so each is paired with the scripts on its own (no episode on a pose source no
+    learnt agent of the run uses), or :data:`DEFAULT_ESTIMATORS` in a run of scripts alone."""
     if estimators is not None:
         return list(estimators)
     record = trained_on(agent)
     if record is not None:
         return [record["estimator"]]
-    return list(dict.fromkeys([*DEFAULT_ESTIMATORS, *learnt_sources]))
+    return list(dict.fromkeys(learnt_sources or DEFAULT_ESTIMATORS))
 
 
 def training_groups(rows) -> dict[tuple[str, str], list[str]]:
