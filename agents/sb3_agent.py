@@ -91,11 +91,13 @@ def trained_algo(record: dict) -> str:
 
 
 def training_record(path: str | Path) -> dict:
-    """What an evaluation records about a model: algorithm, pose source, world, timesteps."""
+    """What an evaluation records about a model: algorithm, pose source, world, timesteps. A
+    ``dagger+...`` run's model saved before its first reward step (its clone) ran ``dagger``."""
     data = _saved_data(path)
     meta = data[META_KEY]
+    algo = trained_algo(meta)
     return {
-        "algo": trained_algo(meta),
+        "algo": "dagger" if algo.startswith("dagger+") and not data["num_timesteps"] else algo,
         "estimator": meta["estimator"],
         "world": meta["world"],
         "timesteps": data["num_timesteps"],

@@ -69,6 +69,8 @@ def test_a_fine_tuned_folders_clones_are_an_agent_of_their_own(tiny_learner, tmp
     (clone,) = resolve_agent(f"clone:{folder}")
     assert clone == str((folder / "finetune" / "clone.zip").resolve())
     assert make_agent(clone).digest != make_agent(str(folder)).digest
+    assert make_agent(clone).trained_on()["algo"] == "dagger"  # what ran before the reward stage
+    assert make_agent(str(folder)).trained_on()["algo"] == "dagger+ppo"
     (model,) = expand_agents([str(folder)])
     assert agent_name(clone) == f"{agent_name(model)} clone"
     assert training_group(clone) == f"clone:{training_group(model)}"
