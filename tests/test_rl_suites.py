@@ -12,7 +12,10 @@ import numpy as np
 import pytest
 import yaml
 
+from stsf_gym.agents import pretrained
+from stsf_gym.envs.suite import load_suite
 from stsf_gym.envs.worlds.generator_config import load_generator_config
+from stsf_gym.experiments.benchmark.run import benchmark_cells
 from stsf_gym.experiments.benchmark.trained import (
     DEFAULT_ESTIMATORS,
     agent_pose_sources,
@@ -74,6 +77,16 @@ def test_in_protocol_b_the_follower_drives_the_learnt_agents_pose_sources():
     assert sources == ["mcl", "odometry"]  # each once, no other
     assert agent_pose_sources("follower", None, []) == list(DEFAULT_ESTIMATORS)  # scripts alone
     assert agent_pose_sources("follower", ["stsf"], ["mcl"]) == ["stsf"]  # protocol (a)
+
+
+def test_a_benchmark_runs_world_by_world_so_a_cut_short_run_is_paired():
+    shipped = "pretrained:sparse/dagger-stsf"
+    cells = benchmark_cells(load_suite("sparse"), ["follower", shipped], None, [0, 1, 2])
+    per_world = len(cells) // 3
+    assert per_world == 1 + len(pretrained.models(shipped))  # the follower on STSF, each model
+    for first in range(0, len(cells), per_world):
+        assert {c["seed"] for c in cells[first : first + per_world]} == {first // per_world}
+    assert {c["estimator"] for c in cells} == {"stsf"}
 
 
 def test_the_iqm_is_over_runs_not_over_binary_episodes():

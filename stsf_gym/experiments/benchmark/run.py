@@ -55,27 +55,30 @@ def benchmark_cells(
     suite: Suite, agents: list[str], estimators: list[str] | None, seeds: list[int]
 ):
     """One evaluate cell per agent, pose source and episode seed (the pose sources of
-    :func:`~stsf_gym.experiments.benchmark.trained.agent_pose_sources`); per agent seed by
-    seed, so a run cut short has every pose source on the same worlds."""
+    :func:`~stsf_gym.experiments.benchmark.trained.agent_pose_sources`); world by world, so a
+    run cut short has every agent and pose source on the same worlds."""
     cells, expanded = [], expand_agents(agents)
     learnt_sources = [record["estimator"] for a in expanded if (record := trained_on(a))]
-    for agent in expanded:
-        pose_sources = agent_pose_sources(agent, estimators, learnt_sources)
-        for seed, estimator in itertools.product(seeds, pose_sources):
-            cells.append(
-                {
-                    "kind": "evaluate",
-                    "world": WORLD,
-                    "estimator": estimator,
-                    "agent": agent,
-                    "seed": seed,
-                    "faults": "none",
-                    "env": suite.episode_env,
-                    "options": estimator_options(estimator),
-                    "values": {"suite": suite.name, "agent": agent, "estimator": estimator},
-                    "version": BENCHMARK_VERSION,
-                }
-            )
+    drives = [
+        (agent, estimator)
+        for agent in expanded
+        for estimator in agent_pose_sources(agent, estimators, learnt_sources)
+    ]
+    for seed, (agent, estimator) in itertools.product(seeds, drives):
+        cells.append(
+            {
+                "kind": "evaluate",
+                "world": WORLD,
+                "estimator": estimator,
+                "agent": agent,
+                "seed": seed,
+                "faults": "none",
+                "env": suite.episode_env,
+                "options": estimator_options(estimator),
+                "values": {"suite": suite.name, "agent": agent, "estimator": estimator},
+                "version": BENCHMARK_VERSION,
+            }
+        )
     return cells
 
 
