@@ -22,6 +22,8 @@ WORLDS = 12
 SEED_0 = "/runs/ppo-truth/seed-0/model.zip"
 SEED_1 = "/runs/ppo-truth/seed-1/model.zip"
 ON_STSF = "/runs/ppo-stsf/seed-0/model.zip"  # trained on STSF's estimate
+FINE_0, FINE_1 = (f"/runs/fine-stsf/seed-{s}/model.zip" for s in (0, 1))  # fine-tuned on STSF
+CLONE_0, CLONE_1 = (f"/runs/fine-stsf/seed-{s}/finetune/clone.zip" for s in (0, 1))
 #: Which worlds each (agent, pose source) succeeds on: the follower on all of the true pose's,
 #: seed 0 of the learnt agent on two, seed 1 on all but one.
 SUCCEEDS = {
@@ -32,6 +34,11 @@ SUCCEEDS = {
     (SEED_0, "stsf"): {0},
     (SEED_1, "stsf"): {0, 2},
     (ON_STSF, "stsf"): {0, 2, 4},
+    ("cautious-follower", "stsf"): set(range(0, WORLDS, 3)),
+    (FINE_0, "stsf"): set(range(0, WORLDS, 2)) | {1},
+    (FINE_1, "stsf"): set(range(0, WORLDS, 2)) | {3, 5},
+    (CLONE_0, "stsf"): set(range(0, WORLDS, 2)),  # each clone one or two worlds short of its run
+    (CLONE_1, "stsf"): set(range(0, WORLDS, 2)),
 }
 
 
@@ -65,7 +72,8 @@ def _summary(keys, estimator_name: dict | None = None) -> dict:
             name = rename.get(source, source)
             cells.append({"agent": agent, "estimator": name, "seed": seed, "values": {}})
             results.append(_result(seed in SUCCEEDS[agent, source]))
-    own = {SEED_0: "truth", SEED_1: "truth", ON_STSF: "stsf"}
+    own = {SEED_0: "truth", SEED_1: "truth", ON_STSF: "stsf", FINE_0: "stsf", FINE_1: "stsf"}
+    own |= {CLONE_0: "stsf", CLONE_1: "stsf"}
     summary = summarise_benchmark(load_suite("corridor"), cells, results, own)
     summary["worlds"] = {
         "world_seeds": [1000, 1000 + WORLDS - 1],
@@ -130,6 +138,26 @@ def test_what_each_agent_does_near_its_goals_is_summarised_beside_its_success():
     sigma = follower["stop_sigma_m"]
     assert table[0][3] == f"{sigma['mean']:.2f} ± {sigma['std']:.2f}"
     assert table[1][-1] == str(WORLDS)  # one stop a world
+
+
+def test_a_fine_tuned_folder_is_paired_with_its_clones_and_the_scripts_run_by_run():
+    keys = [("follower", "stsf"), ("cautious-follower", "stsf")]
+    keys += [(m, "stsf") for m in (FINE_0, FINE_1, CLONE_0, CLONE_1)]
+    summary = _summary(keys)
+    entries = {e["reference"]: e for e in summary["against_references"]}
+    assert set(entries) == {"follower", "cautious-follower", "clone"}  # clones have none
+    assert {e["agent"] for e in entries.values()} == {"/runs/fine-stsf"}
+    clone = entries["clone"]
+    assert clone["runs"] == 2 and clone["worlds"] == WORLDS
+    # run 0 gains world 1 over its clone, run 1 worlds 3 and 5: IQM of two runs is their mean
+    assert clone["success_iqm_difference"]["difference"] == pytest.approx(1.5 / WORLDS)
+    assert [p["only_first"] for p in clone["paired_per_run"]] == [1, 2]
+    assert [p["only_second"] for p in clone["paired_per_run"]] == [0, 0]
+    follower = entries["follower"]["paired_per_run"]
+    assert follower[1] == _difference((FINE_1, "stsf"), ("follower", "stsf"))
+    table = _table(leaderboard_markdown(summary), "## Learnt agents against their references")
+    assert [row[2] for row in table] == ["follower", "cautious-follower", "clone"]
+    assert table[2][0] == "fine-stsf" and table[2][-1] == str(WORLDS)
 
 
 def test_every_row_names_its_agent():

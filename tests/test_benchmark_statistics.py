@@ -10,6 +10,8 @@ from stsf_gym.experiments.benchmark.intervals import (
     iqm,
     newcombe_paired,
     paired_bootstrap,
+    paired_seed_iqm,
+    seed_iqm,
     stratified_bootstrap,
     wilson,
 )
@@ -100,6 +102,25 @@ def test_bootstraps_and_iqm():
     spread = stratified_bootstrap([[0.0, 1.0] * 25, [0.5] * 10])
     assert spread["low"] < spread["estimate"] < spread["high"]
     assert iqm([0, 1, 2, 3, 4, 5, 6, 100]) == pytest.approx(np.mean([2, 3, 4, 5]))
+
+
+def test_a_paired_iqm_difference_removes_the_luck_both_sides_share():
+    rng = np.random.default_rng(3)
+    # 3 runs x 60 worlds; the second succeeds where the first does, and on 6 worlds more
+    first = rng.random((3, 60)) < 0.5
+    second = first.copy()
+    second[:, :6], first[:, :6] = True, False
+    paired = paired_seed_iqm(first, second)
+    expected = seed_iqm(first)["estimate"] - seed_iqm(second)["estimate"]
+    assert paired["difference"] == pytest.approx(expected) == pytest.approx(-0.1)
+    assert paired["low"] < -0.1 < paired["high"] < 0  # only the 6 worlds' draws vary
+    alone = seed_iqm(second)
+    assert paired["high"] - paired["low"] < alone["high"] - alone["low"]
+    scores = rng.random((3, 60))  # a constant shift: no spread at all
+    assert paired_seed_iqm(scores + 0.1, scores)["low"] == pytest.approx(0.1)
+    assert paired_seed_iqm(scores + 0.1, scores)["high"] == pytest.approx(0.1)
+    with pytest.raises(ValueError, match="one non-empty shape"):
+        paired_seed_iqm(first, second[:2])
 
 
 def test_an_agent_has_one_name_in_every_table(tmp_path):

@@ -5,6 +5,7 @@ paired differences, what each agent does near its goals."""
 from __future__ import annotations
 
 from stsf_gym.experiments.benchmark.against_follower import against_follower_markdown
+from stsf_gym.experiments.benchmark.references import references_markdown
 from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.io import markdown_table
 
@@ -101,6 +102,8 @@ def leaderboard_markdown(summary: dict) -> str:
                 }
             )
         text += markdown_table(pairs)
+    if summary.get("against_references"):
+        text += references_markdown(summary["against_references"])
     if summary.get("behaviour"):
         text += behaviour_markdown(summary["behaviour"])
     if summary["failed"]:

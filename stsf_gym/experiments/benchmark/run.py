@@ -33,6 +33,7 @@ from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.benchmark.agent_behaviour import behaviour_row
 from stsf_gym.experiments.benchmark.figure import plot_leaderboard
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, paired_bootstrap
+from stsf_gym.experiments.benchmark.references import against_references
 from stsf_gym.experiments.benchmark.report import leaderboard_markdown
 from stsf_gym.experiments.benchmark.scores import episode_scores, leaderboard_row
 from stsf_gym.experiments.benchmark.trained import (
@@ -200,6 +201,7 @@ def summarise_benchmark(
         "rows": rows,
         "trained": aggregate_runs(scores, own_sources),
         "trained_paired": paired_across_sources(scores, own_sources),
+        "against_references": against_references(scores),
         "paired": paired,
         "behaviour": [
             {"agent": agent, "estimator": estimator, **behaviour_row(rows)}
