@@ -72,7 +72,7 @@ def pair_errors(job: tuple) -> np.ndarray:
 
     world, seed, mode, options = job
     env, follower = _env(world, "conventional", mode, options)
-    estimator, measured, rows = env.estimator, [], []
+    estimator, measured, rows = env.get_wrapper_attr("estimator"), [], []
     pair_measurement = LandmarkFusionEstimator._pair_measurement
 
     def recorded(self, previous, current):
@@ -122,7 +122,7 @@ def board_errors(job: tuple) -> np.ndarray:
 
     world, seed, mode, options = job
     env, follower = _env(world, "smoother", mode, options)
-    estimator, measured, rows = env.estimator, [], []
+    estimator, measured, rows = env.get_wrapper_attr("estimator"), [], []
     landmark_pose = smoother_module.landmark_pose
 
     def recorded(observation, *floors):
@@ -159,7 +159,7 @@ def sonar_distances(job: tuple) -> np.ndarray:
     world, seed, mode, options = job
     env, follower = _env(world, "mcl", mode, options)
     obs, info, done, rows = *env.reset(seed=seed), False, []
-    mcl = env.estimator
+    mcl = env.get_wrapper_attr("estimator")
     max_range = mcl.model.sonar.max_range
     while not done:
         obs, _, terminated, truncated, info = env.step(follower.act(obs["pose"], obs["sonar"]))
@@ -260,7 +260,7 @@ def nees_parts(job: tuple) -> dict:
         nees = error @ np.linalg.solve(cov, error)
         position = error[:2] @ np.linalg.solve(cov[:2, :2], error[:2])
         rows.append([nees, position, error[2] ** 2 / cov[2, 2], *(error**2), *np.diag(cov)])
-    counters = dict(env.estimator.counters)
+    counters = dict(env.get_wrapper_attr("estimator").counters)
     env.close()
     rows = np.array(rows)
     return {

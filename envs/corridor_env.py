@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -16,7 +17,7 @@ from stsf_gym.envs.config import EnvConfig, WorldConfig, check_env_keywords, loa
 from stsf_gym.envs.drive_controller import VelocityController
 from stsf_gym.envs.faults import FaultInjector
 from stsf_gym.envs.random_streams import RandomStreams
-from stsf_gym.envs.rendering.map_view import MapView, detections_frame
+from stsf_gym.envs.rendering.map_view import MapMarks, MapView, detections_frame
 from stsf_gym.envs.rendering.window import HumanWindow, display_available
 from stsf_gym.envs.robot import DiffDriveRobot
 from stsf_gym.envs.sensors.camera import PinholeCamera, believed_calibration, look_at, view_matrix
@@ -156,9 +157,9 @@ class CorridorEnv(gym.Env):
     - ``config``: YAML path or mapping merged over ``configs/default.yaml``.
     - ``render_mode``: ``None``, ``"rgb_array"`` or ``"human"`` (a window; needs a display).
       ``render.view`` picks the picture: ``map`` (default; :mod:`stsf_gym.envs.rendering.map_view`:
-      a top-down map with the true pose, the estimates a wrapper hands to :attr:`view`, sensors and
-      an inset of the camera frame), ``chase`` (a rendered camera behind the robot) or ``top``
-      (a rendered view of the whole world from above).
+      a top-down map with the true pose, the estimates of the wrappers that asked to be drawn
+      (:meth:`draw_on_map`), sensors and an inset of the camera frame), ``chase`` (a rendered
+      camera behind the robot) or ``top`` (a rendered view of the whole world from above).
     - ``**overrides``: single values, e.g. ``camera__width=640`` or ``camera={"rate_hz": 10}``.
 
     ``reset(seed=..., options={"start_pose": [x, y, yaw]})`` places the robot elsewhere; with
@@ -218,8 +219,9 @@ class CorridorEnv(gym.Env):
         self.action_space = self.action_layout.space
         self.observation_space = self._observation_space()
         self._initial_state: int | None = None
-        #: The top-down map (``render_mode`` set): wrappers hand it their estimates.
+        #: The top-down map (``render_mode`` set); it draws what the map sources give.
         self.view = None if render_mode is None else self._map_view()
+        self._map_sources: list[Callable[[], MapMarks]] = []
         self._build_world(cfg.world)
         if self.sim.renderer == "egl" and self._rendered_camera:
             # The first two EGL frames of a client are shaded differently from all later ones
@@ -391,8 +393,6 @@ class CorridorEnv(gym.Env):
             self._sonar = self.sonar.read(self.sim, self._pose, streams.sonar)
         obs = self.faults.observe(self._observe(np.zeros(2, np.int64)), 0.0, streams.faults)
         self._last_obs = obs
-        if self.view is not None:
-            self.view.clear()
         if self._window is not None:
             self.render()
         return obs, self._info(collision=False)
@@ -511,6 +511,13 @@ class CorridorEnv(gym.Env):
         self._window.show(frame)
         return None
 
+    def draw_on_map(self, source: Callable[[], MapMarks]) -> None:
+        """Have the map view ask ``source`` at every frame it draws (sources in the order
+        given) for its marks (:data:`~stsf_gym.envs.rendering.map_view.MapMarks`): a wrapper's
+        pose estimates ``{label: (mean, cov)}`` and the ids of the landmarks it keeps the camera
+        on. The estimates reach the picture this way, by the render path, in every render mode."""
+        self._map_sources.append(source)
+
     def _map_view(self) -> MapView:
         cfg = self.config
         return MapView(
@@ -541,6 +548,7 @@ class CorridorEnv(gym.Env):
             in_view,
             inset,
             f"t = {self._time:.1f} s",
+            [source() for source in self._map_sources],
         )
 
     def _rendered_view(self, view: str) -> np.ndarray:

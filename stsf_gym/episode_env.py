@@ -10,11 +10,19 @@ from typing import Any
 import gymnasium as gym
 
 from stsf_gym.estimators import estimator_class, estimator_settings
-from stsf_gym.wrappers import TRUTH, PoseEstimateWrapper, check_sensors
+from stsf_gym.wrappers import TRUTH, CameraPointingWrapper, PoseEstimateWrapper, check_sensors
 from stsf_gym.yaml_layers import merge_settings
 
 #: Keyword arguments of an env that are not config values.
 NOT_CONFIG = ("render_mode", "split", "generator")
+#: What an episode's env has unless its settings say otherwise: the pan camera, which
+#: :class:`CameraPointingWrapper` points, so the agent's action stays ``[v, w]``.
+EPISODE_DEFAULTS = {"camera__control": "pan"}
+
+
+def episode_settings(env: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The env settings of an episode: ``env`` over :data:`EPISODE_DEFAULTS`."""
+    return {**EPISODE_DEFAULTS, **(env or {})}
 
 
 def make_episode_env(
@@ -25,17 +33,21 @@ def make_episode_env(
     **overrides: Any,
 ) -> gym.Env:
     """``world`` (a name, YAML path or mapping; ``"generated"`` with a ``split`` override, or
-    ``"generated:<split>"``: a generated world per episode) with the pan camera (pointed by the
-    wrapper, so the action stays ``[v, w]``), the env settings ``env`` and ``overrides``
-    (``config``, ``render_mode``, ``camera__width``, ...; see
+    ``"generated:<split>"``: a generated world per episode) with the settings of
+    :func:`episode_settings` (``env``: the pan camera unless it says otherwise) and
+    ``overrides`` (``config``, ``render_mode``, ``camera__width``, ...; see
     :class:`stsf_gym.envs.corridor_env.CorridorEnv`), wrapped in :class:`PoseEstimateWrapper` for
-    the pose source ``estimator`` with ``estimator_options`` over its YAML settings."""
+    the pose source ``estimator`` with ``estimator_options`` over its YAML settings, and, with a
+    pan camera, in :class:`CameraPointingWrapper` (outermost: ``searching`` is its; read the
+    estimate wrapper's attributes with ``get_wrapper_attr``, e.g. ``"estimator"``)."""
     from stsf_gym.envs.generated_env import make_world_env
 
-    settings = merge_settings({"camera__control": "pan", **(env or {})}, overrides)
-    corridor = make_world_env(world, **settings)
+    corridor = make_world_env(world, **merge_settings(episode_settings(env), overrides))
     try:
-        return PoseEstimateWrapper(corridor, estimator, **(estimator_options or {}))
+        estimating = PoseEstimateWrapper(corridor, estimator, **(estimator_options or {}))
+        if corridor.unwrapped.config.camera.control != "pan":
+            return estimating
+        return CameraPointingWrapper(estimating)
     except Exception:
         corridor.close()
         raise
@@ -62,7 +74,7 @@ def resolved_config(
     from stsf_gym.envs.generated_env import GENERATED, parse_world
     from stsf_gym.envs.worlds.generator_config import load_generator_config
 
-    overrides = {"camera__control": "pan", **(env or {})}
+    overrides = episode_settings(env)
     config = overrides.pop("config", None)
     split = overrides.get("split", "train") if world == GENERATED else parse_world(world)
     generator = overrides.get("generator")

@@ -2,14 +2,16 @@
 
 The map shows the walls, clutter, landmarks, the path and its goal (drawn once), and per
 frame the sonar cones with their ranges, the camera's field of view, the landmarks in the
-current frame, the true pose, every pose estimate a wrapper handed over with
-:meth:`MapView.show_estimate` (its 2-sigma ellipse and heading spread) and an inset of the
-current camera frame (or, in the fast sensor mode, of its detections).
+current frame, the true pose, the :data:`MapMarks` the env's map sources give at that frame
+(each pose estimate with its 2-sigma ellipse and heading spread, the landmarks the camera is
+kept on ringed) and an inset of the current camera frame (or, in the fast sensor mode, of its
+detections).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from itertools import cycle
 
@@ -31,12 +33,15 @@ SIGMAS = 2.0
 
 @dataclass
 class Estimate:
-    """A pose estimate to draw: mean ``[x, y, yaw]``, 3x3 covariance, optional landmark id
-    the wrapper points the camera at."""
+    """A pose estimate to draw: mean ``[x, y, yaw]`` and 3x3 covariance."""
 
     mean: np.ndarray
     cov: np.ndarray
-    target: int | None = None
+
+
+#: What one map source (a wrapper, asked at every frame) has the map draw: its pose estimates,
+#: ``{label: (mean, cov)}``, and the ids of the landmarks it keeps the camera on (ringed).
+MapMarks = tuple[Mapping[str, tuple[np.ndarray, np.ndarray]], Iterable[int]]
 
 
 class MapView:
@@ -66,7 +71,6 @@ class MapView:
         self.body_radius, self.hfov = body_radius, hfov
         self.sonar_axes, self.sonar_half_width = np.asarray(sonar_axes), sonar_half_width
         self.landmarks = {lm.id: lm for lm in landmarks}
-        self.estimates: dict[str, Estimate] = {}
         ends = np.array([p for wall in world.walls for p in (wall[:2], wall[2:])])
         low, high = ends.min(axis=0), ends.max(axis=0)
         span = np.maximum(high - low, 1e-6)
@@ -75,16 +79,6 @@ class MapView:
         self._origin = low - (np.array([width, height]) - used) / 2 / self.scale
         self._base = self._draw_base(world)
         self._inset_corner = self._emptiest_corner()
-
-    # --- the seam for wrappers ----------------------------------------------------------
-    def show_estimate(self, label: str, mean, cov, target: int | None = None) -> None:
-        """Draw this estimate (under ``label``) on the next frames; ``target``: the landmark
-        the wrapper keeps the camera on."""
-        self.estimates[label] = Estimate(np.asarray(mean, float), np.asarray(cov, float), target)
-
-    def clear(self) -> None:
-        """Forget the estimates (the env calls it on reset)."""
-        self.estimates.clear()
 
     # --- drawing ------------------------------------------------------------------------
     def px(self, xy) -> np.ndarray:
@@ -102,23 +96,35 @@ class MapView:
         in_view: list[int],
         inset: np.ndarray | None,
         caption: str = "",
+        marks: Iterable[MapMarks] = (),
     ) -> np.ndarray:
-        """The frame: the base map with the robot's sensors, true pose, estimates, inset."""
+        """The frame: the base map with the robot's sensors, true pose, ``marks`` (one per map
+        source, in order; a later source's estimate replaces an earlier one's of its label),
+        inset."""
+        estimates: dict[str, Estimate] = {}
+        targets: set[int] = set()
+        for shown, ringed in marks:
+            estimates.update(
+                {
+                    k: Estimate(np.asarray(m, float), np.asarray(c, float))
+                    for k, (m, c) in shown.items()
+                }
+            )
+            targets.update(ringed)
         image = self._base.copy()
         shade = image.copy()
         if sonar is not None:
             self._draw_sonar(shade, pose, sonar)
         self._draw_fov(shade, camera_pose)
         cv2.addWeighted(shade, 0.45, image, 0.55, 0.0, dst=image)
-        targets = {e.target for e in self.estimates.values()}
         for lm_id in in_view:
             self._mark_landmark(image, lm_id, IN_VIEW, 3)
-        for lm_id in targets - {None}:
+        for lm_id in targets:
             centre = self.px(self.landmarks[lm_id].centre[:2])
             cv2.circle(image, tuple(centre.tolist()), 9, IN_VIEW, 2, cv2.LINE_AA)
         self._draw_robot(image, pose)
         legend = [("truth", TRUTH)]
-        for (label, estimate), colour in zip(self.estimates.items(), cycle(ESTIMATE_COLOURS)):
+        for (label, estimate), colour in zip(estimates.items(), cycle(ESTIMATE_COLOURS)):
             self._draw_estimate(image, estimate, colour)
             legend.append((f"{label} +-{SIGMAS:g} sigma", colour))
         if inset is not None:

@@ -68,12 +68,14 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
 
     import stsf_gym  # noqa: F401 - registers the ids
     from stsf_gym.agents.follower import PathFollower
-    from stsf_gym.wrappers import PoseEstimateWrapper  # the estimator's settings from configs/
+    from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
     overrides, source = CASES[name]
     env = gym.make("stsf_gym/Corridor-v0", **overrides)
-    if source != "truth":
+    if source != "truth":  # the estimator's settings from configs/
         env = PoseEstimateWrapper(env, source)
+        if env.unwrapped.config.camera.control == "pan":
+            env = CameraPointingWrapper(env)
     frame_time = _time_frames(env.unwrapped)
     follower = PathFollower.for_env(env)
     steps = round(sim_seconds / env.unwrapped.dt)
@@ -82,7 +84,7 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
     wall, cpu, frames, obs, info = _drive(env, follower, source, steps, obs, info, kept)
     stages = {"camera frame": frame_time["total"]} if frame_time["count"] else {}
     if source != "truth":
-        timings = env.estimator.timings
+        timings = env.get_wrapper_attr("estimator").timings
         stages["detect"] = timings["detect"]
         stages[f"{source} update"] = sum(
             v for k, v in timings.items() if k not in ("detect", *PER_STEP_STAGES)
@@ -106,7 +108,7 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
         # every stage of the estimator (odometry, detection, update) per control step
         "estimator_ms_per_step": None
         if source == "truth"
-        else 1e3 * sum(env.estimator.timings.values()) / steps,
+        else 1e3 * sum(env.get_wrapper_attr("estimator").timings.values()) / steps,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
     if profile:  # a second drive of the same length: the profiler's overhead stays out of the rows
@@ -117,7 +119,7 @@ def _measure(name: str, sim_seconds: float, seed: int, cpu: int | None, profile:
         row["profile"] = top_functions(profiler, profiled_wall)
     if kept:
         row["detector_vs_aruco"] = detector_vs_aruco(
-            kept, env.unwrapped.config.world, env.estimator.detector
+            kept, env.unwrapped.config.world, env.get_wrapper_attr("estimator").detector
         )
     env.close()
     return row
@@ -135,7 +137,7 @@ def _drive(env, follower, source: str, steps: int, obs, info, kept: list | None)
             frames += 1
             keep = kept is not None and len(kept) < ARUCO_FRAMES
             if keep and "image" in obs and source != "truth":
-                kept.append((obs["image"], env.estimator.detector.predictions))
+                kept.append((obs["image"], env.get_wrapper_attr("estimator").detector.predictions))
         if terminated or truncated:
             obs, info = env.reset()
     return time.perf_counter() - start, time.process_time() - start_cpu, frames, obs, info

@@ -173,12 +173,11 @@ class EpisodeTrace(gym.Wrapper):
     def reset(self, *, seed=None, options=None):
         """Reset and record the start (the floor's too, with the camera on)."""
         obs, info = self.env.reset(seed=seed, options=options)
-        if "image_new" in obs and not isinstance(self.estimating.estimator, TruePose):
+        estimating = self.estimating.get_wrapper_attr
+        if "image_new" in obs and not isinstance(estimating("estimator"), TruePose):
             # the floor needs the camera; the true pose needs no floor
             self.floor = FloorRecorder(estimator_settings(FLOOR_SETTINGS))
-            self.floor.reset(
-                sensor_model(self.env), self.estimating.start, self.estimating.start_cov
-            )
+            self.floor.reset(sensor_model(self.env), estimating("start"), estimating("start_cov"))
         self._record(obs, info)
         return obs, info
 
@@ -239,7 +238,8 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             obs, _, terminated, truncated, _ = driven.step(agent.act(obs))
         info, trace, steps = traced.info, traced.trace, traced.steps
         path = np.asarray(env.unwrapped.config.world.path, dtype=float)
-        counters = estimating.estimator.counters
+        estimator = estimating.get_wrapper_attr("estimator")
+        counters = estimator.counters
         outcome = "collision" if info["collision"] else "time"
         if terminated and not info["collision"]:
             outcome = "goal" if info["success"] else "missed"
@@ -255,7 +255,7 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             true_poses=trace["true"],
             estimates=trace["est"],
             covariances=trace["cov"],
-            nis=[list(value) for value in estimating.estimator.innovations()],
+            nis=[list(value) for value in estimator.innovations()],
             path_errors=distance_to_path(np.array(trace["true"])[:, :2], path).tolist(),
             frames=counters.get("frames", 0),
             camera_frames=traced.frames,
@@ -266,9 +266,7 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             relocalised=counters.get("relocalised", 0),
             finite=traced.finite,
             min_cov_eigenvalue=traced.min_eig,
-            stage_ms_per_step={
-                k: 1000 * v / steps for k, v in estimating.estimator.timings.items()
-            },
+            stage_ms_per_step={k: 1000 * v / steps for k, v in estimator.timings.items()},
             stops=[{**stop, "position": list(stop["position"])} for stop in info["stops"]],
             goals=len(task.goals),
             route_length=task.path.project(task.goals[-1]),
