@@ -142,9 +142,9 @@ MODULE_LIMIT = 400
 LONG_MODULES = {
     "stsf_gym.envs.corridor_env": (
         "the env class: about 130 of its lines are the docstring that documents its spaces, "
-        "reward and episode end (its API page), the rest is one step loop; its render path "
-        "changes with the estimate wrapper's split (the map view's estimates come through the "
-        "render path), after which the views can leave the class"
+        "reward and episode end (its API page), the rest is one step loop; its views (map, "
+        "chase, top, the window) can leave the class next: the wrappers' estimates now reach "
+        "the map through the render path (draw_on_map), not through the class's state"
     ),
 }
 

@@ -1,5 +1,5 @@
-"""The views people watch: the top-down map with the wrapper's estimate, the chase camera,
-the human window's guard."""
+"""The views people watch: the top-down map with the wrappers' estimate and camera target
+(asked for in the render path), the chase camera, the human window's guard."""
 
 import os
 import shutil
@@ -13,7 +13,7 @@ import pytest
 
 from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.rendering.map_view import ESTIMATE_COLOURS, INSET_FRACTION, TRUTH
-from stsf_gym.wrappers import PoseEstimateWrapper
+from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 
 def _colour_near(frame: np.ndarray, pixel, colour, radius: int = 3) -> bool:
@@ -39,7 +39,6 @@ def test_map_shows_the_wrappers_estimate_with_its_two_sigma_ellipse(make_env):
     )
     env.reset(seed=0, options={"start_pose": [3.0, 0.0, 0.0]})
     view = env.unwrapped.view
-    assert set(view.estimates) == {"ekf"}
     frame = env.render()
     colour = ESTIMATE_COLOURS[0]
     # 2 sigma: 0.6 m along x, 0.2 m along y from the start
@@ -48,9 +47,45 @@ def test_map_shows_the_wrappers_estimate_with_its_two_sigma_ellipse(make_env):
     assert not _colour_near(frame, view.px([3.0, 0.45]), colour, 1)
     for _ in range(5):
         obs, *_ = env.step(np.float32([0.5, 0.0]))
-    np.testing.assert_allclose(view.estimates["ekf"].mean[:2], obs["pose"][:2], atol=1e-5)
-    env.reset(seed=1)
-    assert set(view.estimates) == {"ekf"}  # cleared by the env, handed over again
+    # the legend names the estimator; the cross sits on the current estimate
+    assert _colour_near(env.render(), view.px(obs["pose"][:2]), colour, 1)
+    env.reset(seed=1, options={"start_pose": [6.0, 0.0, 0.0]})  # drawn again after a reset
+    assert _colour_near(env.render(), view.px([6.0, 0.0]), colour, 1)
+
+
+def test_the_map_asks_its_sources_at_each_frame_it_draws(make_env):
+    """Estimates reach the map by the render path: the view asks each source when it draws,
+    nothing is handed over when no frame is drawn."""
+    env = make_env(render_mode="rgb_array", camera__enabled=False)
+    asked = []
+
+    def source():
+        asked.append(True)
+        return {"mine": ([4.0, 0.0, 0.0], np.diag([0.04, 0.01, 0.01]))}, ()
+
+    env.unwrapped.draw_on_map(source)
+    env.reset(seed=0)
+    env.step(np.float32([0.5, 0.0]))
+    assert not asked
+    frame = env.render()
+    assert asked == [True]
+    assert _colour_near(frame, env.unwrapped.view.px([4.4, 0.0]), ESTIMATE_COLOURS[0], 1)
+
+
+def test_map_rings_the_landmark_the_pointing_wrapper_keeps_the_camera_on(make_env):
+    corridor = make_env(render_mode="rgb_array", camera__mode="fast", camera__control="pan")
+    env = CameraPointingWrapper(PoseEstimateWrapper(corridor, "truth"))
+    env.reset(seed=0, options={"start_pose": [2.0, 0.0, 0.0]})  # board 1 ahead on the left
+    for _ in range(10):
+        env.step(np.float32([0.5, 0.0]))
+    target = env.pointer.target
+    assert target is not None
+    ringed = env.render()
+    env.pointer.reset()  # no target: the same frame without the ring
+    rows, cols = np.nonzero(np.any(ringed != env.render(), axis=2))
+    u, v = env.unwrapped.view.px(env.unwrapped.view.landmarks[target].centre[:2])
+    radius = np.hypot(cols - u, rows - v)
+    assert len(radius) > 50 and np.all(np.abs(radius - 9) < 3.5)  # 9 px, 2 px wide, smoothed
 
 
 def test_map_inset_is_the_current_camera_frame(make_env):

@@ -47,7 +47,7 @@ PREFIXES: dict[str, str] = {
     "stsf_gym/fusion/": "estimation",
     "stsf_gym/vision/": "estimation",
     "stsf_gym/estimators/": "estimation",
-    "stsf_gym/wrappers.py": "estimation",
+    "stsf_gym/wrappers/": "estimation",
     "stsf_gym/state_history.py": "estimation",
     "stsf_gym/episode_env.py": "estimation",
     "configs/estimators/": "estimation",

@@ -153,7 +153,7 @@ def file_digest(path: Path) -> str:
 
 def loaded_modules() -> list[str]:
     """The package's module files imported in this process (``sys.modules``), as relative
-    paths (``stsf_gym/wrappers.py``, ``envs/simulator.py``), sorted."""
+    paths (``stsf_gym/wrappers/estimate.py``, ``envs/simulator.py``), sorted."""
     folders = _package_folders()
     files = {getattr(module, "__file__", None) for module in list(sys.modules.values())}
     found = {_relative(Path(os.path.abspath(f)), folders) for f in files if f and f.endswith(".py")}
