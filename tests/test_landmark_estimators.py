@@ -15,16 +15,17 @@ from stsf_gym.estimators.pose_errors import PoseErrors
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
 from stsf_gym.experiments.figures import PATH_ONLY
 from stsf_gym.experiments.statistics import nees_consistency
-from stsf_gym.wrappers import PoseEstimateWrapper
+from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 STEPS = 450  # about 5 m at 12.2 cm/s
 
 
 def run(estimator: str, seed: int = 3):
-    env = PoseEstimateWrapper(gym.make("stsf_gym/Straight10m-v0", camera__control="pan"), estimator)
+    corridor = gym.make("stsf_gym/Straight10m-v0", camera__control="pan")
+    env = CameraPointingWrapper(PoseEstimateWrapper(corridor, estimator))
     follower = PathFollower.for_env(env)
     obs, info = env.reset(seed=seed)
-    assert env.action_space.shape == (2,)  # the wrapper points the camera
+    assert env.action_space.shape == (2,)  # the pointing wrapper points the camera
     nees = []
     for _ in range(STEPS):
         obs, _, terminated, truncated, info = env.step(follower.act(info["true_pose"]))
@@ -34,7 +35,7 @@ def run(estimator: str, seed: int = 3):
         assert np.all(np.linalg.eigvalsh(cov) > 0)
         nees.append(error @ np.linalg.solve(cov, error))
         assert not (terminated or truncated)
-    counters = dict(env.estimator.counters)
+    counters = dict(env.get_wrapper_attr("estimator").counters)
     env.close()
     return float(np.hypot(*error[:2])), float(np.mean(nees)), counters
 
@@ -125,11 +126,12 @@ def test_pointer_keeps_a_facing_landmark_in_reach():
 
 @pytest.fixture(scope="module")
 def recorded():
-    """Observations and true poses of a drive with the camera pointed by the STSF wrapper."""
-    env = PoseEstimateWrapper(gym.make("stsf_gym/Straight10m-v0", camera__control="pan"), "stsf")
+    """Observations and true poses of a drive with the camera pointed from STSF's estimate."""
+    corridor = gym.make("stsf_gym/Straight10m-v0", camera__control="pan")
+    env = CameraPointingWrapper(PoseEstimateWrapper(corridor, "stsf"))
     follower = PathFollower.for_env(env)
     obs, info = env.reset(seed=3)
-    model, history = env.estimator.model, []
+    model, history = env.get_wrapper_attr("estimator").model, []
     for _ in range(STEPS):
         obs, *_, info = env.step(follower.act(info["true_pose"]))
         history.append((obs, info["true_pose"].copy()))

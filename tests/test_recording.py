@@ -41,13 +41,14 @@ def record(folder: Path, estimator: str, seconds: float, env: dict, **recording)
     follower = make_agent("follower")
     follower.begin(env)
     act = follower.act
-    means, covs = [inner.estimator.mean.copy()], [inner.estimator.cov.copy()]
+    live = inner.get_wrapper_attr  # the estimator: a new object after a late frame
+    means, covs = [live("estimator").mean.copy()], [live("estimator").cov.copy()]
     history = [(obs, info)]
     done = False
     while not done:
         obs, _, terminated, truncated, info = env.step(act(obs))
-        means.append(inner.estimator.mean.copy())
-        covs.append(inner.estimator.cov.copy())
+        means.append(live("estimator").mean.copy())
+        covs.append(live("estimator").cov.copy())
         history.append((obs, info))
         done = terminated or truncated
     env.close()

@@ -14,7 +14,7 @@ from stsf_gym.envs.action_layout import ActionLayout
 from stsf_gym.envs.config import ConfigError, load_config
 from stsf_gym.envs.start_pose import draw_leg
 from stsf_gym.envs.task import PathTask, Polyline
-from stsf_gym.wrappers import PoseEstimateWrapper
+from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 STOP_TASK = {"protocol": "declare", "stop_action": True}
 NO_CAMERA = {"camera__enabled": False}
@@ -75,10 +75,10 @@ def test_the_layout_reads_entries_by_name():
 
 
 def test_the_pan_wrapper_keeps_the_stop_entry_last(make_env):
-    env = PoseEstimateWrapper(
-        make_env("stsf_gym/Straight10m-v0", camera__control="pan", task=STOP_TASK, **NO_CAMERA),
-        "odometry",
+    corridor = make_env(
+        "stsf_gym/Straight10m-v0", camera__control="pan", task=STOP_TASK, **NO_CAMERA
     )
+    env = CameraPointingWrapper(PoseEstimateWrapper(corridor, "odometry"))
     assert env.action_layout.names == ("v", "w", "stop") and env.action_space.shape == (3,)
     env.reset(seed=0)
     *_, terminated, _, info = env.step(np.array([0.0, 0.0, 1.0], np.float32))

@@ -11,7 +11,7 @@ from stsf_gym.estimators.pose_errors import PoseErrors
 from stsf_gym.vision.detector import LandmarkDetector, to_grey
 from stsf_gym.vision.landmarks import board_corners, square_centres
 from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher
-from stsf_gym.wrappers import PoseEstimateWrapper
+from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 STEPS = 600  # 60 s: about 7 m of the IRL corridor, past landmarks 1 and 2
 START_COV = np.diag([1e-4, 1e-4, 2.5e-5])
@@ -19,14 +19,15 @@ START_COV = np.diag([1e-4, 1e-4, 2.5e-5])
 
 @pytest.fixture(scope="module")
 def recorded():
-    """A rendered drive under the paper's camera, the camera pointed by the STSF wrapper:
+    """A rendered drive under the paper's camera, the camera pointed from STSF's estimate:
     the sensor model, every observation with the true pose, camera pose and the boards in
     view, the true camera and the boards' world corners."""
-    env = PoseEstimateWrapper(gym.make("stsf_gym/Corridor-v0", camera__control="pan"), "stsf")
+    corridor = gym.make("stsf_gym/Corridor-v0", camera__control="pan")
+    env = CameraPointingWrapper(PoseEstimateWrapper(corridor, "stsf"))
     assert env.unwrapped.config.camera.profile == "paper"
     follower = PathFollower.for_env(env)
     obs, info = env.reset(seed=5)
-    model, history = env.estimator.model, []
+    model, history = env.get_wrapper_attr("estimator").model, []
     for _ in range(STEPS):
         obs, *_, info = env.step(follower.act(info["true_pose"]))
         in_view = env.unwrapped.landmarks_in_view() if obs["image_new"] else []
