@@ -1,9 +1,9 @@
 """A policy that decides every ``k`` control steps, while the estimators see every step.
 
-:class:`DecisionInterval` sits outside :class:`~stsf_gym.wrappers.PoseEstimateWrapper` (and the
-policy's observation), so the estimator updates on every sensor reading at the control rate;
-only the policy's decisions are spaced out, as highway-env runs its policy at 1 Hz over a
-15 Hz simulation. The interval is a physical choice (``configs/agents/*.yaml``,
+:class:`DecisionInterval` sits outside :class:`~stsf_gym.wrappers.PoseEstimateWrapper` (its
+camera pointing and the policy's observation), so the estimator updates on every sensor reading
+at the control rate; only the policy's decisions are spaced out, as highway-env runs its policy
+at 1 Hz over a 15 Hz simulation. The interval is a physical choice (``configs/agents/*.yaml``,
 ``decision_steps``): see :data:`DEFAULT_DECISION_STEPS`.
 """
 

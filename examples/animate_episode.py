@@ -31,15 +31,16 @@ def frames(seconds: float, every: float, camera: str, seed: int) -> list[np.ndar
     try:
         follower = PathFollower.for_env(env)
         obs, _ = env.reset(seed=seed)
-        view, dt = env.unwrapped.view, env.unwrapped.dt
+        dt = env.unwrapped.dt
         odometry = make_estimator("odometry")
         odometry.reset(sensor_model(env), obs["pose"], np.diag(np.square(START_STD)))
+        drawn: dict = {}  # the map asks for it at each frame it draws
+        env.unwrapped.draw_on_map(lambda: (drawn, ()))
         shown, step_every = [], max(1, round(every / dt))
         for step in range(round(seconds / dt) + 1):
             if step:
                 obs, _, terminated, truncated, _ = env.step(follower.act(obs["pose"], obs["sonar"]))
-                mean, cov = odometry.update(obs, dt)
-                view.show_estimate("odometry", mean, cov)
+                drawn["odometry"] = odometry.update(obs, dt)
                 if terminated or truncated:
                     break
             if step % step_every == 0:

@@ -28,7 +28,8 @@ ENV_WORLDS: dict[str, str] = {
 
 #: Estimators with an estimating id per world, e.g. ``stsf_gym/Corridor-STSF-v0``: the env of
 #: an episode (:func:`stsf_gym.episode_env.make_episode_env`: the env wrapped in
-#: :class:`stsf_gym.wrappers.PoseEstimateWrapper`, which points the camera).
+#: :class:`stsf_gym.wrappers.PoseEstimateWrapper` and, over it,
+#: :class:`stsf_gym.wrappers.CameraPointingWrapper`, which points the camera).
 ESTIMATOR_IDS: dict[str, str] = {
     "Odometry": "odometry",
     "Conventional": "conventional",  # the paper's: the current two frames only

@@ -1,12 +1,13 @@
 """Localizing from an unknown start: ``python -m stsf_gym.experiments.global_localization``.
 
 Each seed resets the IRL corridor with ``options={"unknown_start": True}`` (the estimator's
-prior spread over the map's free space, :class:`~stsf_gym.wrappers.PoseEstimateWrapper`) and
+prior spread over the map's free space, :class:`~stsf_gym.wrappers.PoseEstimateWrapper`; the
+search, :class:`~stsf_gym.wrappers.CameraPointingWrapper`, outermost) and
 the path follower drives until ``max_distance`` metres. Recorded per seed: the distance driven
 when the position error first falls under ``tolerance`` and the distance after which it stays
 under it (``None``: not within the run). By default the follower drives on the *true* pose,
 so the figure is the localization's alone. On the estimate (``--drive estimate``) the robot
-does what a robot that does not know where it is would: while the wrapper is still
+does what a robot that does not know where it is would: while the pointing wrapper is still
 ``searching`` (no board has confirmed a narrow estimate) it wanders
 (:meth:`~stsf_gym.agents.follower.PathFollower.explore`: ahead, the sonar turning it from
 walls) with the pan camera sweeping, then follows the path on its estimate. (The IRL start

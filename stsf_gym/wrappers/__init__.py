@@ -1,8 +1,8 @@
 """The wrappers between the simulator and an agent, one job each.
 
 - :class:`PoseEstimateWrapper` (:mod:`~stsf_gym.wrappers.estimate`) adds ``obs["pose"]`` and
-  ``obs["pose_cov"]``: the estimate of a pose source (:mod:`~stsf_gym.wrappers.pose_sources`),
-  checked (:mod:`~stsf_gym.wrappers.estimate_checks`), from the robot's model of its sensors
+  ``obs["pose_cov"]``: the estimate of a pose source, checked
+  (:mod:`~stsf_gym.wrappers.pose_sources`), from the robot's model of its sensors
   (:func:`sensor_model`, the one seam between the simulator and the estimators).
 - :class:`CameraPointingWrapper` (:mod:`~stsf_gym.wrappers.pointing`), over it, points the pan
   camera from that estimate, sweeps it while an unknown start is searched for, and takes the
@@ -14,13 +14,15 @@ pan camera. Each wrapper that has something to show asks the env's map view to d
 """
 
 from stsf_gym.wrappers.estimate import COV_LIMIT, START_STD, PoseEstimateWrapper
-from stsf_gym.wrappers.estimate_checks import SYMMETRY_TOLERANCE, EstimateError, check_estimate
 from stsf_gym.wrappers.pointing import FOUND_STD, SWEEP_PERIOD_S, CameraPointingWrapper
 from stsf_gym.wrappers.pose_sources import (
     POSE_SOURCES,
+    SYMMETRY_TOLERANCE,
     TRUTH,
     TRUTH_STD,
+    EstimateError,
     TruePose,
+    check_estimate,
     check_pose_source,
     check_sensors,
     estimator_driver,

@@ -13,8 +13,13 @@ from stsf_gym.estimators import PoseEstimator, make_estimator
 from stsf_gym.estimators.settings import OdometrySettings
 from stsf_gym.geometry import bounded
 from stsf_gym.validation import ConfigError, reset_options
-from stsf_gym.wrappers.estimate_checks import check_estimate
-from stsf_gym.wrappers.pose_sources import TRUTH, TruePose, check_sensors, estimator_driver
+from stsf_gym.wrappers.pose_sources import (
+    TRUTH,
+    TruePose,
+    check_estimate,
+    check_sensors,
+    estimator_driver,
+)
 from stsf_gym.wrappers.sensor_model import sensor_model
 
 #: Default standard deviations of the start pose the robot is given (m, m, rad).
