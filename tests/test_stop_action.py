@@ -170,7 +170,7 @@ def test_training_and_evaluation_build_the_same_policy_stack(make_env, tmp_path,
         "straight_10m", "truth", settings, {}, 5, str(tmp_path / "m"), in_worker=False
     )
     inner = trained
-    while not isinstance(inner, PoseEstimateWrapper):
+    while not isinstance(inner, CameraPointingWrapper):  # the episode env's outermost wrapper
         inner = inner.env
     assert _layers(trained, inner) == ["Monitor", "DecisionInterval", "PolicyObservation"]
     agent = SB3Agent.__new__(SB3Agent)  # as loaded from a model trained with this stack
