@@ -19,7 +19,11 @@ SHIPPED = pretrained.names()
 
 def test_agents_are_shipped_under_what_trained_them_and_old_names_are_aliases():
     assert "pretrained:corridor/dagger-truth" in SHIPPED
-    assert all(pretrained.summary(n)["algo"] == "dagger" for n in SHIPPED)  # no reward stage
+    for name in SHIPPED:  # each named by what ran: a reward stage only where it says so
+        record = pretrained.summary(name)
+        assert name.endswith(f"/{record['algo']}-{record['pose_source']}")
+        steps = [make_agent(str(m)).trained_on()["timesteps"] for m in pretrained.models(name)]
+        assert all(steps) if "+ppo" in record["algo"] else not any(steps)
     old, new = "pretrained:corridor/ppo-truth", "pretrained:corridor/dagger-truth"
     assert pretrained.aliases()[old] == new and old not in SHIPPED
     assert expand_agents([old]) == expand_agents([new])

@@ -271,3 +271,38 @@ def test_a_shipped_agents_folder_is_readable_as_any_other(models, tmp_path, run_
     finally:
         os.umask(umask)
     assert (models / "corridor" / "dagger-truth").stat().st_mode & 0o777 == 0o755
+
+
+def test_a_fine_tuned_agent_ships_without_optimizer_moments_and_with_its_own_val_success(
+    models, tmp_path, run_cli, tiny_learner
+):
+    """The reward stage's Adam moments are twice the weights and acting reads none of them;
+    the listing's val success is the fine-tuned model's, not its clone's."""
+    import numpy as np
+
+    from stsf_gym.agents.sb3_agent import load_model
+
+    folder, summary = tiny_learner
+    record = json.loads((folder / "train.json").read_text())
+    run = tmp_path / "fine" / f"seed-{record['seed']}"
+    run.mkdir(parents=True)
+    shutil.copyfile(folder / "model.zip", run / "model.zip")
+    shutil.copyfile(folder / "train.json", run / "train.json")
+    code, err = run_cli("agents", "--ship", str(run.parent), "--suite", "corridor")
+    assert code == 0, err
+    (shipped,) = (models / "corridor").glob("dagger+ppo-*/seed-*.zip")
+    assert shipped.stat().st_size < 0.6 * (run / "model.zip").stat().st_size
+    original, lean = load_model(run / "model.zip"), load_model(shipped)
+    obs = original.observation_space.sample()
+    assert np.array_equal(
+        original.predict(obs, deterministic=True)[0], lean.predict(obs, deterministic=True)[0]
+    )
+    assert (
+        lean.policy.optimizer.param_groups[0]["lr"]
+        == original.policy.optimizer.param_groups[0]["lr"]
+    )
+    with zipfile.ZipFile(shipped) as lean_zip, zipfile.ZipFile(run / "model.zip") as whole:
+        assert sorted(lean_zip.namelist()) == sorted(whole.namelist())
+    listed = json.loads((shipped.parent / "agent.json").read_text())["val_success"]
+    last = summary["last_evaluation"]
+    assert last["timesteps"] > 0 and listed == {str(record["seed"]): last["success_rate"]}

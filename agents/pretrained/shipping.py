@@ -12,11 +12,15 @@ leaves the shipped agent as it was, never half replaced, and no seed of the old 
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import secrets
 import shutil
+import zipfile
 from pathlib import Path
+
+import torch
 
 from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.agents.training_folder import MODEL, seed_runs
@@ -25,6 +29,8 @@ from stsf_gym.validation import ConfigError
 
 #: What a model's ``stsf_meta`` and its run's ``train.json`` must both say, and alike.
 AGREED_KEYS = ("algo", "estimator", "suite", "seed", "made_by")
+#: The optimizer's state in an SB3 model file.
+OPTIMIZER = "policy.optimizer.pth"
 #: What every seed of one shipped agent shares.
 SHARED_KEYS = ("algo", "estimator", "suite")
 
@@ -123,6 +129,30 @@ def swap_in(built: Path, target: Path) -> None:
         shutil.rmtree(aside, ignore_errors=True)
 
 
+def saved_val_success(record: dict) -> float | None:
+    """The val success of the model a run saved (its ``train.json`` ``record``): the last
+    evaluation of its reward stage where one ran, else the demonstrations' kept round."""
+    last = record.get("last_evaluation") or {}
+    if last.get("timesteps"):
+        return last.get("success_rate")
+    return (record.get("demonstrations") or {}).get("val_success")
+
+
+def without_optimizer_moments(source: Path, target: Path) -> None:
+    """Copy SB3 model ``source`` to ``target`` with its optimizer's running moments dropped
+    (its parameter groups, learning rate included, kept): acting reads none of them, and a
+    fine-tuned model's Adam moments are twice its weights. Every other entry is copied as is."""
+    with zipfile.ZipFile(source) as src, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == OPTIMIZER:
+                state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=False)
+                buffer = io.BytesIO()
+                torch.save({"state": {}, "param_groups": state["param_groups"]}, buffer)
+                data = buffer.getvalue()
+            dst.writestr(item, data)
+
+
 def build_agent(
     name: str, training: Path, suite: str, records: list[dict], folder: Path, seen_inputs
 ) -> None:
@@ -134,10 +164,10 @@ def build_agent(
     for record in records:
         seed = record["seed"]
         model = folder / f"seed-{seed}.zip"
-        shutil.copyfile(training / f"seed-{seed}" / MODEL, model)
+        without_optimizer_moments(training / f"seed-{seed}" / MODEL, model)
         write_json(folder / f"seed-{seed}.json", record)
         seen[str(seed)] = seen_inputs(model, suite, pose_source).tolist()
-        val[str(seed)] = (record.get("demonstrations") or {}).get("val_success")
+        val[str(seed)] = saved_val_success(record)
     summary = {
         "name": name,
         "algo": algo,
