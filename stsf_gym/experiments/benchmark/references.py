@@ -44,8 +44,8 @@ def against_references(scores: dict[tuple[str, str], dict[int, dict]]) -> list[d
             worlds = sorted(set.intersection(*(set(s) for s in (*mine, *sides))))
             if not worlds:
                 continue
-            first = [[float(run[w]["success"]) for w in worlds] for run in mine]
-            second = [[float(side[w]["success"]) for w in worlds] for side in sides]
+            first = [[bool(run[w]["success"]) for w in worlds] for run in mine]
+            second = [[bool(side[w]["success"]) for w in worlds] for side in sides]
             entries.append(
                 {
                     "agent": group,
@@ -55,8 +55,7 @@ def against_references(scores: dict[tuple[str, str], dict[int, dict]]) -> list[d
                     "worlds": len(worlds),
                     "success_iqm_difference": paired_seed_iqm(first, second),
                     "paired_per_run": [
-                        newcombe_paired([bool(v) for v in a], [bool(v) for v in b])
-                        for a, b in zip(first, second, strict=True)
+                        newcombe_paired(a, b) for a, b in zip(first, second, strict=True)
                     ],
                 }
             )
