@@ -10,12 +10,15 @@ A name the CLI takes stands for one or more single agents, one per trained model
 - ``clone:<training folder>``: the clone of each of its runs, the policy each reward stage
   started from (``seed-S/finetune/clone.zip``), so a fine-tuned agent and its own start are
   scored side by side, over the same seeds;
-- a ``.zip`` model file: itself, as an absolute path;
+- a ``.zip`` model file: itself;
 - anything else (``follower``, ``cautious-follower``, a registered name, ``package.module:Class``):
   itself; :func:`~stsf_gym.agents.registry.make_agent` judges it.
 
 :func:`resolve_agent` is that reading; the benchmark's ``expand_agents`` and ``make_agent`` both
-call it, so a name means the same models everywhere.
+call it, so a name means the same models everywhere. A model file under the working directory
+is named relative to it (:func:`model_path`), so the cells and results of a run started from a
+clone's root name no path of this machine: they are committed, and reused by the same run from
+another clone.
 """
 
 from __future__ import annotations
@@ -31,17 +34,25 @@ CLONE_PREFIX = "clone:"
 
 def resolve_agent(name: str) -> list[str]:
     """The single agents ``name`` stands for (see the module's docstring): model files as
-    absolute paths, in training-seed order; any other name as given."""
+    :func:`model_path` names them, in training-seed order; any other name as given."""
     path = Path(name)
     if name.startswith(pretrained.PREFIX):
-        return [str(model) for model in pretrained.models(name)]
+        return [model_path(model) for model in pretrained.models(name)]
     if name.startswith(CLONE_PREFIX):
-        return [str(clone.resolve()) for clone in folder_clones(name.removeprefix(CLONE_PREFIX))]
+        return [model_path(clone) for clone in folder_clones(name.removeprefix(CLONE_PREFIX))]
     if path.is_dir():
-        return [str(model.resolve()) for model in folder_models(path)]
+        return [model_path(model) for model in folder_models(path)]
     if path.suffix == ".zip":
-        return [str(path.resolve())]
+        return [model_path(path)]
     return [name]
+
+
+def model_path(model: Path) -> str:
+    """``model``'s path relative to the working directory when it lies under it (the same
+    file from any clone run at its root; job workers, local processes or a local Ray, share
+    the working directory), else absolute."""
+    absolute, here = model.resolve(), Path.cwd().resolve()
+    return str(absolute.relative_to(here) if absolute.is_relative_to(here) else absolute)
 
 
 def folder_clones(folder: str | Path) -> list[Path]:

@@ -28,8 +28,8 @@ def test_make_agent_takes_a_shipped_name_an_alias_a_folder_a_zip_and_a_scripted_
     models = pretrained.models(SHIPPED)
     for name in (SHIPPED, "pretrained:corridor/ppo-truth"):
         agents = make_agents(name)
-        assert [a.path for a in agents] == models
-        assert make_agent(name).path == models[0]  # its first seed
+        assert [a.path.resolve() for a in agents] == models
+        assert make_agent(name).path.resolve() == models[0]  # its first seed
         assert make_agent(name).trained_on()["algo"] == "dagger"  # what ran, not the SB3 class
     run = tmp_path / "run"
     for seed, model in enumerate(models[:2]):
@@ -80,6 +80,22 @@ def test_a_fine_tuned_folders_clones_are_an_agent_of_their_own(tiny_learner, tmp
     (run / "model.zip").write_bytes(pretrained.models(SHIPPED)[0].read_bytes())
     with pytest.raises(ConfigError, match=r"seed-0/finetune/clone.zip not found"):
         resolve_agent(f"clone:{run.parent}")
+
+
+def test_models_under_the_working_directory_are_named_relative_to_it(
+    tiny_learner, monkeypatch
+):
+    """A run started at a clone's root names its models relative to it: its cells and results
+    carry no path of the machine, and the same run from another clone reuses them."""
+    folder, _ = tiny_learner
+    outside = resolve_agent(f"clone:{folder}")
+    assert Path(outside[0]).is_absolute()
+    monkeypatch.chdir(folder.parent)
+    relative = [f"{folder.name}/finetune/clone.zip"]
+    assert resolve_agent(f"clone:{folder}") == relative == resolve_agent(f"clone:{folder.name}")
+    assert resolve_agent(str(folder)) == [f"{folder.name}/model.zip"]
+    assert make_agent(relative[0]).digest == make_agent(outside[0]).digest
+    assert training_group(relative[0]) == f"clone:{folder.name}"
 
 
 def test_the_benchmark_expands_names_with_the_same_resolver():
