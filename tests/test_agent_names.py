@@ -82,9 +82,7 @@ def test_a_fine_tuned_folders_clones_are_an_agent_of_their_own(tiny_learner, tmp
         resolve_agent(f"clone:{run.parent}")
 
 
-def test_models_under_the_working_directory_are_named_relative_to_it(
-    tiny_learner, monkeypatch
-):
+def test_models_under_the_working_directory_are_named_relative_to_it(tiny_learner, monkeypatch):
     """A run started at a clone's root names its models relative to it: its cells and results
     carry no path of the machine, and the same run from another clone reuses them."""
     folder, _ = tiny_learner
