@@ -144,3 +144,39 @@ def test_a_killed_command_resumes_to_the_uninterrupted_result(name, tmp_path):
     if name == "finetune":  # the same run (weights, evaluations), resumed from an update
         assert resumed.pop("resumed_from") > 0 == reference.pop("resumed_from")
     assert _comparable(resumed, out) == _comparable(reference, tmp_path / "reference")
+
+
+def test_the_workers_of_a_run_killed_alone_exit(tmp_path):
+    """``kill PID`` of a run (not of its process group) leaves no worker holding its memory:
+    a forkserver worker is not the run's child, so it watches the run's pid."""
+    from stsf_gym.experiments.jobs.backends import PARENT_CHECK_S
+
+    pid_files = [tmp_path / f"worker-{i}.pid" for i in range(2)]
+    jobs = [{"pid_file": str(path), "seconds": 600} for path in pid_files]
+    script = (
+        "import sys; sys.path.insert(0, 'tests')\n"
+        "from stsf_gym.experiments.jobs.backends import process_runner\n"
+        "from worker_jobs import note_pid_and_wait\n"
+        f"list(process_runner(2)(note_pid_and_wait, {jobs!r}))\n"
+    )
+    run = subprocess.Popen([sys.executable, "-c", script], cwd=Path(__file__).parents[1])
+    deadline = time.monotonic() + 120
+    while not all(path.exists() and path.read_text() for path in pid_files):
+        assert run.poll() is None and time.monotonic() < deadline, "the workers did not start"
+        time.sleep(0.05)
+    workers = [int(path.read_text()) for path in pid_files]
+    run.kill()  # the run alone, as `kill -9 PID` does
+    run.wait()
+    deadline = time.monotonic() + 5 * PARENT_CHECK_S
+    while alive := [pid for pid in workers if _running(pid)]:
+        assert time.monotonic() < deadline, f"workers {alive} outlived their run"
+        time.sleep(0.1)
+
+
+def _running(pid: int) -> bool:
+    """Whether ``pid`` is a process that has not exited (a zombie has)."""
+    try:
+        status = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return status != "Z"

@@ -11,8 +11,10 @@ that ran on either backend; its result is unchanged.
 
 from __future__ import annotations
 
+import os
 import socket
 import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
@@ -24,6 +26,7 @@ from stsf_gym.validation import ConfigError
 
 BACKENDS = ("local", "ray")
 RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head answers a TCP connection in well under this
+PARENT_CHECK_S = 2.0  # how often a local worker checks that the run that started it still runs
 
 
 def make_runner(
@@ -113,6 +116,8 @@ def process_runner(workers: int) -> Runner:
     only the job it was running: that job is yielded as a :class:`Crash`, and the slot starts
     a fresh process for its next job. An exception raised by ``fn`` is a :class:`Crash` too;
     in this process (``workers`` 1) only exceptions are caught, a dying job ends the run.
+    A worker whose run was killed exits within :data:`PARENT_CHECK_S` (:func:`exit_with`):
+    its job's result was lost with the run, and a rerun redoes it.
     """
 
     def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterator[tuple[dict, object]]:
@@ -129,7 +134,12 @@ def process_runner(workers: int) -> Runner:
 
         def in_own_process(job: dict) -> object:
             if getattr(slot, "pool", None) is None:
-                slot.pool = ProcessPoolExecutor(1, mp_context=get_context("forkserver"))
+                slot.pool = ProcessPoolExecutor(
+                    1,
+                    mp_context=get_context("forkserver"),
+                    initializer=exit_with,
+                    initargs=(os.getpid(),),
+                )
                 with lock:
                     pools.append(slot.pool)
             try:
@@ -152,3 +162,21 @@ def process_runner(workers: int) -> Runner:
                         pool.shutdown(cancel_futures=True)
 
     return run
+
+
+def exit_with(run_pid: int) -> None:
+    """In a worker: exit as soon as process ``run_pid`` (the run that started it) is gone.
+
+    A forkserver worker is the forkserver's child, not the run's, so it outlives a run killed
+    alone (``kill PID``, not its process group) and would hold its memory idle; a daemon thread
+    checks every :data:`PARENT_CHECK_S` seconds instead."""
+
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_CHECK_S)
+            try:
+                os.kill(run_pid, 0)
+            except OSError:  # gone (or its pid reused by another user's process)
+                os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-run", daemon=True).start()
