@@ -12,7 +12,7 @@ from stsf_gym.agents import pretrained
 from stsf_gym.agents.decision_interval import DecisionInterval
 from stsf_gym.agents.observation import PolicyObservation, observation_config
 from stsf_gym.agents.registry import make_agent, make_agents
-from stsf_gym.agents.resolve import resolve_agent, training_group
+from stsf_gym.agents.resolve import model_path, resolve_agent, training_group
 from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.agents.trained_agent import SB3Agent, wrap_for_model
 from stsf_gym.envs.config import ConfigError
@@ -198,7 +198,7 @@ def test_evaluate_prints_a_row_per_model_and_the_seeds_together(tmp_path):
     assert main([*argv.split(), "--out", str(tmp_path)]) == 0
     summary = json.loads((tmp_path / "comparison.json").read_text())
     agents = [r["agent"] for r in summary["rows"]]
-    assert agents == [*map(str, pretrained.models(SHIPPED)), "follower"]
+    assert agents == [*map(model_path, pretrained.models(SHIPPED)), "follower"]
     assert [a["agent"] for a in summary["aggregates"]] == [SHIPPED]
     assert "dagger-truth/seed-2" in (Path(tmp_path) / "comparison.md").read_text()
 
