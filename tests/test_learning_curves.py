@@ -3,21 +3,16 @@ evaluation, for every stage a run logged, one figure per suite."""
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import pytest
+from repo_scripts import load_script
 
 from stsf_gym.io import write_json
 
-SCRIPT = Path(__file__).parents[1] / "benchmarks" / "learning_curves.py"
-
 
 def _script():
-    spec = importlib.util.spec_from_file_location("learning_curves", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/learning_curves.py")
 
 
 def _run(

@@ -3,7 +3,6 @@ match serial ones. (Config ranges and geometry: tests/test_config.py.)"""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import re
 from dataclasses import dataclass
@@ -11,22 +10,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from repo_scripts import load_script
 
 from stsf_gym.experiments.jobs.cache import JobsFailed
 from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.experiments.jobs.spec import JobKind
 from stsf_gym.validation import ConfigError, Positive, build
 
-ROOT = Path(__file__).resolve().parent.parent
 LIFETIME_CYCLES = 200  # 1000 in `benchmarks/soak.py --cycles 1000`; this many keep it < 1 min
 SOAK_STEPS = 5000  # 200,000 in `benchmarks/soak.py --steps 200000`
 
 
 def _soak_module():
-    spec = importlib.util.spec_from_file_location("soak", ROOT / "benchmarks" / "soak.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/soak.py")
 
 
 # --- actions ------------------------------------------------------------------------------

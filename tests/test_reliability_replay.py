@@ -4,13 +4,13 @@ refused naming it; every number of its sensor model and episode passes a config'
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
+from repo_scripts import load_script
 
 from stsf_gym.recording import ros_messages as ros
 from stsf_gym.recording import topics
@@ -18,16 +18,12 @@ from stsf_gym.recording.log_reader import read_log
 from stsf_gym.recording.mcap_writer import McapLogWriter
 from stsf_gym.recording.sensor_model_json import sensor_model_dict
 
-ROOT = Path(__file__).resolve().parent.parent
 DT, STEPS = 0.1, 6
 
 
 def _own_robot():
     """``examples/own_robot_log.py``: a hand-written sensor model of a robot of one's own."""
-    spec = importlib.util.spec_from_file_location("own", ROOT / "examples" / "own_robot_log.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("examples/own_robot_log.py")
 
 
 def write_log(

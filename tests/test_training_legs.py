@@ -2,22 +2,17 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import pytest
+from repo_scripts import load_script
 
 from stsf_gym.io import write_json
 
-SCRIPT = Path(__file__).parents[1] / "benchmarks" / "training_legs.py"
-
 
 def _script():
-    spec = importlib.util.spec_from_file_location("training_legs", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/training_legs.py")
 
 
 def _run(folder: Path, legs: list[tuple[float, int, int]]) -> Path:
