@@ -15,6 +15,7 @@ import pytest
 from stsf_gym.agents import pretrained
 from stsf_gym.experiments.jobs.cells import cell_name
 from stsf_gym.experiments.jobs.engine import forget_failures
+from stsf_gym.validation import ConfigError
 
 SHIPPED = pretrained.MODELS / "corridor" / "dagger-truth"  # trained on the corridor suite, truth
 
@@ -137,6 +138,24 @@ def test_another_benchmark_into_a_reports_folder_is_refused(run_cli, tmp_path):
     assert code == 2 and "holds the report of another benchmark (worlds 3 there, 2 now)" in err
     assert json.loads(report.read_text())["request"] == request
     assert sorted(p.name for p in report.parent.iterdir()) == ["results.json"]
+    code, err = run_cli(
+        "benchmark", "--suite", "corridor", "--worlds", "4", "--agents", "cautious-follower",
+        "--out", str(tmp_path / "out"),
+    )  # fmt: skip
+    assert code == 2 and "agents ['follower'] there, ['cautious-follower'] now" in err
+
+
+def test_a_benchmark_on_more_worlds_extends_the_report_of_fewer(tmp_path):
+    """A long run reported on the worlds it has finished, then on all of them."""
+    from stsf_gym.experiments.benchmark.run import check_same_request
+
+    report = tmp_path / "results.json"
+    fewer = {"agents": ["follower"], "estimators": ["truth"], "worlds": 40, "seed": 0}
+    report.write_text(json.dumps({"request": fewer, "rows": []}))
+    check_same_request(report, {**fewer, "worlds": 100})  # extends it: allowed
+    report.write_text(json.dumps({"request": {**fewer, "worlds": 100}, "rows": []}))
+    with pytest.raises(ConfigError, match="worlds 100 there, 40 now"):
+        check_same_request(report, fewer)
 
 
 def test_a_dial_scale_is_named_as_the_levels(run_cli, tmp_path):

@@ -131,15 +131,17 @@ def benchmark(
 
 def check_same_request(results: Path, request: dict) -> None:
     """Refuse to write over ``results`` (an earlier run's ``results.json``) the report of
-    another benchmark: other agents, pose sources, worlds or first seed. The same request
-    resumes or reruns it; a report from before requests were recorded is not compared."""
+    another benchmark: other agents, pose sources, first seed or fewer worlds. The same request
+    resumes or reruns it, and the same on more worlds extends it (a long run reported on the
+    worlds it has finished, then on all); a report from before requests were recorded is not
+    compared."""
     if not results.is_file():
         return
     try:
         earlier = json.loads(results.read_text()).get("request")
     except (ValueError, AttributeError):
         return  # unreadable: nothing to keep; the run writes it anew
-    if earlier is not None and earlier != request:
+    if earlier is not None and earlier != request and not _extends(request, earlier):
         differ = [key for key in request if earlier.get(key) != request[key]]
         said = "; ".join(
             f"{key} {earlier.get(key)!r} there, {request[key]!r} now" for key in differ
@@ -148,6 +150,12 @@ def check_same_request(results: Path, request: dict) -> None:
             f"{results.parent} holds the report of another benchmark ({said}); give another "
             "--out (its cells/ folder may be copied there: finished cells are reused)"
         )
+
+
+def _extends(request: dict, earlier: dict) -> bool:
+    """Whether ``request`` is ``earlier`` on more of the suite's test worlds."""
+    same = all(earlier.get(key) == value for key, value in request.items() if key != "worlds")
+    return same and request["worlds"] > earlier.get("worlds", request["worlds"])
 
 
 def summarise_benchmark(
