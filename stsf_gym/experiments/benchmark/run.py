@@ -154,8 +154,10 @@ def check_same_request(results: Path, request: dict) -> None:
 
 def _extends(request: dict, earlier: dict) -> bool:
     """Whether ``request`` is ``earlier`` on more of the suite's test worlds."""
-    same = all(earlier.get(key) == value for key, value in request.items() if key != "worlds")
-    return same and request["worlds"] > earlier.get("worlds", request["worlds"])
+    others = [key for key in request if key != "worlds"]
+    fewer = earlier.get("worlds")
+    same = all(earlier.get(key) == request[key] for key in others)
+    return same and isinstance(fewer, int) and request["worlds"] > fewer
 
 
 def summarise_benchmark(
