@@ -145,17 +145,25 @@ def test_another_benchmark_into_a_reports_folder_is_refused(run_cli, tmp_path):
     assert code == 2 and "agents ['follower'] there, ['cautious-follower'] now" in err
 
 
-def test_a_benchmark_on_more_worlds_extends_the_report_of_fewer(tmp_path):
-    """A long run reported on the worlds it has finished, then on all of them."""
+def test_a_benchmark_on_more_worlds_or_agents_extends_the_report_of_fewer(tmp_path):
+    """A long run reported on the worlds it has finished, then on all of them; agents trained
+    later added beside the earlier ones. Leaving out a world or an agent is refused."""
     from stsf_gym.experiments.benchmark.run import check_same_request
 
     report = tmp_path / "results.json"
     fewer = {"agents": ["follower"], "estimators": ["truth"], "worlds": 40, "seed": 0}
     report.write_text(json.dumps({"request": fewer, "rows": []}))
     check_same_request(report, {**fewer, "worlds": 100})  # extends it: allowed
+    check_same_request(report, {**fewer, "agents": ["follower", "cautious-follower"]})
+    with pytest.raises(ConfigError, match="estimators \\['truth'\\] there, None now"):
+        check_same_request(report, {**fewer, "worlds": 100, "estimators": None})
     report.write_text(json.dumps({"request": {**fewer, "worlds": 100}, "rows": []}))
     with pytest.raises(ConfigError, match="worlds 100 there, 40 now"):
         check_same_request(report, fewer)
+    more = {**fewer, "agents": ["follower", "cautious-follower"], "worlds": 100}
+    report.write_text(json.dumps({"request": more, "rows": []}))
+    with pytest.raises(ConfigError, match="agents \\['follower', 'cautious-follower'\\] there"):
+        check_same_request(report, {**more, "agents": ["cautious-follower"]})
 
 
 def test_a_dial_scale_is_named_as_the_levels(run_cli, tmp_path):

@@ -131,10 +131,11 @@ def benchmark(
 
 def check_same_request(results: Path, request: dict) -> None:
     """Refuse to write over ``results`` (an earlier run's ``results.json``) the report of
-    another benchmark: other agents, pose sources, first seed or fewer worlds. The same request
-    resumes or reruns it, and the same on more worlds extends it (a long run reported on the
-    worlds it has finished, then on all); a report from before requests were recorded is not
-    compared."""
+    another benchmark: other pose sources or first seed, fewer worlds, or agents that leave
+    one of its agents out. The same request resumes or reruns it, and one that keeps every
+    earlier agent and world extends it (a long run reported on the worlds it has finished,
+    then on all; agents trained later added beside the earlier ones); a report from before
+    requests were recorded is not compared."""
     if not results.is_file():
         return
     try:
@@ -153,11 +154,16 @@ def check_same_request(results: Path, request: dict) -> None:
 
 
 def _extends(request: dict, earlier: dict) -> bool:
-    """Whether ``request`` is ``earlier`` on more of the suite's test worlds."""
-    others = [key for key in request if key != "worlds"]
-    fewer = earlier.get("worlds")
-    same = all(earlier.get(key) == request[key] for key in others)
-    return same and isinstance(fewer, int) and request["worlds"] > fewer
+    """Whether ``request`` keeps every agent and test world of ``earlier``, with the same
+    pose sources and first seed (every row of the earlier report is in the new one)."""
+    fewer, agents = earlier.get("worlds"), earlier.get("agents")
+    return (
+        all(earlier.get(key) == request[key] for key in ("estimators", "seed"))
+        and isinstance(fewer, int)
+        and request["worlds"] >= fewer
+        and isinstance(agents, list)
+        and set(agents) <= set(request["agents"])
+    )
 
 
 def summarise_benchmark(
