@@ -11,15 +11,17 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from stsf_gym.agents.rl.map_view import BOARD_FEATURES, MapView
+from stsf_gym.agents.rl.residual import PROPOSAL
 from stsf_gym.envs.config import build
 from stsf_gym.envs.task import Polyline
-from stsf_gym.validation import Positive
+from stsf_gym.validation import Positive, Range
 
 STD_FLOOR, STD_CEIL = 1e-3, 10.0  # clip range of a standard deviation before its log
 TANGENT_STEP = 0.1  # m, arc length over which the path's direction is measured
@@ -36,12 +38,18 @@ class ObservationConfig:
     never seen; saturated at a horizon its legs reach, they read as a goal at the horizon.
     ``far_goal`` says which: ``direction``, the goal's own direction (the straight line to a
     goal can point back across a wall when the route turns around); ``route``, the route's
-    point ``goal_horizon`` metres ahead along the path, as a leg's goal that far ahead reads."""
+    point ``goal_horizon`` metres ahead along the path, as a leg's goal that far ahead reads.
+    The robot's map (:mod:`~stsf_gym.agents.rl.map_view`, from the estimate): ``boards``, the
+    nearest map boards in the input (0: none); ``predicted_sonar``, the ranges the map predicts
+    at the estimated pose beside the measured ones. Both off by default, so agents trained
+    before them keep their inputs."""
 
     lookahead: tuple[float, ...] = (0.0, 0.5, 1.0, 2.0, 4.0)
     scale: Positive = 4.0
     goal_horizon: Positive | None = None
     far_goal: Literal["direction", "route"] = "direction"
+    boards: Annotated[int, Range(ge=0)] = 0
+    predicted_sonar: bool = False
 
 
 def observation_config(data: Mapping[str, Any] | None) -> ObservationConfig:
@@ -64,7 +72,14 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     - ``log10`` of the standard deviations of the estimate along and across the robot's
       heading and of its yaw (each clipped to 1 mm..10 m or rad), over 3;
     - the sonar ranges, 0 at ``min_range`` to 1 at ``max_range``;
-    - the wheel speeds from the encoder ticks, 1 at the robot's top speed.
+    - the wheel speeds from the encoder ticks, 1 at the robot's top speed;
+    - with ``boards`` = K: 4 K entries, each of the K map boards nearest the estimated position
+      as range over ``scale``, sine and cosine of its bearing, and 1 if the camera could see it
+      (:meth:`~stsf_gym.agents.rl.map_view.MapView.boards`);
+    - with ``predicted_sonar``: the sonar ranges the map predicts at the estimated pose, scaled
+      as the measured ones (:meth:`~stsf_gym.agents.rl.map_view.MapView.sonar`);
+    - over a :class:`~stsf_gym.agents.rl.residual.ResidualFollower` (its ``follower_action``
+      in the observation): the follower's action ``[v, w, stop]`` for this state.
 
     ``info["is_success"]`` is set at the end of an episode (every goal reached, under the
     task's protocol), which stable-baselines3's evaluation callback counts.
@@ -91,7 +106,11 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         self.ticks_at_top_speed = (
             top_wheel_speed * env.unwrapped.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
         )
+        self.map_view: MapView | None = None  # built for each world, when the config asks
         size = 2 * len(self.config.lookahead) + 9 + cfg.sonar.count + 2
+        size += BOARD_FEATURES * config.boards + (cfg.sonar.count if config.predicted_sonar else 0)
+        self._proposal = PROPOSAL in env.observation_space.spaces
+        size += 3 if self._proposal else 0
         self.observation_space = spaces.Box(-FEATURE_LIMIT, FEATURE_LIMIT, (size,), np.float32)
 
     def step(self, action):
@@ -105,7 +124,10 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         """The policy's input (:attr:`observation_space`) from the wrapped env's observation."""
         world = self.env.unwrapped.config.world
         if world is not self._world:  # a generated world per episode: follow the new path
-            self._world, self.path = world, Polyline(world.path)
+            self._world, self.path, self.map_view = world, Polyline(world.path), None
+        uses_map = self.config.boards or self.config.predicted_sonar
+        if uses_map and self.map_view is None:
+            self.map_view = MapView(self.env, self.config.scale)
         x, y, yaw = (float(v) for v in obs["pose"])
         c, s = math.cos(yaw), math.sin(yaw)
         to_robot = np.array([[c, s], [-s, c]])
@@ -138,6 +160,15 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
                 np.log10(np.clip(stds, STD_FLOOR, STD_CEIL)) / 3.0,
                 (np.asarray(obs["sonar"], dtype=float) - low) / (high - low),
                 np.asarray(obs["encoders"], dtype=float) / self.ticks_at_top_speed,
+                *self._map_features(obs["pose"]),
+                *([obs[PROPOSAL]] if self._proposal else []),
             ]
         )
         return np.clip(features, -FEATURE_LIMIT, FEATURE_LIMIT).astype(np.float32)
+
+    def _map_features(self, pose: np.ndarray) -> list[np.ndarray]:
+        """The map's entries of the input (none unless the config asks for them)."""
+        if self.map_view is None:
+            return []
+        boards = [self.map_view.boards(pose, self.config.boards)] if self.config.boards else []
+        return boards + ([self.map_view.sonar(pose)] if self.config.predicted_sonar else [])

@@ -11,16 +11,24 @@ import gymnasium as gym
 
 from stsf_gym.agents.decision_interval import DecisionInterval
 from stsf_gym.agents.observation import ObservationConfig, PolicyObservation, observation_config
+from stsf_gym.agents.rl.residual import ResidualFollower
 
 
 def policy_stack(
-    env: gym.Env, observation: ObservationConfig | dict | None, decision_steps: int
+    env: gym.Env,
+    observation: ObservationConfig | dict | None,
+    decision_steps: int,
+    residual: dict | None = None,
 ) -> gym.Env:
     """``env`` (a :class:`~stsf_gym.wrappers.PoseEstimateWrapper`) as the policy sees and
-    drives it: :class:`PolicyObservation` with ``observation``'s settings (checked already,
-    or a saved model's mapping), then :class:`DecisionInterval` of ``decision_steps`` (1: a
-    decision every control step)."""
+    drives it: with ``residual`` (its ``scale`` and ``hold_below``) the follower under the
+    policy's correction (:class:`~stsf_gym.agents.rl.residual.ResidualFollower`), then
+    :class:`PolicyObservation` with ``observation``'s settings (checked already, or a saved
+    model's mapping), then :class:`DecisionInterval` of ``decision_steps`` (1: a decision
+    every control step)."""
     if not isinstance(observation, ObservationConfig):
         observation = observation_config(observation)
+    if residual is not None:
+        env = ResidualFollower(env, **residual)
     features = PolicyObservation(env, observation)
     return features if decision_steps == 1 else DecisionInterval(features, decision_steps)

@@ -42,7 +42,7 @@ def stack_for(env: gym.Env, meta: dict, model: str | Path) -> gym.Env:
     observation, steps = observation_config(meta.get("observation")), meta["decision_steps"]
     wrapped = _wrapper(env, PolicyObservation)
     if wrapped is None:
-        return policy_stack(env, meta.get("observation"), steps)
+        return policy_stack(env, meta.get("observation"), steps, meta.get("residual"))
     if wrapped.config != observation:
         raise ConfigError(
             f"{model} was trained on the policy observation {observation}; this env is "

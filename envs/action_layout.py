@@ -1,4 +1,5 @@
-"""The action's entries by name: ``v, w`` (drive), ``pan, tilt`` (camera mount), ``stop``.
+"""The action's entries by name: ``v, w`` (drive), ``pan, tilt`` (camera mount), ``stop``, and
+``hold`` (a residual policy's gate over a scripted declaration, :mod:`stsf_gym.agents.rl.residual`).
 
 An env's action is a ``Box(-1, 1)`` whose entries follow :data:`ACTION_NAMES` in order, each
 present or not: ``v`` and ``w`` always, ``pan`` and ``tilt`` as ``camera.control`` asks,
@@ -15,7 +16,7 @@ import numpy as np
 from gymnasium import spaces
 
 #: Every entry an action may have, in the order they appear.
-ACTION_NAMES = ("v", "w", "pan", "tilt", "stop")
+ACTION_NAMES = ("v", "w", "pan", "tilt", "stop", "hold")
 MOUNT_AXES = {"none": (), "pan": ("pan",), "pan_tilt": ("pan", "tilt")}
 
 

@@ -148,11 +148,13 @@ class RewardConfig:
     steering_change: Annotated[float, Range(le=0)] = 0.0  # per unit change of action[1]
 
 
-def check_declare_reward(reward: RewardConfig, time_limit: float) -> None:
+def check_declare_reward(reward: RewardConfig, time_limit: float, false_stop_ends: bool) -> None:
     """The reward's optimum is the declared-arrival task (:meth:`PathTask.reward`): time costs
-    (``reward.time`` < 0), a goal pays (``reward.goal`` > 0), and a false stop costs at least
-    as much as standing until the time limit (``reward.false_stop`` <= ``reward.time`` *
-    ``sim.max_episode_seconds``)."""
+    (``reward.time`` < 0), a goal pays (``reward.goal`` > 0), and a false stop that ends the
+    episode costs at least as much as standing until the time limit (``reward.false_stop`` <=
+    ``reward.time`` * ``sim.max_episode_seconds``); one that lets the leg go on (the
+    training-only ``task.false_stop_ends: false``) costs something (< 0), so no declaration
+    off the goal pays better than none."""
     require(
         reward.time < 0,
         "reward.time",
@@ -164,6 +166,14 @@ def check_declare_reward(reward: RewardConfig, time_limit: float) -> None:
         "reward.goal",
         f"must be > 0 under task.protocol: declare, got {reward.goal:g}",
     )
+    if not false_stop_ends:
+        require(
+            reward.false_stop < 0,
+            "reward.false_stop",
+            "must be < 0 under task.false_stop_ends: false, so a declaration off the goal "
+            f"never pays better than none, got {reward.false_stop:g}",
+        )
+        return
     waiting = reward.time * time_limit
     require(
         reward.false_stop <= waiting,
@@ -191,6 +201,7 @@ class TaskConfig:
     stop_action: bool = False  # declare: a last action entry; above 0 declares arrival at once
     leg_min: NonNegative = 0.0  # m: training legs (envs/start_pose.py): a start on the route ...
     leg_max: NonNegative = 0.0  # ... and one goal this far ahead along it; both 0: the route
+    false_stop_ends: bool = True  # declare: False (training only) lets a leg go on after one
 
     def __post_init__(self) -> None:
         require(
@@ -205,9 +216,11 @@ class TaskConfig:
             f"({self.goal_radius:g} m), got {self.leg_min:g}",
         )
         require(
-            not (self.stop_action or self.leg_max) or self.protocol == "declare",
+            not (self.stop_action or self.leg_max or not self.false_stop_ends)
+            or self.protocol == "declare",
             "protocol",
-            "is 'reach', but task.stop_action and training legs need the declare protocol: "
+            "is 'reach', but task.stop_action, training legs and task.false_stop_ends need "
+            "the declare protocol: "
             "set task.protocol: declare (--set task.protocol=declare, or task__protocol='declare')",
         )
 
@@ -246,7 +259,9 @@ class EnvConfig:
             f"got {self.sim.control_dt:g}",
         )
         if self.task.protocol == "declare":
-            check_declare_reward(self.reward, self.sim.max_episode_seconds)
+            check_declare_reward(
+                self.reward, self.sim.max_episode_seconds, self.task.false_stop_ends
+            )
         map_ids = sorted(lm.id for lm in self.world.landmarks)
         for i, fault in enumerate(self.faults):
             require(

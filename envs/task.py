@@ -134,6 +134,7 @@ class PathTask:
         self.goal_index = 0
         self.stops: list[Stop] = []
         self._still, self._armed = 0.0, False
+        self._false_now = False  # this step's declaration was off its goal
 
     @property
     def goal(self) -> np.ndarray:
@@ -193,6 +194,7 @@ class PathTask:
         """Advance by one control step with the TRUE position ``xy``, the commanded speed ``v``
         (m/s) and yaw rate ``w`` (rad/s) and the action's ``stop`` entry (``task.stop_action``);
         True when a goal was reached at this step."""
+        self._false_now = False
         if self.protocol == "reach":
             reached = self.distance_to_goal(xy) <= self.goal_radius
             self.goal_index += int(reached)
@@ -215,14 +217,15 @@ class PathTask:
         success = distance <= self.goal_radius
         position = (float(xy[0]), float(xy[1]))
         self.stops.append(Stop(self.goal_index, time, position, distance, success))
-        self._still, self._armed = 0.0, False
+        self._still, self._armed, self._false_now = 0.0, False, not success
         self.goal_index += int(success)
         return success
 
     @property
     def missed(self) -> bool:
-        """A declared stop was off its goal (``declare``): the episode ends as a failure."""
-        return any(not stop.success for stop in self.stops)
+        """A declared stop was off its goal (``declare``) and ends the episode as a failure
+        (always, unless the training-only ``task.false_stop_ends`` is false)."""
+        return self.cfg.false_stop_ends and any(not stop.success for stop in self.stops)
 
     @property
     def finished(self) -> bool:
@@ -243,9 +246,11 @@ class PathTask:
         - ``time`` (< 0 under ``declare``) per second ``dt``: dawdling to the time limit costs;
         - ``goal`` (> 0) once per goal ``reached``, judged at the TRUE position of the declared
           stop (what the task judges; the observation never sees it);
-        - ``false_stop`` once, at the declared stop off its goal that ends the episode; at most
+        - ``false_stop`` at a declared stop off its goal: once, as it ends the episode, at most
           ``time * sim.max_episode_seconds``, so it never pays better than trying on (standing
-          until the time limit costs at most that, and keeps the progress made);
+          until the time limit costs at most that, and keeps the progress made); under the
+          training-only ``task.false_stop_ends: false`` at each such stop, below 0, so a
+          declaration off the goal never pays better than none;
         - ``collision`` once, at the collision that ends the episode;
         - ``steering_change`` (<= 0) per unit change of the yaw command.
         """
@@ -255,6 +260,6 @@ class PathTask:
             + cfg.time * dt
             + cfg.goal * reached
             + cfg.collision * collided
-            + cfg.false_stop * self.missed
+            + cfg.false_stop * self._false_now
             + cfg.steering_change * steering_change
         )

@@ -13,7 +13,14 @@ Importing the package registers the environments with Gymnasium (idempotently):
 
 Each also has an id per pose source, e.g. ``stsf_gym/Corridor-STSF-v0`` or
 ``stsf_gym/Suite-Sparse-EKF-v0`` (see below).
+
+- ``stsf_gym/RL-<Level>-<Estimator>-v0``: RL-ready ids, one per suite and pose source: the
+  policy's flat ``Box`` input, a decision every 0.5 s, training legs (``split="train"``) or
+  full routes (``split="val" | "test"``), ``max_episode_steps`` declared
+  (:mod:`stsf_gym.agents.rl.ready`): what SB3 trains from ``gym.make`` alone.
 """
+
+import math
 
 from gymnasium.envs.registration import register, registry
 
@@ -72,7 +79,17 @@ def register_envs() -> None:
 
 def suite_id(name: str) -> str:
     """``stsf_gym/Suite-<Name>-v0`` of suite ``name``."""
-    return f"stsf_gym/Suite-{name.title().replace('_', '').replace('-', '')}-v0"
+    return f"stsf_gym/Suite-{_title(name)}-v0"
+
+
+def rl_id(suite: str, estimator: str) -> str:
+    """``stsf_gym/RL-<Suite>-<Source>-v0``: the RL-ready id of ``suite`` on ``estimator``."""
+    suffix = next(s for s, e in ESTIMATOR_IDS.items() if e == estimator)
+    return f"stsf_gym/RL-{_title(suite)}-{suffix}-v0"
+
+
+def _title(name: str) -> str:
+    return name.title().replace("_", "").replace("-", "")
 
 
 def _register_suites() -> None:
@@ -91,6 +108,29 @@ def _register_suites() -> None:
                 kwargs={"env": {"generator": generator, **env}},
             )
         _register_estimating(env_id, "generated", {**env, "generator": generator})
+        _register_rl(path.stem, env)
+
+
+def _register_rl(suite: str, env: dict) -> None:
+    """The RL-ready ids of ``suite`` (its env settings ``env``), one per pose source, each
+    declaring its episodes' most decisions (the suite's time limit over the decision period;
+    :func:`stsf_gym.agents.rl.ready.episode_decisions` computes the same from the env, and a
+    test holds them equal)."""
+    from stsf_gym.yaml_layers import CONFIG_DIR, read_yaml
+
+    defaults = read_yaml(CONFIG_DIR / "default.yaml")["sim"]
+    seconds = (env.get("sim") or {}).get("max_episode_seconds", defaults["max_episode_seconds"])
+    steps = read_yaml(CONFIG_DIR / "agents" / "ppo.yaml")["suites"]["decision_steps"]
+    decisions = math.ceil(seconds / (defaults["control_dt"] * steps) - 1e-9)
+    for estimator in ESTIMATOR_IDS.values():
+        env_id = rl_id(suite, estimator)
+        if env_id not in registry:
+            register(
+                id=env_id,
+                entry_point="stsf_gym.agents.rl.ready:make_rl_env",
+                kwargs={"suite": suite, "estimator": estimator},
+                max_episode_steps=decisions,
+            )
 
 
 def _register_estimating(env_id: str, world: str, env: dict | None = None) -> None:

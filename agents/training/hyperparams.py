@@ -25,6 +25,7 @@ import stsf_gym  # noqa: F401 - registers the env ids that name sections
 from stsf_gym.agents.decision_interval import DEFAULT_DECISION_STEPS
 from stsf_gym.agents.demonstrations.dagger import DemonstrationConfig, demonstration_config
 from stsf_gym.agents.observation import ObservationConfig, observation_config
+from stsf_gym.agents.rl.residual import ResidualConfig
 from stsf_gym.envs.config import (
     CONFIG_DIR,
     ConfigError,
@@ -48,7 +49,11 @@ from stsf_gym.yaml_layers import shown
 ALGORITHMS: dict[str, str] = {"ppo": "stable_baselines3:PPO", "sac": "stable_baselines3:SAC"}
 #: What ran, as ``algo`` records it, -> its learner: cloning and DAgger rounds without reward
 #: (``dagger``), then PPO on the env's reward (``dagger+ppo``); ``ppo`` and ``sac`` on reward alone.
-METHODS: dict[str, str] = {"dagger": "ppo", "dagger+ppo": "ppo", "ppo": "ppo", "sac": "sac"}
+METHODS: dict[str, str] = {
+    "dagger": "ppo", "dagger+ppo": "ppo", "ppo": "ppo", "sac": "sac", "residual+ppo": "ppo",
+}  # fmt: skip
+#: The residual learner (agents/rl/residual.py): PPO on a correction of the follower.
+RESIDUAL = "residual+ppo"
 #: Constructor arguments the trainer sets itself (or that name classes, not values).
 RESERVED = {
     "self", "policy", "env", "policy_kwargs", "tensorboard_log", "verbose", "seed", "device",
@@ -97,12 +102,18 @@ class TrainingConfig:
     train_env: dict = field(default_factory=dict)  # over env, for the training envs only (legs)
     demonstrations: dict = field(default_factory=dict)  # agents/demonstrations/dagger.py
     finetune: dict = field(default_factory=dict)  # FinetuneConfig: reward after demonstrations
+    #: --algo residual+ppo: the ResidualConfig bounds, and ``observation`` and ``finetune``
+    #: settings that replace the section's for the residual learner
+    residual: dict = field(default_factory=dict)
     #: Chance that a fresh policy's STOP entry declares at a decision (plain RL only; see
     #: agents/training/stop_prior.py): 0.5 would end most legs within a few decisions.
     initial_stop_probability: Annotated[float, Range(gt=0, lt=1)] = 0.0025
 
     def __post_init__(self) -> None:
-        dicts = ("policy_kwargs", "env", "observation", "train_env", "demonstrations", "finetune")
+        dicts = (
+            "policy_kwargs", "env", "observation", "train_env", "demonstrations", "finetune",
+            "residual",
+        )  # fmt: skip
         for name in dicts:
             value = getattr(self, name)
             require(isinstance(value, dict), name, f"must be a mapping, got {value!r}")
@@ -140,6 +151,7 @@ class Hyperparams:
     observation: ObservationConfig
     demonstrations: DemonstrationConfig
     finetune: FinetuneConfig
+    residual: ResidualConfig | None  # --algo residual+ppo only
     sources: KeySources = field(compare=False, repr=False)
     default_source: str = ""  # the file and section named when no layer set a key
 
@@ -216,6 +228,8 @@ def load_hyperparams(
     merged: dict = {}
     sources = KeySources()
     for source, layer in layers:
+        if algo == RESIDUAL:  # each layer's residual settings over its own, layer by layer
+            layer = residual_section(layer)
         merged = deep_merge(merged, layer)
         sources.record(layer, source)
     training_keys = {f.name for f in dataclasses.fields(TrainingConfig)}
@@ -230,6 +244,7 @@ def load_hyperparams(
             observation_config(training.observation),
             demonstration_config(training.demonstrations),
             build(FinetuneConfig, training.finetune, "finetune"),
+            build(ResidualConfig, training.residual, "residual") if algo == RESIDUAL else None,
         )
     except ConfigError as err:  # named by the layer that set the key (the file if none did)
         where = sources.file_of(err.key) or f"{shown(path)} [{chosen}]"
@@ -237,6 +252,17 @@ def load_hyperparams(
     return Hyperparams(
         algo, chosen, training, algo_kwargs, *typed, sources, f"{shown(path)} [{chosen}]"
     )
+
+
+def residual_section(layer: dict) -> dict:
+    """A layer as the residual learner reads it: its ``residual.observation`` and
+    ``residual.finetune`` over its own, no demonstrations (the learner starts as the
+    follower), and ``residual`` keeping only the bounds (:class:`ResidualConfig`)."""
+    residual = dict(layer.get("residual") or {})
+    layer = {**layer, "demonstrations": {"expert_episodes": 0}}
+    for key in ("observation", "finetune"):
+        layer[key] = deep_merge(layer.get(key) or {}, residual.pop(key, None) or {})
+    return {**layer, "residual": residual}
 
 
 def _check_algo_kwargs(cls: type, kwargs: dict) -> None:

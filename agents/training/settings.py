@@ -18,7 +18,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from stsf_gym.agents.rl.residual import ResidualConfig
 from stsf_gym.agents.training.hyperparams import (
+    RESIDUAL,
     Hyperparams,
     check_timesteps,
     learner_of,
@@ -56,9 +58,15 @@ class RunSettings:
         return self.hp.demonstrations.enabled
 
     @property
+    def residual(self) -> ResidualConfig | None:
+        """The residual learner's bounds (``--algo residual+ppo``), else None."""
+        return self.hp.residual
+
+    @property
     def finetuning(self) -> bool:
-        """Learning from reward that starts from the clone (its ``finetune`` settings apply)."""
-        return self.demonstrating and self.reward_steps > 0
+        """Learning from reward that starts from a policy that drives already, the clone or
+        the residual's follower (the ``finetune`` settings apply)."""
+        return (self.demonstrating or self.residual is not None) and self.reward_steps > 0
 
     def env_spec(self, training: bool) -> dict:
         """The keyword arguments of :func:`make_vec_env` for the training or evaluation envs."""
@@ -68,7 +76,14 @@ class RunSettings:
             "env": self.train_env if training else self.env,
             "observation": self.hp.observation,  # typed: checked once, on load
             "decision_steps": self.meta["decision_steps"],
+            "residual": self.meta.get("residual"),
         }
+
+
+def suite_env(hp: Hyperparams, suite: str, over: dict | None = None) -> dict:
+    """The evaluation env of training on ``suite``: the suite's env over the file's, ``over``
+    (the command line's) over both; the training legs add ``hp.training.train_env``."""
+    return deep_merge(deep_merge(hp.training.env, load_suite(suite).episode_env), over or {})
 
 
 def recorded_algo(learner: str, demonstrating: bool, reward_steps: int) -> str:
@@ -88,11 +103,11 @@ def reward_budget(algo: str, hp: Hyperparams, timesteps: int | None) -> int:
         if asked:
             raise ConfigError(f"--algo dagger learns no reward; got --timesteps {timesteps}")
         return 0
-    if algo == "dagger+ppo":
+    if algo in ("dagger+ppo", RESIDUAL):
         budget = timesteps if timesteps is not None else hp.finetune.timesteps
         if budget < 1:
             key = "finetune.timesteps"
-            raise hp.error(f"--algo dagger+ppo needs {key} above 0", key)
+            raise hp.error(f"--algo {algo} needs {key} above 0", key)
         return budget
     return hp.training.n_timesteps if timesteps is None else timesteps
 
@@ -130,10 +145,8 @@ def resolve_run(
     env_id = env_id_for(world, estimator, suite)
     hp = load_hyperparams(algo, env_id, config, overrides, suite is not None)
     cfg = hp.training
-    env = cfg.env
-    if suite is not None:  # the suite over the file's env, the command line's over both
-        on_command_line = overrides_to_tree(overrides or {}).get("env", {})
-        env = deep_merge(deep_merge(cfg.env, load_suite(suite).episode_env), on_command_line)
+    on_command_line = overrides_to_tree(overrides or {}).get("env", {})
+    env = cfg.env if suite is None else suite_env(hp, suite, on_command_line)
     n_envs = cfg.n_envs if n_envs is None else n_envs
     reward_steps = reward_budget(algo, hp, timesteps)
     demonstrating = hp.demonstrations.enabled
@@ -143,11 +156,16 @@ def resolve_run(
             f"--n-envs must be at least 1 and --timesteps at least {least}, "
             f"got {n_envs}, {reward_steps}"
         )
-    check_budgets(hp, n_envs, reward_steps, demonstrating and reward_steps > 0)
-    recorded = recorded_algo(learner_of(algo), demonstrating, reward_steps)
+    finetuning = (demonstrating or hp.residual is not None) and reward_steps > 0
+    check_budgets(hp, n_envs, reward_steps, finetuning)
+    recorded = (
+        RESIDUAL if hp.residual else recorded_algo(learner_of(algo), demonstrating, reward_steps)
+    )
     training = {k: v for k, v in asdict(cfg).items() if k not in ("env", "observation")}
     training["demonstrations"] = asdict(hp.demonstrations)  # defaults too: they can change
     training["finetune"] = asdict(hp.finetune)
+    if hp.residual:
+        training["residual"] = asdict(hp.residual)
     hyperparams = {"section": hp.section, **training, **hp.algo_kwargs, "n_envs": n_envs}
     observation = asdict(hp.observation)
     resolved = {
@@ -168,6 +186,7 @@ def resolve_run(
         "env": env,
         "observation": observation,
         "decision_steps": cfg.decision_steps,
+        **({"residual": hp.residual.bounds} if hp.residual else {}),
         "hyperparams": hyperparams,
         "wall_time_s": 0.0,
         "made_by": fingerprint(resolved),

@@ -29,6 +29,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from stsf_gym.agents.demonstrations.dagger import run_demonstrations, stage_episodes
+from stsf_gym.agents.rl.residual import start_as_follower
 from stsf_gym.agents.sb3_agent import META_KEY
 from stsf_gym.agents.training.checkpoints import (
     finished_summary,
@@ -65,7 +66,8 @@ __all__ = [
 
 
 def create_model(run: RunSettings, out: Path, train_env):
-    """A fresh model; plain RL's STOP entry starts from its prior (:func:`set_stop_prior`)."""
+    """A fresh model; plain RL's STOP entry starts from its prior (:func:`set_stop_prior`), the
+    residual learner's mean correction from 0 (:func:`start_as_follower`)."""
     cfg = run.hp.training
     cls = FinetunePPO if run.finetuning else algorithm_class(run.algo)
     model = cls(
@@ -78,6 +80,8 @@ def create_model(run: RunSettings, out: Path, train_env):
         **run.hp.algo_kwargs,
     )
     setattr(model, META_KEY, dict(run.meta))
+    if run.residual is not None:  # before any update, it drives as the follower does
+        start_as_follower(model.policy, run.residual)
     layout = train_env.get_attr("action_layout", [0])[0]
     if not run.demonstrating and "stop" in layout and hasattr(model.policy, "action_net"):
         set_stop_prior(model.policy, layout.index("stop"), cfg.initial_stop_probability)

@@ -61,16 +61,19 @@ def make_training_env(
     monitor_file: str,
     in_worker: bool,
     expert: bool = False,
+    residual: dict | None = None,
 ) -> gym.Env:
     """One monitored env behind the policy's stack (built inside a worker process); with
-    ``expert`` the follower labels every state (:class:`ExpertLabel`, demonstrations)."""
+    ``expert`` the follower labels every state (:class:`ExpertLabel`, demonstrations); with
+    ``residual`` the policy corrects the follower (:class:`~stsf_gym.agents.rl.residual.
+    ResidualFollower`'s bounds)."""
     if in_worker:  # Ctrl-C is the parent's to handle: it saves a checkpoint, then closes us
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     estimating = make_episode_env(world, estimator, env, {})
     labelled = estimating
     if expert:  # the expert labels every control step in the policy's features
         labelled = ExpertLabel(estimating, PolicyObservation(estimating, observation).observation)
-    policy_env = policy_stack(labelled, observation, decision_steps)
+    policy_env = policy_stack(labelled, observation, decision_steps, residual)
     fresh = not Path(f"{monitor_file}.{Monitor.EXT}").is_file()
     monitored = Monitor(
         policy_env, monitor_file, info_keywords=("is_success",), override_existing=fresh

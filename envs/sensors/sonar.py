@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from stsf_gym.envs.config import ConfigError, SonarConfig
+from stsf_gym.envs.rendering.scene import Scene
 from stsf_gym.envs.sensors.plane_cast import PlaneCaster
 from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
@@ -42,6 +43,7 @@ class SonarRing:
         )
         self._directions = np.column_stack([np.cos(ray_angles), np.sin(ray_angles)])
         self._plane = PlaneCaster(cfg.height) if cfg.cast == "plane" else None
+        self._scene_caster = PlaneCaster(cfg.height)  # scene_ranges: any scene, in the plane
 
     def true_ranges(
         self, sim: Simulator, pose: np.ndarray, transducers: np.ndarray | None = None
@@ -55,22 +57,36 @@ class SonarRing:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Hit fraction of max range (1: no hit) and angle of incidence (rad from the hit
         surface's normal) of every ray, ``(transducers, rays_per_beam)`` each."""
-        x, y, yaw = pose
-        c, s = math.cos(yaw), math.sin(yaw)
-        rotation = np.array([[c, -s], [s, c]])
+        x, y, _ = pose
         rays = self._rays(transducers)
-        starts = self._origins[rays] @ rotation.T + (x, y)
-        directions = self._directions[rays] @ rotation.T
+        starts, directions = self._world_rays(pose, rays)
         if self._plane is not None:
             fractions, normals = self._plane.cast(
                 sim.scene, np.array([x, y]), starts, directions, self.cfg.max_range
             )
         else:
-            ends = starts + self.cfg.max_range * self._directions[rays] @ rotation.T
+            ends = starts + self.cfg.max_range * self._directions[rays] @ _rotation(pose[2]).T
             fractions, normals = _bullet_cast(sim, starts, ends, self.cfg.height)
         incidence = np.arccos(_incidence_cosines(normals, directions))
         shape = (-1, self.cfg.rays_per_beam)
         return fractions.reshape(shape), incidence.reshape(shape)
+
+    def scene_ranges(self, scene: Scene, pose: np.ndarray) -> np.ndarray:
+        """Noise-free nearest-hit range (m) of every transducer at ``pose`` against ``scene``'s
+        shapes (a map's walls, say), cast in the ring's plane: the ranges :meth:`true_ranges`
+        reads in a world of just those shapes."""
+        starts, directions = self._world_rays(pose, slice(None))
+        fractions, _ = self._scene_caster.cast(
+            scene, np.asarray(pose[:2], dtype=float), starts, directions, self.cfg.max_range
+        )
+        return self.cfg.max_range * fractions.reshape(-1, self.cfg.rays_per_beam).min(axis=1)
+
+    def _world_rays(self, pose: np.ndarray, rays) -> tuple[np.ndarray, np.ndarray]:
+        """World starts and unit directions (N, 2 each) of ``rays`` from the ring at ``pose``."""
+        rotation = _rotation(pose[2])
+        return self._origins[rays] @ rotation.T + tuple(pose[:2]), self._directions[
+            rays
+        ] @ rotation.T
 
     def _rays(self, transducers: np.ndarray | None) -> np.ndarray | slice:
         if transducers is None:
@@ -101,6 +117,11 @@ class SonarRing:
         dropped = rng.random(len(ranges)) < cfg.dropout_prob
         noise = (cfg.noise_std, cfg.noise_std_per_m)
         return _readings(ranges, normal, dropped, *noise, cfg.min_range, cfg.max_range)
+
+
+def _rotation(yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s], [s, c]])
 
 
 @compiled

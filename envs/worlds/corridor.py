@@ -56,6 +56,17 @@ class Landmark:
         return plane_to_world(self.centre, self.right, self.up, plane_xy)
 
 
+def wall_box(segment, thickness: float, height: float) -> Box:
+    """The box of a wall ``[x1, y1, x2, y2]`` (its centre line): ``thickness`` across, ``height``
+    tall, reaching half the thickness past each end (so walls meeting at a corner close it)."""
+    start, end = np.asarray(segment[:2], dtype=float), np.asarray(segment[2:], dtype=float)
+    delta = end - start
+    length = float(np.hypot(*delta))
+    centre = (start + end) / 2
+    half = (length / 2 + thickness / 2, thickness / 2, height / 2)
+    return Box((centre[0], centre[1], height / 2), half, math.atan2(delta[1], delta[0]), WALL_RGBA)
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
 
@@ -191,11 +202,7 @@ class CorridorWorld:
             raise ConfigError(
                 f"world {self.cfg.name!r}: wall segment {list(segment)} has no length"
             )
-        t, h = self.cfg.wall_thickness, self.cfg.wall_height
-        half = (length / 2 + t / 2, t / 2)
-        return self._box(
-            (start + end) / 2, half, h / 2, h / 2, math.atan2(delta[1], delta[0]), WALL_RGBA
-        )
+        return self.sim.add(wall_box(segment, self.cfg.wall_thickness, self.cfg.wall_height))
 
     def _obstacle(self, spec) -> int:
         if spec.shape == "box":

@@ -68,7 +68,7 @@ class LandmarkPointer:
     def _camera_xy(self, pose: np.ndarray) -> np.ndarray:
         return pose[:2] + self.camera_forward * np.array([math.cos(pose[2]), math.sin(pose[2])])
 
-    def _candidates(self, pose: np.ndarray) -> list[tuple[int, float]]:
+    def candidates(self, pose: np.ndarray) -> list[tuple[int, float]]:
         """(index, pan) of every landmark that qualifies from ``pose``, in map order: range,
         viewing angle and line of sight in one compiled pass over the landmarks, then the
         pan limit for the few left."""
@@ -94,7 +94,7 @@ class LandmarkPointer:
         """Pan towards the best-scoring landmark (0 if none qualifies). The current target
         keeps an advantage of ``SWITCH_FACTOR`` so the choice does not flicker."""
         best = None
-        for index, pan in self._candidates(pose):
+        for index, pan in self.candidates(pose):
             # motion stereo needs parallax: favour landmarks off the direction of travel
             distance = float(np.hypot(*(self._centres[index] - pose[:2])))
             score = distance / max(abs(math.sin(pan)), MIN_SIDEWAYS)
