@@ -103,11 +103,12 @@ class CautiousFollowerAgent(FollowerAgent):
     options and decision interval)."""
 
     name = "cautious-follower"
+    follower_class: type[CautiousFollower] = CautiousFollower
 
     def begin(self, env: gym.Env) -> None:
         """A cautious follower of this episode's path, told the task's settings."""
         cfg = env.unwrapped.config
-        self.follower = CautiousFollower.for_env(env, **self.options)
+        self.follower = self.follower_class.for_env(env, **self.options)
         self.follower.configure_caution(
             cfg.task.goal_radius,
             cfg.sim.max_episode_seconds,

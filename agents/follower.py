@@ -152,7 +152,6 @@ class PathFollower:
 
     def _drive(self, pose: np.ndarray, sonar: np.ndarray | None) -> np.ndarray:
         """[v, w] for :meth:`act`; sets ``_declared`` when this step declares arrival."""
-        x, y, yaw = pose
         along = self.path.project(pose)
         ahead, speed = along + self.cfg.lookahead, self.cfg.speed
         self._declared = False
@@ -173,7 +172,15 @@ class PathFollower:
             ahead = min(ahead, goal)
             speed = min(max(arrival.approach_gain * left, arrival.min_speed), speed)  # np.clip
             speed = self._approach_speed(left, speed)
-        target = self.path.point_at(ahead)
+        return self._pursue(pose, self.path.point_at(ahead), speed, sonar)
+
+    def _pursue(
+        self, pose: np.ndarray, target: np.ndarray, speed: float, sonar: np.ndarray | None
+    ) -> np.ndarray:
+        """[v, w] in [-1, 1] that steers from ``pose`` toward ``target`` (world x, y) at
+        ``speed``: pure pursuit, turning on the spot when the target is far off the heading,
+        bent by the sonar."""
+        x, y, yaw = pose
         dx, dy = target - (x, y)
         c, s = math.cos(yaw), math.sin(yaw)
         x_r, y_r = c * dx + s * dy, -s * dx + c * dy

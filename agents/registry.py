@@ -8,6 +8,8 @@ evaluation steps that stack, so an agent is evaluated exactly as it was trained.
 - ``follower``: the scripted path follower (:mod:`stsf_gym.agents.follower`); options override
   ``configs/agents/follower.yaml``; ``cautious-follower``: the follower that waits near a goal
   until its estimate is sure enough (:mod:`stsf_gym.agents.cautious_follower`);
+  ``active-follower``: the cautious follower that turns or drives to see a map board where it
+  would wait (:mod:`stsf_gym.agents.active_follower`);
 - ``pretrained:<suite>/<algo>-<pose source>``: a shipped agent; a training folder; a ``.zip``
   model saved by ``stsf-gym train`` (:class:`~stsf_gym.agents.trained_agent.SB3Agent`). A name
   of several training seeds gives its first seed's agent from :func:`make_agent`, every seed's
@@ -36,6 +38,7 @@ from stsf_gym.agents.follower_agent import FOLLOWER, FollowerAgent
 from stsf_gym.validation import ConfigError
 
 CAUTIOUS_FOLLOWER = "cautious-follower"
+ACTIVE_FOLLOWER = "active-follower"
 
 
 class Agent(Protocol):
@@ -72,10 +75,18 @@ def _cautious_follower(**options) -> Agent:
     return CautiousFollowerAgent(**options)
 
 
+def _active_follower(**options) -> Agent:
+    """``active-follower``, imported when asked for (as the cautious follower)."""
+    from stsf_gym.agents.active_follower import ActiveFollowerAgent
+
+    return ActiveFollowerAgent(**options)
+
+
 #: Agents registered by name: name -> factory(**options).
 AGENTS: dict[str, Callable[..., Agent]] = {
     FOLLOWER: FollowerAgent,
     CAUTIOUS_FOLLOWER: _cautious_follower,
+    ACTIVE_FOLLOWER: _active_follower,
 }
 
 

@@ -65,13 +65,17 @@ class LandmarkPointer:
         """Forget the landmark the camera was kept on."""
         self.target = None
 
+    def centre(self, index: int) -> np.ndarray:
+        """The floor position (x, y) of the board of the landmark at ``index`` (map order)."""
+        return self._centres[index]
+
     def _camera_xy(self, pose: np.ndarray) -> np.ndarray:
         return pose[:2] + self.camera_forward * np.array([math.cos(pose[2]), math.sin(pose[2])])
 
-    def candidates(self, pose: np.ndarray) -> list[tuple[int, float]]:
-        """(index, pan) of every landmark that qualifies from ``pose``, in map order: range,
-        viewing angle and line of sight in one compiled pass over the landmarks, then the
-        pan limit for the few left."""
+    def in_sight(self, pose: np.ndarray) -> list[tuple[int, float]]:
+        """(index, bearing from the camera, rad off the heading) of every landmark within
+        range, facing the camera within the viewing angle and with no wall in the line of
+        sight from ``pose``, whatever the pan limit; in map order."""
         eye = self._camera_xy(pose)
         seen = _in_sight(
             eye,
@@ -82,13 +86,17 @@ class LandmarkPointer:
             self.max_range,
             math.cos(self.max_view),
         )
-        candidates = []
+        sighted = []
         for index in np.flatnonzero(seen):
             to_board = self._centres[index] - eye
-            pan = math.remainder(math.atan2(to_board[1], to_board[0]) - pose[2], math.tau)
-            if abs(pan) <= self.pan_limit:
-                candidates.append((int(index), pan))
-        return candidates
+            bearing = math.remainder(math.atan2(to_board[1], to_board[0]) - pose[2], math.tau)
+            sighted.append((int(index), bearing))
+        return sighted
+
+    def candidates(self, pose: np.ndarray) -> list[tuple[int, float]]:
+        """(index, pan) of every landmark that qualifies from ``pose``, in map order: those
+        :meth:`in_sight` within the pan limit."""
+        return [(i, pan) for i, pan in self.in_sight(pose) if abs(pan) <= self.pan_limit]
 
     def pan(self, pose: np.ndarray) -> float:
         """Pan towards the best-scoring landmark (0 if none qualifies). The current target

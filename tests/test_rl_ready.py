@@ -1,0 +1,121 @@
+"""RL-ready ids: one per suite and pose source, each declaring its episodes' most decisions,
+passing Gymnasium's and SB3's checkers, with an action layout as the user steps it, and a fresh
+policy whose training legs do not end in a false stop at once."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from stable_baselines3 import PPO
+
+import stsf_gym
+from stsf_gym.agents.rl.declaration import DISCRETE_ACTIONS, GOES_ON_FALSE_STOP
+from stsf_gym.agents.rl.ready import episode_decisions
+from stsf_gym.envs.suite import suite_names
+
+EARLY = 5  # decisions: a false stop this early is a fresh policy's, not a learnt one
+
+
+def test_every_suite_and_pose_source_has_an_id_that_declares_its_most_decisions():
+    for suite in suite_names():
+        limit = episode_decisions(suite)
+        for estimator in stsf_gym.ESTIMATOR_IDS.values():
+            spec = gym.spec(stsf_gym.rl_id(suite, estimator))
+            assert spec.max_episode_steps == limit
+
+
+@pytest.mark.parametrize("env_id", ["stsf_gym/RL-Corridor-Truth-v0", "stsf_gym/RL-Sparse-STSF-v0"])
+def test_an_rl_ready_id_passes_both_checkers(env_id):
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    env = gym.make(env_id, sim__max_episode_seconds=20.0)
+    try:
+        check_env(env, skip_render_check=True)
+        sb3_check_env(env, warn=False)
+    finally:
+        env.close()
+
+
+def test_the_action_layout_is_read_from_the_env_as_stepped():
+    env = gym.make("stsf_gym/RL-Sparse-STSF-v0")
+    try:
+        layout = env.get_wrapper_attr("action_layout")
+        assert layout.names == ("v", "w", "stop") and env.action_space.shape == (3,)
+        assert env.observation_space.shape == (37,)  # the policy's flat input, no image
+    finally:
+        env.close()
+
+
+def test_the_camera_is_off_where_the_pose_source_reads_none():
+    for estimator, enabled in (("truth", False), ("odometry", False), ("stsf", True)):
+        env = gym.make(stsf_gym.rl_id("corridor", estimator))
+        assert env.unwrapped.config.camera.enabled is enabled
+        env.close()
+
+
+def _early_false_stops(env: gym.Env, model: PPO, legs: int) -> int:
+    """Legs (of ``legs``) that a fresh stochastic policy ends in a false stop within their
+    first :data:`EARLY` decisions."""
+    ended = 0
+    for leg in range(legs):
+        obs, _ = env.reset(seed=leg)
+        for _ in range(EARLY):
+            action, _ = model.predict(obs, deterministic=False)
+            obs, _, terminated, truncated, info = env.step(action)
+            if terminated or truncated:
+                ended += int(bool(info["stops"]) and not info["collision"])
+                break
+    return ended
+
+
+@pytest.mark.slow
+def test_a_fresh_policy_does_not_end_most_legs_in_a_false_stop():
+    """Measured over 50 legs: under the default declaration a false stop costs and the leg goes
+    on; under the evaluation's rule (``declaration="stop"``) the same fresh policy ends most."""
+    env = gym.make("stsf_gym/RL-Corridor-Truth-v0")
+    model = PPO("MlpPolicy", env, seed=0, device="cpu")
+    try:
+        assert _early_false_stops(env, model, 50) < 25
+    finally:
+        env.close()
+    strict = gym.make("stsf_gym/RL-Corridor-Truth-v0", declaration="stop")
+    try:
+        assert _early_false_stops(strict, model, 50) >= 25
+    finally:
+        strict.close()
+
+
+def test_a_false_stop_on_a_training_leg_costs_and_the_leg_goes_on():
+    env = gym.make("stsf_gym/RL-Corridor-Truth-v0")
+    try:
+        env.reset(seed=3)
+        _, reward, terminated, _, info = env.step(np.array([0.0, 0.0, 1.0], np.float32))
+        assert len(info["stops"]) == 1 and not info["stops"][0]["success"]
+        assert not terminated and reward == pytest.approx(GOES_ON_FALSE_STOP, abs=0.05)
+    finally:
+        env.close()
+    val = gym.make("stsf_gym/RL-Corridor-Truth-v0", split="val")
+    try:
+        val.reset(seed=3)  # a full route: the task as evaluated
+        _, _, terminated, _, info = val.step(np.array([0.0, 0.0, 1.0], np.float32))
+        assert terminated and not info["success"]
+    finally:
+        val.close()
+
+
+def test_discrete_actions_drive_and_declare():
+    env = gym.make("stsf_gym/RL-Corridor-Truth-v0", declaration="discrete")
+    try:
+        assert env.action_space == gym.spaces.Discrete(len(DISCRETE_ACTIONS))
+        assert env.get_wrapper_attr("action_names")[0] == "stop"
+        _, first = env.reset(seed=1)
+        start = first["true_pose"]
+        _, _, _, _, info = env.step(1)  # forward: 0.122 m/s for 0.5 s
+        moved = np.hypot(*(info["true_pose"][:2] - start[:2]))
+        assert 0.03 < moved < 0.09 and not info["stops"]
+        _, _, _, _, info = env.step(0)
+        assert len(info["stops"]) == 1
+    finally:
+        env.close()
