@@ -136,7 +136,7 @@ class ActiveFollower(CautiousFollower):
         """The arc length of the route point nearest the goal, within :data:`MAX_DETOUR_M`,
         from which a board is in sight (None: none)."""
         goal = self.goals[self._goal]
-        steps = int(round(MAX_DETOUR_M / VIEW_STEP_M))
+        steps = round(MAX_DETOUR_M / VIEW_STEP_M)
         for offset in sorted((k * VIEW_STEP_M for k in range(-steps, steps + 1)), key=abs):
             arc = goal + offset
             if offset == 0 or not 0.0 <= arc <= self.path.length:

@@ -106,3 +106,50 @@ def test_a_reward_whose_optimum_is_not_the_task_is_refused(reward, key):
             world="straight_10m", task=TASK, reward=reward, sim={"max_episode_seconds": 150.0}
         )
     load_config(world="straight_10m", reward=reward)  # reach: the paper's protocol, unchanged
+
+
+GOES_ON = {**TASK, "false_stop_ends": False}
+
+
+def goes_on_return(xs: list[float], stops_at: set[int]) -> tuple[float, bool]:
+    """The return (and success) on a training leg where a false stop goes on
+    (``task.false_stop_ends: false``, the RL-ready ids' default), declaring at the steps
+    ``stops_at``."""
+    from stsf_gym.agents.rl.declaration import GOES_ON_FALSE_STOP
+
+    cfg = load_config(
+        world="straight_10m", task=GOES_ON, reward={"false_stop": GOES_ON_FALSE_STOP},
+        sim={"max_episode_seconds": TIME_LIMIT},
+    )  # fmt: skip
+    task = PathTask(cfg.world, cfg.reward, cfg.task)
+    task.set_goals([[GOAL_ARC, 0.0]])
+    progress, total, time = task.progress(np.array([xs[0], 0.0])), 0.0, 0.0
+    for i, x in enumerate(xs[1:], 1):
+        time += DT
+        xy = np.array([x, 0.0])
+        reached = task.update(xy, 0.1, 0.0, DT, time, stop=i in stops_at)
+        now = task.progress(xy)
+        total += task.reward(now - progress, DT, reached, False)
+        progress = now
+        if task.finished or time >= TIME_LIMIT - 1e-9:
+            break
+    return total, task.success
+
+
+def test_under_the_training_rule_a_false_stop_costs_goes_on_and_never_pays():
+    xs = drive(1.0, GOAL_ARC)
+    last = len(xs) - 1
+    correct, ok = goes_on_return(xs, {last})
+    tried_early, ok_early = goes_on_return(xs, {3, last})
+    spammed, ok_spam = goes_on_return(xs, set(range(1, last + 1)))
+    never, ok_never = goes_on_return(xs, set())
+    assert ok and ok_early and ok_spam and not ok_never  # a false stop ends nothing
+    assert correct - tried_early == pytest.approx(1.0)  # each costs GOES_ON_FALSE_STOP
+    assert spammed < tried_early < correct and never < correct
+
+
+def test_a_false_stop_that_goes_on_must_cost_something():
+    with pytest.raises(ConfigError, match="reward.false_stop"):
+        load_config(world="straight_10m", task=GOES_ON, reward={"false_stop": 0.0})
+    with pytest.raises(ConfigError, match="protocol"):
+        load_config(world="straight_10m", task={"false_stop_ends": False})
