@@ -60,18 +60,21 @@ def test_the_untrained_residual_agent_drives_the_followers_episode_step_for_step
         alone.close()
         stack.close()
     assert len(followed.actions) == len(corrected.actions) > 100
-    assert all(np.array_equal(a, b) for a, b in zip(followed.actions, corrected.actions))
+    assert all(
+        np.array_equal(a, b) for a, b in zip(followed.actions, corrected.actions, strict=True)
+    )
     assert solo["stops"] == residual["stops"] and solo["success"] == residual["success"]
 
 
 def test_the_gate_holds_a_declaration_and_the_follower_declares_again():
     env = ResidualFollower(make_episode_env("generated:test", "truth", suite_env(300.0)), **BOUNDS)
     try:
-        obs, _ = env.reset(seed=4)
+        env.reset(seed=4)
         held = declared = 0
         for _ in range(4000):
             hold = -1.0 if held < 3 else 0.0  # hold the first three declarations back
-            obs, _, terminated, truncated, info = env.step(np.array([0.0, 0.0, hold], np.float32))
+            action = np.array([0.0, 0.0, hold], np.float32)
+            _, _, terminated, truncated, info = env.step(action)
             held += info["declaration_held"]
             declared = len(info["stops"])
             if declared or terminated or truncated:

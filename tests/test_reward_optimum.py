@@ -149,7 +149,7 @@ def test_under_the_training_rule_a_false_stop_costs_goes_on_and_never_pays():
 
 
 def test_a_false_stop_that_goes_on_must_cost_something():
-    with pytest.raises(ConfigError, match="reward.false_stop"):
+    with pytest.raises(ConfigError, match=r"reward\.false_stop"):
         load_config(world="straight_10m", task=GOES_ON, reward={"false_stop": 0.0})
     with pytest.raises(ConfigError, match="protocol"):
         load_config(world="straight_10m", task={"false_stop_ends": False})
