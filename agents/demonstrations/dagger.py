@@ -52,6 +52,9 @@ class DemonstrationConfig:
     episodes_per_round: Episodes = 0
     every_control_step: bool = True  # label the held steps between decisions too (else: not)
     keep: Literal["last", "best"] = "best"  # the policy the stage ends with (see the module)
+    #: the pose the teaching follower drives on: ``truth`` (privileged, "learning by cheating")
+    #: or ``estimate``, the student's own (its labels then follow from what the student sees)
+    teacher_pose: Literal["truth", "estimate"] = "truth"
     cloning: dict = field(default_factory=dict)  # CloningConfig's keys
 
     @property

@@ -1,4 +1,5 @@
-"""The expert of the demonstrations: the path follower on the TRUE pose, labelling states.
+"""The expert of the demonstrations: the path follower on the TRUE pose (or on the student's own
+estimate, ``teacher_pose: estimate``), labelling states.
 
 :class:`ExpertLabel` sits directly over the pose-estimating env, beneath the policy's stack,
 and writes the follower's action for the state just reached into ``info["expert_action"]``
@@ -26,13 +27,22 @@ class ExpertLabel(gym.Wrapper):
     it also keeps every control step's ``(features, label)``, between the policy's decisions
     too: a state the robot passes while an action is held is a state like any other, and
     labelling it gives the cloning ``decision_steps`` times the data for the same driving.
-    :meth:`pop_samples` hands them over.
+    :meth:`pop_samples` hands them over. With ``pose="estimate"`` the follower drives on the
+    observation's ``pose``, the estimate the student sees, instead of the truth: its labels are
+    then a function of the student's information, with nothing it cannot predict.
     """
 
-    def __init__(self, env: gym.Env, features: Callable[[dict], np.ndarray] | None = None) -> None:
+    def __init__(
+        self,
+        env: gym.Env,
+        features: Callable[[dict], np.ndarray] | None = None,
+        pose: str = "truth",
+    ) -> None:
         super().__init__(env)
+        if pose not in ("truth", "estimate"):
+            raise ValueError(f"the teacher's pose is 'truth' or 'estimate', got {pose!r}")
         self.expert: PathFollower | None = None
-        self.features = features
+        self.features, self.pose = features, pose
         self._samples: list[tuple[np.ndarray, np.ndarray]] = []
 
     def pop_samples(self) -> tuple[np.ndarray, np.ndarray]:
@@ -56,7 +66,8 @@ class ExpertLabel(gym.Wrapper):
 
     def _label(self, obs: dict, info: dict) -> dict:
         self.expert.head_for(float(obs["goal_arc"][0]) if obs["goals_left"][0] else None)
-        info["expert_action"] = self.expert.act(info["true_pose"], obs["sonar"])
+        pose = info["true_pose"] if self.pose == "truth" else obs["pose"]
+        info["expert_action"] = self.expert.act(pose, obs["sonar"])
         if self.features is not None:
             self._samples.append((self.features(obs), info["expert_action"]))
         return info

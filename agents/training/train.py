@@ -93,7 +93,8 @@ def demonstrate(model, run: RunSettings, out: Path, eval_env, bar: tqdm) -> None
     labels; the learner evaluated after each round on the val worlds, each round drawn into
     the learning curve and TensorBoard."""
     cfg, title = run.hp.demonstrations, curve_title(run)
-    venv = make_vec_env(run.n_envs, out, "demonstrations", expert=True, **run.env_spec(True))
+    teacher = cfg.teacher_pose  # the follower on the truth, or on the student's estimate
+    venv = make_vec_env(run.n_envs, out, "demonstrations", expert=teacher, **run.env_spec(True))
     layout = venv.get_attr("action_layout", [0])[0]
     evaluate = partial(
         val_outcomes, model, eval_env, run.hp.training.n_eval_episodes, run.seed + EVAL_SEED_OFFSET

@@ -60,11 +60,12 @@ def make_training_env(
     decision_steps: int,
     monitor_file: str,
     in_worker: bool,
-    expert: bool = False,
+    expert: str | None = None,
     residual: dict | None = None,
 ) -> gym.Env:
     """One monitored env behind the policy's stack (built inside a worker process); with
-    ``expert`` the follower labels every state (:class:`ExpertLabel`, demonstrations); with
+    ``expert`` (the teacher's pose: ``truth`` or ``estimate``) the follower labels every state
+    (:class:`ExpertLabel`, demonstrations); with
     ``residual`` the policy corrects the follower (:class:`~stsf_gym.agents.rl.residual.
     ResidualFollower`'s bounds)."""
     if in_worker:  # Ctrl-C is the parent's to handle: it saves a checkpoint, then closes us
@@ -72,7 +73,8 @@ def make_training_env(
     estimating = make_episode_env(world, estimator, env, {})
     labelled = estimating
     if expert:  # the expert labels every control step in the policy's features
-        labelled = ExpertLabel(estimating, PolicyObservation(estimating, observation).observation)
+        features = PolicyObservation(estimating, observation).observation
+        labelled = ExpertLabel(estimating, features, expert)
     policy_env = policy_stack(labelled, observation, decision_steps, residual)
     fresh = not Path(f"{monitor_file}.{Monitor.EXT}").is_file()
     monitored = Monitor(
