@@ -9,6 +9,10 @@ python -m rl_zoo3.train --algo ppo --env stsf_gym/Corridor-STSF-v0 --gym-package
     --conf-file stsf_gym.agents.zoo -n 20000
 ```
 
+The RL-ready ids (``stsf_gym/RL-Corridor-Truth-v0``, ...) have sections too, with no wrapper:
+``python -m rl_zoo3.train --algo ppo --env stsf_gym/RL-Corridor-Truth-v0 --gym-packages stsf_gym
+--conf-file stsf_gym.agents.zoo`` trains the learner's task as ``gym.make`` gives it.
+
 rl-zoo3's own options (``--eval-freq``, ``--save-freq``, ``-params``) replace the training keys
 rl-zoo3 does not know (``eval_freq``, ``checkpoint_freq``, ``n_eval_episodes``). Unlike
 ``stsf-gym train --suite``, rl-zoo3 trains a suite id without the file's ``train_env`` (no
@@ -22,6 +26,7 @@ from __future__ import annotations
 import gymnasium as gym
 
 import stsf_gym  # noqa: F401 - registers the ids
+from stsf_gym.agents.rl.ready import rl_hyperparams
 from stsf_gym.agents.training.hyperparams import load_hyperparams, policy_kwargs_for_sb3
 from stsf_gym.envs.config import deep_merge
 
@@ -30,6 +35,7 @@ INTERVAL = "stsf_gym.agents.decision_interval.DecisionInterval"
 SUITE_PREFIX = "stsf_gym/Suite-"  # suite ids take the file's `suites` section
 ZOO_TIMESTEPS = 307_200  # the default section's PPO budget
 EPISODE_ENV = "stsf_gym.episode_env:make_episode_env"  # the entry point of estimating ids
+RL_ENV = "stsf_gym.agents.rl.ready:make_rl_env"  # the entry point of the RL-ready ids
 
 
 def estimating_ids() -> list[str]:
@@ -66,9 +72,33 @@ def zoo_section(algo: str, env_id: str) -> dict:
     }
 
 
+def rl_section(env_id: str) -> dict:
+    """rl-zoo3's section of an RL-ready id (``stsf_gym/RL-<Suite>-<Source>-v0``): the id is the
+    whole task already (input, decision interval, legs), so no wrapper and no env kwargs; the
+    suite's PPO hyper-parameters, a budget of :data:`ZOO_TIMESTEPS` decisions."""
+    kwargs = gym.spec(env_id).kwargs
+    hp = rl_hyperparams(kwargs["suite"], kwargs["estimator"])
+    cfg = hp.training
+    return {
+        "policy": cfg.policy,
+        "n_envs": cfg.n_envs,
+        "n_timesteps": ZOO_TIMESTEPS,
+        "policy_kwargs": policy_kwargs_for_sb3(cfg.policy_kwargs),
+        **hp.algo_kwargs,
+    }
+
+
+def rl_ids() -> list[str]:
+    """Every RL-ready id."""
+    return [env_id for env_id, spec in gym.registry.items() if spec.entry_point == RL_ENV]
+
+
 def zoo_hyperparams(algo: str) -> dict[str, dict]:
-    """Every estimating id's section for ``algo``."""
-    return {env_id: zoo_section(algo, env_id) for env_id in estimating_ids()}
+    """Every estimating id's section for ``algo``, and (PPO) every RL-ready id's."""
+    sections = {env_id: zoo_section(algo, env_id) for env_id in estimating_ids()}
+    if algo == "ppo":
+        sections |= {env_id: rl_section(env_id) for env_id in rl_ids()}
+    return sections
 
 
 #: What rl-zoo3 reads from ``--conf-file stsf_gym.agents.zoo``.

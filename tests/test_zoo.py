@@ -22,7 +22,10 @@ def test_every_estimating_id_has_a_section():
     bases = [*stsf_gym.ENV_WORLDS, stsf_gym.GENERATED_ID]
     bases += [stsf_gym.suite_id(path.stem) for path in SUITE_DIR.glob("*.yaml")]
     expected = {b.replace("-v0", f"-{s}-v0") for b in bases for s in stsf_gym.ESTIMATOR_IDS}
+    suites = [path.stem for path in SUITE_DIR.glob("*.yaml")]
+    expected |= {stsf_gym.rl_id(s, e) for s in suites for e in stsf_gym.ESTIMATOR_IDS.values()}
     assert len(bases) >= 6 and set(hyperparams) == expected
+    assert "env_wrapper" not in hyperparams["stsf_gym/RL-Sparse-STSF-v0"]  # the id is the task
     section = zoo_section("ppo", "stsf_gym/Suite-Corridor-Odometry-v0")
     suite = section["env_kwargs"]
     hp = load_hyperparams("ppo", "stsf_gym/Suite-Corridor-Odometry-v0", suite=True).training

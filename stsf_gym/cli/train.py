@@ -38,7 +38,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="a campaign: one run per pose source (comma-separated) and seed, each in "
         "OUT/<pose source>/seed-<s>/; a rerun resumes where it stopped",
     )
-    parser.add_argument("--timesteps", type=int, help="total env steps (hyper-parameter file)")
+    parser.add_argument(
+        "--timesteps",
+        type=int,
+        help="the reward stage's budget in the policy's steps, summed over the envs: decisions "
+        "(0.5 s each) with --suite, control steps (0.1 s) otherwise (default: the "
+        "hyper-parameter file's)",
+    )
     parser.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
     parser.add_argument(
         "--seeds", type=int, default=1, help="training seeds SEED.. (1); each in OUT/seed-<s>/"
@@ -133,7 +139,7 @@ def _campaign(args: argparse.Namespace, jobs: list[dict]) -> dict:
 def run_line(estimator: str, seed: int, summary: dict, out: Path) -> str:
     """A finished training run in one line."""
     return (
-        f"{estimator} seed {seed} ({summary['algo']}): {summary['timesteps']} reward timesteps, "
+        f"{estimator} seed {seed} ({summary['algo']}): {summary['timesteps']} decisions of reward learning, "
         f"{summary['wall_time_s']:.0f} s of training; {evaluation_line(summary)}. "
         f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
     )
