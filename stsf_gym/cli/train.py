@@ -139,7 +139,8 @@ def _campaign(args: argparse.Namespace, jobs: list[dict]) -> dict:
 def run_line(estimator: str, seed: int, summary: dict, out: Path) -> str:
     """A finished training run in one line."""
     return (
-        f"{estimator} seed {seed} ({summary['algo']}): {summary['timesteps']} decisions of reward learning, "
+        f"{estimator} seed {seed} ({summary['algo']}): {summary['timesteps']} decisions of "
+        "reward learning, "
         f"{summary['wall_time_s']:.0f} s of training; {evaluation_line(summary)}. "
         f"Wrote {summary['model']}, {summary['learning_curve']}, {out}/train.json"
     )
