@@ -29,6 +29,7 @@ from stsf_gym.envs.sensors.sonar import SonarRing
 from stsf_gym.envs.sensors.sonar_firing import FiringSchedule
 from stsf_gym.envs.simulator import Simulator
 from stsf_gym.envs.start_pose import draw_leg, draw_start_pose, legs
+from stsf_gym.envs.step_info import stop_info
 from stsf_gym.envs.task import PathTask
 from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
 from stsf_gym.envs.worlds.spec import check_start_pose
@@ -136,8 +137,10 @@ class CorridorEnv(gym.Env):
     world-from-camera, OpenCV axes, of the frame in ``image``, at the middle of its exposure),
     ``collision``, ``distance_travelled`` (m, true), ``progress`` (m along the path),
     ``sim_time`` (s), ``goals_reached`` (goals done so far), ``success`` (every goal reached),
-    ``stops`` (``declare``: each declared stop as ``{goal, time, position, true_distance_m,
-    success}``, the true distance to the goal it was declared for).
+    ``stops`` (``declare``: how many stops were declared) and ``last_stop`` (the latest as
+    ``{goal, time, position, true_distance_m, success}``, the true distance to the goal it was
+    declared for; ``goal`` -1 before the first): every key keeps its shape and type through an
+    episode, so a recorder stores it (:mod:`stsf_gym.envs.step_info`).
 
     ## Camera
     ``camera_matrix`` (K) and ``dist_coeffs`` (OpenCV ``k1 k2 p1 p2 k3``) are the TRUE camera of
@@ -492,12 +495,13 @@ class CorridorEnv(gym.Env):
             "true_pose": self._pose.copy(),
             "camera_pose": self._frame_pose.copy(),
             "collision": bool(collision),
-            "distance_travelled": self._distance,
-            "progress": self._progress,
-            "sim_time": self._time,
-            "goals_reached": self.task.goal_index,
-            "success": self.task.success,
-            "stops": [dataclasses.asdict(stop) for stop in self.task.stops],
+            "distance_travelled": float(self._distance),
+            "progress": float(self._progress),
+            "sim_time": float(self._time),
+            "goals_reached": int(self.task.goal_index),
+            "success": bool(self.task.success),
+            "stops": len(self.task.stops),
+            "last_stop": stop_info(self.task.stops),
         }
 
     def render(self):

@@ -99,7 +99,7 @@ def test_driving_through_the_goal_without_stopping_is_no_success():
             break
     env.close()
     assert passed and terminated and info["collision"]  # on to the end wall
-    assert not info["success"] and info["stops"] == [] and info["goals_reached"] == 0
+    assert not info["success"] and info["stops"] == 0 and info["goals_reached"] == 0
 
 
 def test_reach_protocol_ends_when_the_truth_enters_the_goal():

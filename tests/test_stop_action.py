@@ -50,7 +50,7 @@ def test_a_stop_far_away_ends_the_episode_as_a_miss_and_costs_the_false_stop(mak
     env.reset(seed=0)
     _, reward, terminated, truncated, info = env.step(np.array([0.5, 0.0, 1.0], np.float32))
     assert terminated and not truncated and not info["success"]
-    assert info["stops"][0]["true_distance_m"] > 9.0
+    assert info["stops"] == 1 and info["last_stop"]["true_distance_m"] > 9.0
     assert reward == pytest.approx(-7.0, abs=0.05)  # the penalty, beside a step's progress
 
 
@@ -82,7 +82,7 @@ def test_the_pan_wrapper_keeps_the_stop_entry_last(make_env):
     assert env.action_layout.names == ("v", "w", "stop") and env.action_space.shape == (3,)
     env.reset(seed=0)
     *_, terminated, _, info = env.step(np.array([0.0, 0.0, 1.0], np.float32))
-    assert terminated and len(info["stops"]) == 1  # the stop reached the env past the pan
+    assert terminated and info["stops"] == 1  # the stop reached the env past the pan
 
 
 LEG_TASK = {"protocol": "declare", "leg_min": 2.0, "leg_max": 5.0, "start_lateral": 0.1}
@@ -147,7 +147,7 @@ def test_a_held_stop_declares_once(make_env):
     env.reset(seed=0, options={"start_pose": [3.0, 0.0, 0.0]})
     held = DecisionInterval(env, 5)
     *_, terminated, _, info = held.step(np.array([0.0, 0.0, 1.0], np.float32))
-    assert [s["success"] for s in info["stops"]] == [True]  # the first goal, declared once
+    assert info["stops"] == 1 and info["last_stop"]["success"]  # the first goal, declared once
     assert not terminated and info["control_steps"] == 5
 
 

@@ -89,7 +89,7 @@ class EpisodeResult:
     finite: bool  # pose and covariance finite at every step
     min_cov_eigenvalue: float  # smallest eigenvalue of the covariance over the steps
     stage_ms_per_step: dict[str, float]
-    #: the declared stops (``task.protocol: declare``; ``info["stops"]``), in order
+    #: the declared stops (``task.protocol: declare``; ``env.unwrapped.task.stops``), in order
     stops: list[dict] = field(default_factory=list)
     goals: int = 1  # goals of the route
     route_length: float = 0.0  # m along the path from its start to the last goal (SPL's l)
@@ -267,7 +267,7 @@ def run_episode(spec: EpisodeSpec, record: dict | None = None) -> EpisodeResult:
             finite=traced.finite,
             min_cov_eigenvalue=traced.min_eig,
             stage_ms_per_step={k: 1000 * v / steps for k, v in estimator.timings.items()},
-            stops=[{**stop, "position": list(stop["position"])} for stop in info["stops"]],
+            stops=[{**asdict(stop), "position": list(stop.position)} for stop in task.stops],
             goals=len(task.goals),
             route_length=task.path.project(task.goals[-1]),
             floor_estimates=(
