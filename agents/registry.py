@@ -67,6 +67,10 @@ class Agent(Protocol):
         """A short name for file names and tables."""
 
 
+#: The methods every agent has (:class:`Agent`'s).
+AGENT_METHODS = tuple(m for m in vars(Agent) if not m.startswith("_"))
+
+
 def _cautious_follower(**options) -> Agent:
     """``cautious-follower``, imported when asked for: the follower's module loads the
     simulator's config, which a replay (no simulator) never needs."""
@@ -126,6 +130,8 @@ def make_agents(name: str, options: dict | None = None) -> list[Agent]:
     from stsf_gym.agents.trained_agent import SB3Agent
 
     options = options or {}
+    if not isinstance(name, str) or not name.strip():
+        raise ConfigError(f"an agent name may not be empty, got {name!r}")  # '' is the cwd
     if name in AGENTS:  # before the resolver: a folder of that name is not read as a run
         return [AGENTS[name](**options)]
     singles = resolve_agent(name)
@@ -136,15 +142,29 @@ def make_agents(name: str, options: dict | None = None) -> list[Agent]:
     return [_named_agent(name, options)]
 
 
+def check_agent(agent: object, name: str) -> Agent:
+    """``agent`` (made by ``name``) if it has every method of :class:`Agent`, else a
+    :class:`ConfigError` naming those it lacks."""
+    missing = [m for m in AGENT_METHODS if not callable(getattr(agent, m, None))]
+    if missing:
+        raise ConfigError(
+            f"agent {name!r} made a {type(agent).__name__}, which is not an agent: it lacks "
+            f"{', '.join(missing)} (stsf_gym.agents.registry.Agent)"
+        )
+    return agent  # type: ignore[return-value]
+
+
 def _named_agent(name: str, options: dict) -> Agent:
     """``package.module:Class`` with ``options``."""
     module, sep, attr = name.partition(":")
     if sep and module and attr:
         try:
-            cls = getattr(importlib.import_module(module), attr)
+            factory = getattr(importlib.import_module(module), attr)
         except (ImportError, AttributeError) as err:
             raise ConfigError(f"agent {name!r} not found: {err}") from None
-        return cls(**options)
+        if not callable(factory):
+            raise ConfigError(f"agent {name!r} is a {type(factory).__name__}, not an agent class")
+        return check_agent(factory(**options), name)
     raise ConfigError(
         f"unknown agent {name!r}; known: {', '.join(AGENTS)}, a shipped agent "
         "(pretrained:SUITE/ALGO-SOURCE, `stsf-gym agents`), a training folder, a saved model "

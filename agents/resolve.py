@@ -51,7 +51,10 @@ def model_path(model: Path) -> str:
     """``model``'s path relative to the working directory when it lies under it (the same
     file from any clone run at its root; job workers, local processes or a local Ray, share
     the working directory), else absolute."""
-    absolute, here = model.resolve(), Path.cwd().resolve()
+    try:
+        absolute, here = model.resolve(), Path.cwd().resolve()
+    except (RuntimeError, OSError) as err:  # a symlink loop (RuntimeError before Python 3.13)
+        raise ConfigError(f"model {model} cannot be followed: {err}") from None
     return str(absolute.relative_to(here) if absolute.is_relative_to(here) else absolute)
 
 

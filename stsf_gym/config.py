@@ -7,13 +7,20 @@ __all__ = ["CONFIG_DIR", "ConfigError", "EnvConfig", "load_config", "parse_overr
 
 
 def parse_overrides(items: list[str]) -> dict:
-    """``["camera.width=640", "world=straight_10m"]`` to overrides; values parsed as YAML."""
+    """``["camera.width=640", "world=straight_10m"]`` to overrides; values parsed as YAML
+    (:func:`~stsf_gym.yaml_layers.load_value`: ``1e-4`` is a number)."""
     import yaml
+
+    from stsf_gym.yaml_layers import load_value
 
     overrides = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
             raise ConfigError(f"override {item!r} must look like section.key=value")
-        overrides[key.strip()] = yaml.safe_load(value)
+        try:
+            overrides[key.strip()] = load_value(value)
+        except yaml.YAMLError as err:
+            problem = getattr(err, "problem", None) or str(err)
+            raise ConfigError(f"override {item!r}: {problem}", key.strip()) from err
     return overrides

@@ -2,13 +2,19 @@
 
 ``configs/`` holds the defaults (``default.yaml``), the worlds (``worlds/<name>.yaml``) and the
 estimator settings (``estimators/<name>.yaml``); a world or estimator file may ``extends:``
-another of its folder. Errors name the file: missing, unreadable, malformed YAML (with its
-line) or not a mapping.
+another of its folder. Errors name the file: missing, a folder, unreadable, over
+:data:`MAX_CONFIG_BYTES`, malformed YAML (with its line) or not a mapping.
+
+Files and ``--set`` values are read by :class:`ConfigLoader`, PyYAML's safe loader with three
+changes: a number with an exponent and no dot (``1e-4``) is a number, as in YAML 1.2 (YAML 1.1
+reads it as a string); a key written twice in one mapping is refused (YAML keeps the second
+silently); anchors and aliases are refused (an alias bomb expands a few lines into gigabytes).
 """
 
 from __future__ import annotations
 
 import copy
+import re
 from collections.abc import Mapping
 from importlib.resources import files
 from pathlib import Path
@@ -23,17 +29,79 @@ from stsf_gym.validation import ConfigError
 CONFIG_DIR = Path(str(files("stsf_gym.configs")))
 #: Benchmark suites (``configs/suites/<name>.yaml``, :mod:`stsf_gym.envs.suite`).
 SUITE_DIR = CONFIG_DIR / "suites"
+#: bytes: the most a config file may hold (the largest of ``configs/`` holds 9 kB; a generated
+#: world a few kB): a bigger file is refused before PyYAML spends minutes and gigabytes on it.
+MAX_CONFIG_BYTES = 1_000_000
+
+
+class RefusedYaml(yaml.MarkedYAMLError):
+    """Valid YAML that a config may not hold: a key written twice, an anchor or an alias."""
+
+
+class ConfigLoader(yaml.SafeLoader):
+    """The safe loader with YAML 1.2 exponent numbers, and no duplicate keys or aliases."""
+
+    def compose_node(self, parent, index):
+        """A node; an alias (``*name``) or anchor (``&name``) refused at its line."""
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+            raise RefusedYaml(
+                problem="config files take no YAML anchors or aliases (&name, *name): write "
+                "the value out",
+                problem_mark=event.start_mark,
+            )
+        return super().compose_node(parent, index)
+
+    def construct_mapping(self, node, deep=False):
+        """A mapping; a key written twice refused, naming both lines."""
+        seen: dict = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if isinstance(key, str | int | float | bool) and key in seen:
+                raise RefusedYaml(
+                    problem=f"key {key!r} is written twice (first at line {seen[key] + 1}); "
+                    "YAML would keep only the second: merge the two",
+                    problem_mark=key_node.start_mark,
+                )
+            seen[key] = key_node.start_mark.line
+        return super().construct_mapping(node, deep)
+
+
+#: A number with an exponent (``1e-4``, ``2E6``, ``1.5e3``): YAML 1.1 reads one without a dot,
+#: or with an unsigned exponent, as a string; YAML 1.2 and Python read numbers.
+EXPONENT_NUMBER = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
+ConfigLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float", EXPONENT_NUMBER, list("-+.0123456789")
+)
+
+
+def load_value(text: str) -> Any:
+    """``text`` (a ``--set`` value, a file's content) parsed by :class:`ConfigLoader`."""
+    return yaml.load(text, Loader=ConfigLoader)
 
 
 def read_yaml(path: str | Path) -> dict:
-    """The mapping in YAML file ``path``; a missing, unreadable or malformed file is named."""
+    """The mapping in YAML file ``path``; a missing, unreadable, oversized or malformed file,
+    or a folder, is named."""
     path = Path(path)
+    if path.is_dir():
+        raise ConfigError(f"config file {path} is a folder; give a YAML file")
     if not path.is_file():
         raise ConfigError(f"config file not found: {path}")
     try:
-        data = yaml.safe_load(path.read_text())
+        size = path.stat().st_size
+        if size > MAX_CONFIG_BYTES:
+            raise ConfigError(
+                f"config file {path} holds {size / 1e6:.1f} MB, more than a config may "
+                f"({MAX_CONFIG_BYTES / 1e6:g} MB)"
+            )
+        data = load_value(path.read_text())
     except OSError as err:
         raise ConfigError(f"cannot read config file {path}: {err.strerror}") from err
+    except RefusedYaml as err:
+        mark = err.problem_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}"
+        raise ConfigError(f"{where}: {err.problem}", source=shown(path)) from err
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""

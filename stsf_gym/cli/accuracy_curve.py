@@ -57,10 +57,7 @@ def run(args: argparse.Namespace) -> dict:
     inputs.check_counts(args)
     agents = expand_agents(inputs.names(args.agent, "--agent"))
     estimators = inputs.pose_sources(args.estimators, empty_ok=True)  # points: optional
-    try:
-        levels = [float(level) for level in inputs.names(args.levels, "--levels")]
-    except ValueError as err:
-        raise ConfigError(f"--levels must be comma-separated numbers, got {args.levels!r}") from err
+    levels = _levels(args.levels)
     world = None if args.suite else args.world or options.DEFAULT_WORLD
     summary = accuracy_curve(
         args.out,
@@ -80,3 +77,18 @@ def run(args: argparse.Namespace) -> dict:
     print_markdown(args, args.out / "curve.md")
     finished = len(summary["estimators"]) + sum(len(c["levels"]) for c in summary["curves"])
     return failed_cells(summary, finished)
+
+
+def _levels(text: str) -> list[float]:
+    """The numbers of ``--levels``: each a number, none given twice (the same level's cells
+    would be run and counted twice)."""
+    levels = []
+    for level in text.split(","):
+        try:
+            levels.append(float(level))
+        except ValueError as err:
+            raise ConfigError(f"--levels must be comma-separated numbers, got {text!r}") from err
+    twice = sorted({level for level in levels if levels.count(level) > 1})
+    if twice:
+        raise ConfigError(f"--levels gives the level {twice[0]:g} twice, got {text!r}")
+    return levels

@@ -26,6 +26,7 @@ from stsf_gym.agents.registry import FOLLOWER, trained_on
 from stsf_gym.agents.resolve import CLONE_PREFIX, SEED_FOLDERS, resolve_agent, training_group
 from stsf_gym.agents.training_folder import CLONE, MODEL
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, seed_iqm
+from stsf_gym.validation import ConfigError
 
 __all__ = ["SEED_FOLDERS", "expand_agents", "training_group"]  # also read from here
 
@@ -37,8 +38,18 @@ DEFAULT_ESTIMATORS = ("odometry", "conventional", "conventional-filter", "stsf",
 def expand_agents(agents: list[str]) -> list[str]:
     """Each of ``agents`` as the single agents it stands for
     (:func:`~stsf_gym.agents.resolve.resolve_agent`: shipped agents and training folders as
-    their models, one per training seed)."""
-    return [single for agent in agents for single in resolve_agent(agent)]
+    their models, one per training seed). Two names of the same model (an alias and its
+    shipped name, a folder and its model) are refused: its episodes would count twice."""
+    named_by: dict[str, str] = {}
+    for agent in agents:
+        for single in resolve_agent(agent):
+            if single in named_by:
+                raise ConfigError(
+                    f"{named_by[single]!r} and {agent!r} name the same agent ({single}): "
+                    "name it once"
+                )
+            named_by[single] = agent
+    return list(named_by)
 
 
 def agent_name(agent: str) -> str:

@@ -1,0 +1,130 @@
+"""The sixth list of bad inputs, each refused in one line before any file is written: numbers a
+user types (``1e-4``), duplicate levels, config files that are folders, keys written twice,
+alias bombs and huge files."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from stsf_gym.config import parse_overrides
+from stsf_gym.validation import ConfigError
+from stsf_gym.yaml_layers import MAX_CONFIG_BYTES, read_yaml
+
+# --- numbers a user types -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("text", "number"),
+    [("1e-4", 1e-4), ("1e6", 1e6), ("2E3", 2e3), ("1.5e3", 1.5e3), ("-3e+2", -300.0)],
+)
+def test_a_number_with_an_exponent_is_a_number(text, number):
+    assert parse_overrides([f"finetune.learning_rate={text}"]) == {"finetune.learning_rate": number}
+
+
+def test_a_finetune_learning_rate_typed_with_an_exponent_is_taken():
+    from stsf_gym.agents.training.hyperparams import load_hyperparams
+
+    overrides = parse_overrides(["finetune.learning_rate=1e-4"])
+    settings = load_hyperparams("dagger+ppo", None, overrides=overrides, suite=True)
+    assert settings.finetune.learning_rate == 1e-4
+
+
+def test_a_level_given_twice_is_named(run_cli, tmp_path):
+    code, err = run_cli("accuracy-curve", "--levels", "1,1.0", "--out", str(tmp_path / "o"))
+    assert code == 2 and err.strip().endswith("--levels gives the level 1 twice, got '1,1.0'")
+    assert not (tmp_path / "o").exists()
+
+
+# --- config files ---------------------------------------------------------------------------
+
+
+def write(tmp_path, text: str):
+    path = tmp_path / "config.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        (
+            "sim:\n  max_episode_seconds: 10.0\ncamera: {mode: fast}\nsim:\n  control_dt: 0.1\n",
+            "line 4, column 1: key 'sim' is written twice (first at line 1)",
+        ),
+        ("camera: {mode: fast, mode: gl}\n", "line 1, column 22: key 'mode' is written twice"),
+        (
+            "a: &a [1, 1, 1, 1, 1, 1, 1, 1]\nb: &b [*a, *a, *a, *a, *a, *a, *a, *a]\nc: [*b, *b]\n",
+            "line 1, column 4: config files take no YAML anchors or aliases",
+        ),
+    ],
+)
+def test_yaml_a_config_may_not_hold_is_refused_naming_file_and_line(tmp_path, text, said):
+    path = write(tmp_path, text)
+    with pytest.raises(ConfigError, match=f"^{re.escape(f'{path}: {said}')}"):
+        read_yaml(path)
+
+
+def test_a_config_file_over_the_size_bound_is_refused_unread(tmp_path):
+    path = write(tmp_path, "x: [" + "1," * (MAX_CONFIG_BYTES // 2) + "1]\n")
+    with pytest.raises(ConfigError, match=rf"config file {path} holds 1\.0 MB, more than"):
+        read_yaml(path)
+
+
+def test_a_folder_as_config_says_it_is_a_folder(run_cli, tmp_path):
+    code, err = run_cli("evaluate", "--config", str(tmp_path), "--out", str(tmp_path / "o"))
+    assert code == 2 and f"config file {tmp_path} is a folder" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_alias_in_a_set_value_is_refused():
+    with pytest.raises(ConfigError, match="override 'sim=\\*x': config files take no YAML"):
+        parse_overrides(["sim=*x"])
+
+
+# --- agent names ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("name", "said"),
+    [
+        (
+            "json:JSONDecoder",
+            "made a JSONDecoder, which is not an agent: it lacks wrap, begin, act",
+        ),
+        ("builtins:print", "made a NoneType, which is not an agent: it lacks wrap"),
+        ("os:path", "agent 'os:path' is a module, not an agent class"),
+        ("", "an agent name may not be empty, got ''"),
+        (" ", "an agent name may not be empty, got ' '"),
+    ],
+)
+def test_a_name_that_makes_no_agent_is_refused_naming_what_is_missing(name, said):
+    from stsf_gym.agents.registry import make_agent
+
+    with pytest.raises(ConfigError, match=re.escape(said)):
+        make_agent(name)
+
+
+def test_an_object_that_is_not_an_agent_is_refused_on_the_command_line(run_cli, tmp_path):
+    code, err = run_cli("evaluate", "--agent", "json:JSONDecoder", "--out", str(tmp_path / "o"))
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "not an agent" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_symlink_loop_as_a_model_is_refused(tmp_path):
+    from stsf_gym.agents.registry import make_agent
+
+    (tmp_path / "a.zip").symlink_to(tmp_path / "b.zip")
+    (tmp_path / "b.zip").symlink_to(tmp_path / "a.zip")
+    with pytest.raises(ConfigError, match=r"a\.zip cannot be followed"):
+        make_agent(str(tmp_path / "a.zip"))
+
+
+def test_an_alias_and_its_shipped_name_are_one_agent_named_twice():
+    from stsf_gym.experiments.benchmark.trained import expand_agents
+
+    alias, canonical = "pretrained:corridor/ppo-truth", "pretrained:corridor/dagger-truth"
+    with pytest.raises(ConfigError, match=f"{alias!r} and {canonical!r} name the same agent"):
+        expand_agents(["follower", alias, canonical])
+    assert expand_agents(["follower", canonical]) == ["follower", *expand_agents([alias])]
