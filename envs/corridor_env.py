@@ -32,6 +32,7 @@ from stsf_gym.envs.start_pose import draw_leg, draw_start_pose, legs
 from stsf_gym.envs.step_info import stop_info
 from stsf_gym.envs.task import PathTask
 from stsf_gym.envs.worlds.corridor import CorridorWorld, Landmark
+from stsf_gym.envs.worlds.geodesic import connected_to_path
 from stsf_gym.envs.worlds.spec import check_start_pose
 from stsf_gym.geometry import OdometryCalibration, bounded
 from stsf_gym.validation import reset_options
@@ -347,14 +348,21 @@ class CorridorEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode; ``options``: ``start_pose`` ``[x, y, yaw]``, checked as the world's."""
+        self.require_open("reset")
         super().reset(seed=seed)
         self.streams = RandomStreams.draw(self.np_random)
         return self._start_episode(options)
+
+    def require_open(self, call: str) -> None:
+        """Raise a :class:`RuntimeError` for ``call`` (``step``, ``reset``) after :meth:`close`."""
+        if self.sim.closed:
+            raise RuntimeError(f"{call}() after close(): this env is closed; make a new one")
 
     def _start_episode(self, options: dict | None):
         """Everything of :meth:`reset` after the seed and the episode's :attr:`streams`."""
         options = reset_options(options)
         start = options.pop("start_pose", None)
+        given = start is not None
         if options:
             raise ValueError(f"unknown reset option(s) {sorted(options)}; known: ['start_pose']")
         cfg = self.config
@@ -365,6 +373,11 @@ class CorridorEnv(gym.Env):
         elif start is None:
             start = draw_start_pose(cfg.world, cfg.task, cfg.robot.body_radius, self.streams.start)
         start = check_start_pose(cfg.world, start, cfg.robot.body_radius, "start_pose")
+        if given and not connected_to_path(cfg.world, cfg.robot.body_radius, start[:2]):
+            raise ValueError(
+                f"start_pose {start.tolist()} is outside the corridor: walls part it from the "
+                f"path's start {list(cfg.world.path[0])} (world {cfg.world.name!r})"
+            )
         self.start_pose = start  # where the robot was put: the estimators start here
         self.sim.client.restoreState(self._initial_state)
         self._mount_target = np.radians([self.config.camera.pan_deg, self.config.camera.tilt_deg])
@@ -404,8 +417,9 @@ class CorridorEnv(gym.Env):
         """Apply ``action`` (checked: numeric, finite, of the action space's shape; clipped to
         [-1, 1]) for one control period.
         """
-        a = numeric_action(action).astype(np.float64).ravel()
-        if a.shape != self.action_space.shape:
+        self.require_open("step")
+        a = numeric_action(action).astype(np.float64)
+        if a.shape != self.action_space.shape:  # (1, n) of a batch is refused, not flattened
             raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
         if not np.isfinite(a).all():
             raise ValueError(f"action contains NaN or infinite values: {a.tolist()}")

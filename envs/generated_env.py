@@ -154,6 +154,7 @@ class GeneratedCorridorEnv(CorridorEnv):
         """Start an episode in a new generated world: ``seed`` picks world ``seed`` of the split, or
         ``options["world_seed"]`` (it must lie in the split) a given one.
         """
+        self.require_open("reset")
         options = reset_options(options)
         world_seed = options.pop("world_seed", None)
         gym.Env.reset(self, seed=seed)

@@ -289,6 +289,11 @@ class Simulator:
         stepping it would move the original's robot and closing it would disconnect both."""
         raise TypeError(NOT_COPYABLE)
 
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has disconnected the simulation."""
+        return self._closed
+
     def close(self) -> None:
         """Disconnect; calling it again is harmless."""
         if not self._closed:

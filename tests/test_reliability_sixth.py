@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
 import pytest
 
 from stsf_gym.config import parse_overrides
@@ -128,3 +129,66 @@ def test_an_alias_and_its_shipped_name_are_one_agent_named_twice():
     with pytest.raises(ConfigError, match=f"{alias!r} and {canonical!r} name the same agent"):
         expand_agents(["follower", alias, canonical])
     assert expand_agents(["follower", canonical]) == ["follower", *expand_agents([alias])]
+
+
+# --- the env and its wrappers ---------------------------------------------------------------
+
+FAST = {"camera": {"mode": "fast"}}
+
+
+def test_camera_pointing_with_no_estimate_under_it_says_what_it_needs(make_env):
+    from stsf_gym.wrappers.pointing import CameraPointingWrapper
+
+    env = make_env("stsf_gym/Corridor-v0", camera={"mode": "fast", "control": "pan"})
+    with pytest.raises(ValueError, match="it needs a PoseEstimateWrapper under it"):
+        CameraPointingWrapper(env)
+
+
+def test_an_estimate_over_an_estimate_is_refused(make_env):
+    from stsf_gym.wrappers import PoseEstimateWrapper
+
+    env = make_env("stsf_gym/Corridor-Truth-v0", **FAST)
+    with pytest.raises(ValueError, match="has 'pose' already \\(pose source 'truth'\\)"):
+        PoseEstimateWrapper(env, "odometry")
+
+
+@pytest.mark.parametrize("env_id", ["stsf_gym/Corridor-v0", "stsf_gym/Suite-Corridor-Truth-v0"])
+@pytest.mark.parametrize("call", ["step", "reset"])
+def test_a_call_after_close_says_the_env_is_closed(make_env, env_id, call):
+    env = make_env(env_id, **FAST)
+    env.reset(seed=0)
+    env.close()
+    with pytest.raises(RuntimeError, match=f"^{call}\\(\\) after close\\(\\): this env is closed"):
+        env.step(env.action_space.sample()) if call == "step" else env.reset(seed=0)
+
+
+def test_a_refused_first_reset_leaves_the_env_stepping_after_a_valid_one(make_env):
+    env = make_env("stsf_gym/Corridor-v0", **FAST)
+    with pytest.raises(ValueError, match="start_pose must be inside the walls' bounds"):
+        env.reset(seed=0, options={"start_pose": [1e5, 0.0, 0.0]})
+    env.reset(seed=0)
+    *_, info = env.step(env.action_space.sample())
+    assert info["sim_time"] > 0
+
+
+@pytest.mark.parametrize(
+    ("start", "said"),
+    [
+        ([7.0, 5.0, 0.0], "is outside the corridor: walls part it from the path's start"),
+        ([0.0, 0.0, 1e12], "yaw must be an angle in radians within ±12.57 (two turns), got 1e+12"),
+        ([0.0, 0.0, float("inf")], "must be three finite numbers"),
+    ],
+)
+def test_a_start_pose_off_the_corridor_or_with_an_absurd_yaw_is_refused(make_env, start, said):
+    env = make_env("stsf_gym/Corridor-v0", **FAST)  # the IRL corridor: an L round [7, 5]
+    with pytest.raises(ValueError, match=re.escape(said)):
+        env.reset(seed=0, options={"start_pose": start})
+    _, info = env.reset(seed=0, options={"start_pose": [7.0, 0.0, 2 * np.pi]})  # in the corridor
+    assert info["true_pose"][:2] == pytest.approx([7.0, 0.0], abs=0.01)
+
+
+def test_an_action_of_a_batch_shape_is_refused_with_the_expected_shape(make_env):
+    env = make_env("stsf_gym/Corridor-v0", **FAST)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=re.escape("action must have shape (2,), got (1, 2)")):
+        env.step(np.zeros((1, 2), np.float32))

@@ -150,3 +150,16 @@ def route_geodesic_length(
     space = FreeSpace(world, body_radius)
     stops = [start, *(world.goals if goals is None else goals)]
     return sum(space.shortest_length(a, b) for a, b in pairwise(stops))
+
+
+def connected_to_path(world: WorldConfig, body_radius: float, point: Sequence[float]) -> bool:
+    """Whether a robot of ``body_radius`` at ``point`` could drive to the path's start: the
+    free space around ``point`` is the corridor's, not a pocket between walls or outside them
+    (inside the walls' bounding box all the same)."""
+    blocked = inflated_obstacles(world, body_radius)
+    low, high = np.min(world.path, axis=0) - 1e3, np.max(world.path, axis=0) + 1e3
+    free = shapely.box(*low, *high).difference(blocked)
+    start = shapely.Point(world.path[0])
+    parts = getattr(free, "geoms", [free])
+    corridor = next((part for part in parts if part.covers(start)), None)
+    return corridor is None or bool(corridor.covers(shapely.Point(point)))

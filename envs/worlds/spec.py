@@ -230,9 +230,15 @@ def check_clearance(world: WorldConfig, body_radius: float) -> None:
         _check_clear_of_walls(world, point, body_radius, f"world.path[{i}]")
 
 
+#: rad: the largest start yaw taken (two turns either way); a larger one is a unit mistake or a
+#: typo, not an angle (1e12 rad wraps to a float-rounding accident).
+YAW_LIMIT = 4 * math.pi
+
+
 def check_start_pose(world: WorldConfig, pose, body_radius: float, key: str) -> np.ndarray:
-    """``pose`` as three finite numbers ``[x, y, yaw]`` inside the walls' bounds and a robot
-    radius clear of walls and obstacles; a :class:`FieldError` naming ``key`` otherwise."""
+    """``pose`` as three finite numbers ``[x, y, yaw]`` (yaw within :data:`YAW_LIMIT`) inside
+    the walls' bounds and a robot radius clear of walls and obstacles; a :class:`FieldError`
+    naming ``key`` otherwise."""
     try:
         pose = np.asarray(pose, dtype=float)
     except (TypeError, ValueError):
@@ -241,6 +247,11 @@ def check_start_pose(world: WorldConfig, pose, body_radius: float, key: str) -> 
         pose.shape == (3,) and bool(np.all(np.isfinite(pose))),
         key,
         f"must be three finite numbers [x, y, yaw], got {pose.tolist()}",
+    )
+    require(
+        abs(pose[2]) <= YAW_LIMIT,
+        key,
+        f"yaw must be an angle in radians within ±{YAW_LIMIT:.4g} (two turns), got {pose[2]:g}",
     )
     _check_clear_of_walls(world, pose[:2], body_radius, key)
     for i, obstacle in enumerate(world.obstacles):

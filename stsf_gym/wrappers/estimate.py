@@ -82,6 +82,16 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             self, estimator=estimator, **_as_json({"start_std": start_std, **options})
         )
         gym.Wrapper.__init__(self, env)
+        held = [key for key in ("pose", "pose_cov") if key in env.observation_space.spaces]
+        if held:
+            below = (
+                env.get_wrapper_attr("pose_source") if env.has_wrapper_attr("pose_source") else "?"
+            )
+            raise ValueError(
+                f"PoseEstimateWrapper({estimator!r}) over an observation that has {held[0]!r} "
+                f"already (pose source {below!r}): one pose estimate per env; make the env "
+                "without an estimate (e.g. stsf_gym/Corridor-v0) or pick that id's pose source"
+            )
         if estimator == TRUTH and options:
             raise ConfigError(f"the truth pose source takes no options, got {sorted(options)}")
         source = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)

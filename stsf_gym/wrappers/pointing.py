@@ -47,6 +47,12 @@ class CameraPointingWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 f"{corridor.config.camera.control!r}, not 'pan'",
                 "camera.control",
             )
+        if not env.has_wrapper_attr("estimator"):
+            raise ValueError(
+                "CameraPointingWrapper points the camera from a pose estimate: it needs a "
+                "PoseEstimateWrapper under it, e.g. CameraPointingWrapper(PoseEstimateWrapper("
+                "env, 'stsf'))"
+            )
         robot = corridor.config.robot
         self.pointer = LandmarkPointer(
             {}, [], robot.camera_forward, math.radians(robot.pan_limit_deg)
