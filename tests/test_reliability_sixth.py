@@ -192,3 +192,17 @@ def test_an_action_of_a_batch_shape_is_refused_with_the_expected_shape(make_env)
     env.reset(seed=0)
     with pytest.raises(ValueError, match=re.escape("action must have shape (2,), got (1, 2)")):
         env.step(np.zeros((1, 2), np.float32))
+
+
+# --- fifth list, one left ---------------------------------------------------------------------
+
+
+def test_a_baseline_that_exits_0_saying_nothing_is_refused(run_cli, tmp_path):
+    true = tmp_path / "true"  # as /bin/true: any arguments, exit 0, no output
+    true.write_text("#!/bin/sh\nexit 0\n")
+    true.chmod(0o755)
+    code, err = run_cli(
+        "bench", "--step-only", "--baseline", str(true), "--out", str(tmp_path / "o")
+    )
+    assert code == 2 and err.strip().endswith("exited 0 and printed nothing)")
+    assert not (tmp_path / "o").exists()

@@ -238,6 +238,10 @@ def step_section(
     }
 
 
+#: What the baseline interpreter's probe prints once it has imported ``stsf_gym``.
+PROBE_REPLY = "stsf_gym imported"
+
+
 def check_baseline(baseline: Path) -> None:
     """Refuse a ``--baseline`` that is neither a Python interpreter that imports ``stsf_gym``
     nor a checkout (``stsf_gym/`` and the folders
@@ -248,15 +252,19 @@ def check_baseline(baseline: Path) -> None:
     from stsf_gym.layers import MAPPED_FOLDERS
 
     if baseline.is_file() and os.access(baseline, os.X_OK):
-        probe = [str(baseline), "-c", "import stsf_gym"]
+        probe = [str(baseline), "-c", f"import stsf_gym; print({PROBE_REPLY!r})"]
         try:
-            imported = subprocess.run(probe, capture_output=True, timeout=BASELINE_PROBE_S)
+            imported = subprocess.run(
+                probe, capture_output=True, text=True, timeout=BASELINE_PROBE_S
+            )
         except (OSError, subprocess.TimeoutExpired) as err:
             raise ConfigError(f"--baseline {baseline}: cannot run it as Python ({err})") from None
-        if imported.returncode != 0:
-            raise ConfigError(
+        if imported.returncode != 0 or imported.stdout.strip() != PROBE_REPLY:
+            said = repr(imported.stdout.strip()[:60]) if imported.stdout.strip() else "nothing"
+            raise ConfigError(  # /bin/true exits 0 and says nothing
                 f"--baseline {baseline}: not a Python interpreter with stsf-gym installed "
-                f"(`{baseline} -c 'import stsf_gym'` exited {imported.returncode})"
+                f"(`{baseline} -c 'import stsf_gym; print(...)'` exited "
+                f"{imported.returncode} and printed {said})"
             )
         return
     missing = [
