@@ -4,6 +4,7 @@ the checks that a command's output paths can be written, made before any work.""
 from __future__ import annotations
 
 import json
+import math
 import os
 import secrets
 from pathlib import Path
@@ -83,8 +84,27 @@ def remove_partial_writes(folder: str | Path) -> list[Path]:
 
 
 def write_json(path: str | Path, obj: Any) -> Path:
-    """Write ``obj`` as indented JSON, atomically (numpy values as numbers); return the path."""
-    return write_atomic(path, json.dumps(obj, indent=2, default=_to_builtin) + "\n")
+    """Write ``obj`` as indented, strict JSON, atomically (numpy values as numbers; a NaN or
+    infinity as ``null``: Python's ``NaN`` is no JSON, and other readers refuse it); return
+    the path."""
+    try:
+        text = json.dumps(obj, indent=2, default=_to_builtin, allow_nan=False)
+    except ValueError:  # a non-finite number somewhere: the slow path, rarely taken
+        text = json.dumps(_finite(obj), indent=2, default=_to_builtin, allow_nan=False)
+    return write_atomic(path, text + "\n")
+
+
+def _finite(value: Any) -> Any:
+    """``value`` with every non-finite float (numpy's too) replaced by None."""
+    if hasattr(value, "tolist") and not isinstance(value, float):
+        value = value.tolist()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {key: _finite(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(item) for item in value]
+    return value
 
 
 def save_figure(fig, path: str | Path, dpi: int = 120) -> Path:

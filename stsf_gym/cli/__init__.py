@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import json
 import os
@@ -78,8 +79,8 @@ def _silence_c_stdout() -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run a command. Bad input (a :class:`ConfigError`, :class:`FieldError` or a missing or
     unwritable path): a one-line error and exit code 2, before any output is written; jobs that
-    failed twice: exit code 1 (finished results kept, a rerun resumes). Any other exception is
-    a bug: it propagates with its traceback (exit code 1)."""
+    failed twice, or a full disk: exit code 1 (finished results kept, a rerun resumes). Any
+    other exception is a bug: it propagates with its traceback (exit code 1)."""
     words = sys.argv[1:] if argv is None else list(argv)
     args = build_parser(_command(words)).parse_args(words)
     set_command(["stsf-gym", *words])
@@ -103,6 +104,17 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except (JobsFailed, NothingFinished) as err:
         print(f"{error} {err}", file=sys.stderr)
+        return 1
+    except OSError as err:
+        if err.errno != errno.ENOSPC:
+            raise
+        where = f" writing {err.filename}" if err.filename else ""
+        print(
+            f"{error} the disk is full{where}; every file saved before stays valid (files "
+            "are written whole or not at all): free space and rerun with the same --out to "
+            "resume",
+            file=sys.stderr,
+        )
         return 1
     except KeyboardInterrupt:
         print(f"{error} interrupted; rerun with the same --out to resume", file=sys.stderr)

@@ -21,6 +21,7 @@ from stsf_gym.agents.registry import make_agent
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
+from stsf_gym.experiments.jobs.checks import episode_problem
 from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.experiments.jobs.spec import JobKind
 from stsf_gym.metrics import distance_to_path, nees, pose_error
@@ -299,7 +300,9 @@ def run_job(job: dict) -> EpisodeResult:
 
 
 #: Episodes as jobs of the engine: keyed by the spec's key, resolved by the spec.
-EPISODE_JOBS = JobKind(run_job, lambda job: _spec(job).key, lambda job: _spec(job).resolved())
+EPISODE_JOBS = JobKind(
+    run_job, lambda job: _spec(job).key, lambda job: _spec(job).resolved(), episode_problem
+)
 
 
 def specs_config(specs: list[EpisodeSpec]) -> dict:

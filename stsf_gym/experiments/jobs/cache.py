@@ -50,6 +50,7 @@ def run_cached(
     desc: str = "jobs",
     config: Callable[[dict], Mapping] | None = None,
     on_done: Callable[[dict, object], None] | None = None,
+    check: Callable[[object, Mapping | None], str | None] | None = None,
 ) -> list:
     """``fn(job)`` for every job, its result (as a dict, when ``folder`` keeps it), in job order.
 
@@ -57,11 +58,12 @@ def run_cached(
     as soon as the runner yields it, then ``on_done(job, result)`` is called. The progress bar
     is named ``desc`` (none when empty: the caller shows progress in ``on_done``). ``config(job)``
     is the job's fully resolved configuration (every value, not only the job's overrides): part
-    of the fingerprint a saved result must match to be reused.
+    of the fingerprint a saved result must match to be reused. ``check(result, config)``
+    says what is wrong with a saved result (None: nothing); one that fails is recomputed.
     """
     made_by = {name(job): fingerprint(config(job) if config else None) for job in jobs}
     done: dict[str, object] = {}
-    stale = []
+    stale, inconsistent = [], []
 
     def load(job: dict, note_stale: bool = False) -> object | None:
         if folder is None:
@@ -75,6 +77,11 @@ def run_cached(
         if data.get("made_by") != made_by[name(job)]:
             if note_stale:
                 stale.append(name(job))
+            return None
+        problem = check(data["result"], config(job) if config else None) if check else None
+        if problem:
+            if note_stale:
+                inconsistent.append(f"{name(job)}: {problem}")
             return None
         return data["result"]
 
@@ -91,6 +98,12 @@ def run_cached(
         print(
             f"{desc}: {len(stale)} saved result(s) in {folder} were made by other code or "
             f"settings (e.g. {stale[0]}); recomputing them",
+            file=sys.stderr,
+        )
+    if inconsistent:
+        print(
+            f"{desc}: {len(inconsistent)} saved result(s) in {folder} fail their own check "
+            f"(e.g. {inconsistent[0]}); recomputing them",
             file=sys.stderr,
         )
     errors: dict[str, str] = {}

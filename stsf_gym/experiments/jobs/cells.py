@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from stsf_gym.envs.config import ConfigError, deep_merge
+from stsf_gym.experiments.jobs.checks import cell_problem
 from stsf_gym.experiments.jobs.spec import JobKind, failure
 
 #: ``train`` keys that are arguments of ``stsf_gym.agents.training.train.train`` (with their
@@ -179,4 +180,4 @@ CELL_KINDS: dict[str, CellKind] = {
 }
 
 #: Cells as jobs of the engine.
-CELL_JOBS = JobKind(run_cell, cell_name, cell_config)
+CELL_JOBS = JobKind(run_cell, cell_name, cell_config, cell_problem)

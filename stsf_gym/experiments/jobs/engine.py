@@ -63,6 +63,7 @@ def run_jobs(
         desc,
         config=(lambda job: configs[kind.key(job)]) if kind.resolve else None,
         on_done=on_done,
+        check=kind.check,
     )
     return Ran(results, configs)
 

@@ -16,12 +16,15 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class JobKind:
-    """A kind of job: how to ``run`` one, its ``key``, and ``resolve``: its resolved
-    configuration (None: a result that depends on nothing but the job and the code)."""
+    """A kind of job: how to ``run`` one, its ``key``, ``resolve``: its resolved
+    configuration (None: a result that depends on nothing but the job and the code), and
+    ``check``: what is wrong with a saved result given that configuration (None: nothing;
+    :mod:`~stsf_gym.experiments.jobs.checks`), so a result edited by hand is recomputed."""
 
     run: Callable[[dict], object]
     key: Callable[[dict], str]
     resolve: Callable[[dict], Mapping] | None = None
+    check: Callable[[object, Mapping | None], str | None] | None = None
 
 
 @dataclass(frozen=True)
