@@ -190,6 +190,11 @@ def resolve_run(
         "hyperparams": hyperparams,
         "wall_time_s": 0.0,
         "made_by": fingerprint(resolved),
+        # the demonstration stage's own: the fine-tuning settings are read after it only, so a
+        # change to them alone keeps the demonstrations (the reward stage is trained again)
+        "demonstrations_made_by": fingerprint(
+            {**resolved, "hyperparams": {k: v for k, v in hyperparams.items() if k != "finetune"}}
+        ),
         "provenance": provenance(resolved, [seed]),
     }
     train_env = deep_merge(env, cfg.train_env)

@@ -108,7 +108,7 @@ def demonstrate(model, run: RunSettings, out: Path, eval_env, bar: tqdm) -> None
 
     try:
         stop = layout.index("stop") if "stop" in layout else None
-        made_by = model.stsf_meta["made_by"]
+        made_by = model.stsf_meta["demonstrations_made_by"]
         stage = run_demonstrations(
             model, venv, cfg, stop, out, evaluate, run.seed, made_by, bar.update, on_round
         )

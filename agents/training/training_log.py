@@ -34,12 +34,12 @@ def append_row(path: Path, header: list[str], row: list) -> None:
 
 
 def read_rows(path: Path) -> np.ndarray:
-    """The CSV's numbers as a 2-D array (no rows: shape (0, columns))."""
+    """The CSV's numbers as a 2-D array (no rows, a header alone included: shape (0, columns))."""
     if not path.is_file():
         return np.zeros((0, 4))
     with path.open() as f:
-        rows = list(csv.reader(f))[1:]
-    return np.array(rows, dtype=float).reshape(len(rows), -1)
+        header, *rows = list(csv.reader(f)) or [[]]
+    return np.array(rows, dtype=float).reshape(len(rows), len(header))
 
 
 def read_evaluations(out: Path) -> list[dict]:
