@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import os
 import socket
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -20,12 +22,18 @@ from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_compl
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
 
+from stsf_gym.experiments.jobs.orphan_watchdog import start_watchdog
 from stsf_gym.experiments.jobs.spec import Crash, Runner
 from stsf_gym.results.provenance import run_reporting_modules, worker_result
 from stsf_gym.validation import ConfigError
 
 BACKENDS = ("local", "ray")
 RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head answers a TCP connection in well under this
+#: s: the most a Ray driver may take to join the cluster at ``--address`` (a few seconds on a
+#: loaded machine); a service that is not Ray's keeps ``ray.init`` waiting for minutes
+RAY_JOIN_TIMEOUT_S = 45.0
+#: Joins the cluster at ``sys.argv[1]`` and leaves (run in a child process, killed if late).
+RAY_PROBE = "import sys, ray; ray.init(address=sys.argv[1], log_to_driver=False); ray.shutdown()"
 PARENT_CHECK_S = 2.0  # how often a local worker checks that the run that started it still runs
 
 
@@ -46,12 +54,40 @@ def make_runner(
     raise ConfigError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
 
 
-def check_ray_address(address: str | None, timeout_s: float = RAY_CONNECT_TIMEOUT_S) -> None:
-    """Fail at once when ``address`` names a host and port (``head:6379``,
-    ``ray://head:10001``) where nothing answers within ``timeout_s``: ``ray.init`` would retry
-    there for minutes without a word. ``auto``, ``local`` and None are Ray's to resolve."""
-    if address in (None, "auto", "local"):
+def check_ray_address(
+    address: str | None,
+    timeout_s: float = RAY_CONNECT_TIMEOUT_S,
+    join_timeout_s: float = RAY_JOIN_TIMEOUT_S,
+) -> None:
+    """Fail before any work when no Ray cluster answers at ``address``: a host and port
+    (``head:6379``, ``ray://head:10001``) where nothing answers within ``timeout_s`` (``ray.init``
+    would retry there for minutes without a word), or where a driver cannot join within
+    ``join_timeout_s`` (a service that is not Ray's), or ``auto`` with no cluster running.
+    None and ``local`` (a local Ray, started by the run) are not checked."""
+    if address in (None, "local"):
         return
+    if address != "auto":
+        _check_answers(address, timeout_s)
+    try:
+        joined = subprocess.run(
+            [sys.executable, "-c", RAY_PROBE, address],
+            capture_output=True,
+            text=True,
+            timeout=join_timeout_s,
+        )
+    except subprocess.TimeoutExpired:
+        raise ConfigError(
+            f"--address {address}: no Ray cluster let a driver join within {join_timeout_s:g} s "
+            "(something answers there, but not Ray's GCS?); give the head's GCS port (6379) "
+            "or ray://head:10001, or leave --address out for a local Ray"
+        ) from None
+    if joined.returncode:
+        said = (joined.stderr.strip().splitlines() or ["no message"])[-1]
+        raise ConfigError(f"--address {address}: no Ray cluster to join ({said[:300]})")
+
+
+def _check_answers(address: str, timeout_s: float) -> None:
+    """A host and port where something answers a TCP connection within ``timeout_s``."""
     host, sep, port = address.removeprefix("ray://").rpartition(":")
     if not (sep and host and port.isdigit()):
         raise ConfigError(f"--address {address!r}: give host:port or ray://host:port (or auto)")
@@ -71,7 +107,8 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
     Uses the Ray instance already initialised in this process, else connects to ``address``
     (a running cluster, e.g. ``ray://head:10001`` or ``auto``) or, without one, starts a local
     instance of ``workers * cpus_per_job`` CPUs (``workers`` jobs at once); an instance it
-    started is shut down when the jobs are done.
+    started is shut down when the jobs are done, or by a watchdog when the run is killed
+    (:mod:`~stsf_gym.experiments.jobs.orphan_watchdog`).
     Nodes of a cluster need stsf-gym installed.
     """
     try:
@@ -85,9 +122,11 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
         if not jobs:
             return
         started = not ray.is_initialized()
+        watchdog = None
         if started:
             local = {} if address else {"num_cpus": workers * cpus_per_job}
             ray.init(address=address, include_dashboard=False, log_to_driver=False, **local)
+            watchdog = None if address else start_watchdog()  # a kill leaves no Ray agents
         task = ray.remote(num_cpus=cpus_per_job, max_retries=0)(run_reporting_modules)
         task = task.options(name=getattr(fn, "__name__", "job"))  # errors name the job's function
         pending = {task.remote(fn, job): job for job in jobs}
@@ -105,6 +144,8 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
                 ray.cancel(ref, force=True)
             if started:
                 ray.shutdown()
+            if watchdog is not None:
+                watchdog.terminate()
 
     return run
 
