@@ -92,7 +92,7 @@ def test_a_false_stop_on_a_training_leg_costs_and_the_leg_goes_on():
     try:
         env.reset(seed=3)
         _, reward, terminated, _, info = env.step(np.array([0.0, 0.0, 1.0], np.float32))
-        assert len(info["stops"]) == 1 and not info["stops"][0]["success"]
+        assert info["stops"] == 1 and not info["last_stop"]["success"]
         assert not terminated and reward == pytest.approx(GOES_ON_FALSE_STOP, abs=0.05)
     finally:
         env.close()
@@ -116,6 +116,6 @@ def test_discrete_actions_drive_and_declare():
         moved = np.hypot(*(info["true_pose"][:2] - start[:2]))
         assert 0.03 < moved < 0.09 and not info["stops"]
         _, _, _, _, info = env.step(0)
-        assert len(info["stops"]) == 1
+        assert info["stops"] == 1
     finally:
         env.close()
