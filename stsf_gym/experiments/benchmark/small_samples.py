@@ -36,6 +36,20 @@ def marked(interval: str, worlds: int) -> str:
     return f"{interval} {MARK}" if too_few(worlds) else interval
 
 
+def interval(value: dict, worlds: int, digits: int = 2) -> str:
+    """A paired difference ``{difference, low, high}`` over ``worlds`` worlds as printed:
+    ``+0.10 (-0.05 to +0.25)``, :func:`marked`."""
+    d, low, high = value["difference"], value["low"], value["high"]
+    return marked(f"{d:+.{digits}f} ({low:+.{digits}f} to {high:+.{digits}f})", worlds)
+
+
+def noted(table: str, worlds: int) -> str:
+    """A Markdown ``table`` of paired intervals over ``worlds`` worlds, with the note under it
+    when they are too few."""
+    note = few_worlds_note(worlds)
+    return f"{table}\n{note}\n" if note else table
+
+
 def few_worlds_note(worlds: int) -> str | None:
     """The note printed under a table whose intervals come from ``worlds`` paired worlds
     (None when they are enough)."""
