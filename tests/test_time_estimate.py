@@ -66,3 +66,14 @@ def test_run_cached_says_its_plan_on_stderr_before_the_first_job(tmp_path, capsy
     run_cached(lambda job: job["seed"], _jobs(3), tmp_path, lambda j: str(j["seed"]), runner,
                "table1", unit="seed")  # fmt: skip
     assert "table1: all 3 seed(s) already done" in said[1]
+
+
+def test_train_says_its_runs_and_decisions_before_it_starts():
+    from stsf_gym.cli.train import plan
+
+    job = {"algo": "ppo", "estimator": "truth", "timesteps": 2048, "seed": 0}
+    job |= {"world": "irl_corridor", "config": None, "overrides": {}, "n_envs": 1}
+    job |= {"suite": None, "out": "x"}
+    text = plan([job, {**job, "seed": 1, "out": "y"}], 1)
+    assert text.startswith("train: 2 run(s) of ppo: 2048 decisions learning from reward each")
+    assert "train: 2 run(s) to run on 1 process(es)" in text

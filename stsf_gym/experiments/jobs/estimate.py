@@ -54,10 +54,11 @@ def duration(seconds: float) -> str:
 
 def work_key(jobs: list[dict]) -> str:
     """What kind of work ``jobs`` are, apart from their seeds: a digest of their settings with
-    ``seed`` left out (more seeds of the same work share it; another world or setting does
-    not)."""
+    ``seed`` and ``out`` (a run's own folder) left out (more seeds of the same work share it;
+    another world or setting does not)."""
+    own = ("seed", "out")
     kinds = sorted(
-        {json.dumps({k: v for k, v in job.items() if k != "seed"}, default=str) for job in jobs}
+        {json.dumps({k: v for k, v in j.items() if k not in own}, default=str) for j in jobs}
     )
     return hashlib.sha1("\n".join(kinds).encode()).hexdigest()[:12]
 
@@ -107,15 +108,21 @@ class Stopwatch:
         if not self.finished or not self.desc:
             return
         seconds = (time.monotonic() - self.start) * self.slots / self.finished
-        rates = _rates()
-        rate = {"seconds": round(seconds, 2), "jobs": self.finished}
-        kept = rates.get(self.desc) if isinstance(rates.get(self.desc), dict) else {}
-        rates[self.desc] = {**kept, self.key: rate, "last": rate}
-        try:
-            rates_file().parent.mkdir(parents=True, exist_ok=True)
-            write_json(rates_file(), rates)
-        except OSError as err:  # a read-only home: the next run has no rate, nothing else
-            print(f"{self.desc}: could not keep the measured rate ({err})", file=sys.stderr)
+        record_rate(self.desc, self.key, seconds, self.finished)
+
+
+def record_rate(desc: str, key: str, seconds: float, jobs: int) -> None:
+    """Keep ``seconds`` per job per process, measured over ``jobs``, for ``desc``'s work
+    ``key`` (:func:`work_key`) and as its ``last``."""
+    rates = _rates()
+    rate = {"seconds": round(seconds, 2), "jobs": jobs}
+    kept = rates.get(desc) if isinstance(rates.get(desc), dict) else {}
+    rates[desc] = {**kept, key: rate, "last": rate}
+    try:
+        rates_file().parent.mkdir(parents=True, exist_ok=True)
+        write_json(rates_file(), rates)
+    except OSError as err:  # a read-only home: the next run has no rate, nothing else
+        print(f"{desc}: could not keep the measured rate ({err})", file=sys.stderr)
 
 
 def slots_for(workers: int, todo: int) -> int:
