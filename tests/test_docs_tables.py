@@ -34,3 +34,14 @@ def test_the_agent_table_lists_every_shipped_agent():
     for agent in pretrained.listing():
         assert f"| `{agent['name']}`" in text
     assert "`pretrained:sparse/dagger+ppo-stsf` | the DAgger clone, then PPO" in text
+
+
+def test_the_reward_paragraph_names_every_term():
+    from dataclasses import fields
+
+    from stsf_gym.envs.config import RewardConfig
+
+    page = (ROOT / "docs" / "environment" / "index.md").read_text()
+    paragraph = page[page.index("**Reward**") :].split("\n\n")[0]
+    for term in fields(RewardConfig):
+        assert f"`reward.{term.name}`" in paragraph, term.name
