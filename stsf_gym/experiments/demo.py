@@ -165,9 +165,9 @@ def paragraph(rows: list[dict], worlds: int) -> str:
         note
         if note
         else (
-            "The answer to the project's question: localization must hold the estimate within "
-            "the goal radius where the robot stops, and where boards are sparse only some pose "
-            "sources do."
+            "The project's question, answered here: localization must hold the estimate within "
+            "the goal radius where the robot stops; dead reckoning cannot over such a route, and "
+            "the table ranks how often each pose source that re-anchors on the boards does."
         )
     )
     return words
