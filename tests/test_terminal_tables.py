@@ -62,7 +62,7 @@ def test_results_tables_lead_with_the_headline_and_keep_every_column():
     rows = [{**row, "extra": 1.0} for row in json.loads(FIG11.read_text())["rows"]]
     text = results_tables(rows)
     assert text.splitlines()[0].startswith("| estimator | success rate | collision rate |")
-    assert "## Localization" in text and "## Consistency" in text and "## Other" in text
+    assert "## Localization" in text and "## NEES" in text and "## Other" in text
     shown = " | ".join(line for line in text.splitlines() if line.startswith("| estimator"))
     for key in set(rows[0]) - {"seeds", "agent"}:
         assert f" {METRICS.get(key, key)} |" in shown, key

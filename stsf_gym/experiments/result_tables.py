@@ -20,29 +20,12 @@ RATES = ("success_rate", "collision_rate")  # shown as their means in the headli
 #: The detail tables: title and the keys they show (after the pose source).
 DETAILS: dict[str, list[str]] = {
     "Outcomes": ["episodes", "time_limit_rate", "distance_before_failure_m"],
-    "Localization": [
-        "floor_ate_m",
-        "ate_vs_floor",
-        "rpe_trans_m_per_m",
-        "rpe_rot_deg_per_m",
-        "max_error_m",
-        "rms_heading_error_deg",
-        "path_error_rms_m",
-        "match_rate",
-        "landmark_in_view",
-    ],
-    "Consistency": [
-        "nees_mean",
-        "nees_bounds",
-        "nees_in_bounds",
-        "nees_time_average",
-        "nees_time_bounds",
-        "nees_effective_steps",
-        "nees_verdict",
-        "nis_mean",
-        "nis_bounds",
-        "nis_in_bounds",
-    ],
+    "Localization": ["floor_ate_m", "ate_vs_floor", "rpe_trans_m_per_m", "rpe_rot_deg_per_m"],
+    "Error along the route": ["max_error_m", "rms_heading_error_deg", "path_error_rms_m"],
+    "Landmarks": ["match_rate", "landmark_in_view"],
+    "NEES": ["nees_mean", "nees_bounds", "nees_in_bounds", "nees_verdict"],
+    "NEES over time": ["nees_time_average", "nees_time_bounds", "nees_effective_steps"],
+    "NIS": ["nis_mean", "nis_bounds", "nis_in_bounds"],
     "Cost": ["ms_per_step"],
 }
 NOT_SHOWN = {"seeds", "agent"}  # the seeds are in the JSON; one agent is in the title
