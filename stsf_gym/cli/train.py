@@ -12,9 +12,10 @@ from tqdm import tqdm
 
 from stsf_gym.agents.demonstrations.dagger import stage_episodes
 from stsf_gym.agents.training.hyperparams import METHODS
-from stsf_gym.agents.training.preflight import check_runs, check_seeds
+from stsf_gym.agents.training.preflight import check_out, check_runs, check_seeds, run_kind
 from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.agents.training.train import train
+from stsf_gym.agents.training.training_envs import check_training_env
 from stsf_gym.cli import inputs, options
 from stsf_gym.config import ConfigError, parse_overrides
 from stsf_gym.envs.suite import suite_names
@@ -88,12 +89,11 @@ def run(args: argparse.Namespace) -> dict:
         ]
     check_seeds(args.seed, args.seeds)
     check_runs(jobs)
-    workers = args.workers if args.estimators is not None and args.backend == "ray" else 1
-    print(plan(jobs, workers), file=sys.stderr)
     if args.estimators is not None:
         return _campaign(args, jobs)
     if args.backend != "local" or args.address is not None:
         raise ConfigError("--backend and --address are for a campaign (--estimators)")
+    print(plan(jobs, 1), file=sys.stderr)
     runs = []
     for job in jobs:
         started = time.monotonic()
@@ -114,7 +114,8 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def plan(jobs: list[dict], workers: int) -> str:
-    """What training will do, said before it starts: the runs, each one's demonstration
+    """What training will do, said before it starts (after the checks each run makes before
+    any output, so bad input is still refused first): the runs, each one's demonstration
     episodes and reward decisions, and the time from a run of the same settings measured here
     (:mod:`~stsf_gym.experiments.jobs.estimate`)."""
     first = jobs[0]
@@ -124,6 +125,11 @@ def plan(jobs: list[dict], workers: int) -> str:
         first["n_envs"],
         first["suite"],
     )
+    for job in jobs:
+        check_out(
+            Path(job["out"]), run_kind(run.algo, job["estimator"], job["world"], job["suite"])
+        )
+    check_training_env(run.world, run.estimator, run.train_env, run.seed)
     episodes = stage_episodes(run.hp.demonstrations) if run.demonstrating else 0
     stages = [f"{episodes} demonstration episodes"] if episodes else []
     stages += [f"{run.reward_steps} decisions learning from reward"] if run.reward_steps else []
@@ -143,6 +149,7 @@ def _campaign(args: argparse.Namespace, jobs: list[dict]) -> dict:
     backend asked for (:mod:`stsf_gym.experiments.campaign`)."""
     if args.workers < 1:
         raise ConfigError(f"--workers must be at least 1, got {args.workers}")
+    print(plan(jobs, args.workers if args.backend == "ray" else 1), file=sys.stderr)
     bar = tqdm(total=len(jobs), desc="campaign: training runs", unit="run")
 
     def done(job: dict, summary: dict) -> None:
