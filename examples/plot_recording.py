@@ -6,7 +6,7 @@ The Rerun viewer needs a display; this draws the same entities with matplotlib: 
 (``metrics/*``), and one camera frame (``camera/image``) with the detector's boards
 (``camera/detections``)::
 
-    stsf-gym demo --record rerun --video-seconds 0 --out out/demo
+    stsf-gym demo --record rerun --no-video --out out/demo
     python examples/plot_recording.py out/demo/recordings/irl_corridor-stsf-follower-0.rrd \\
         --out docs/figures/rerun_recording.png
 """

@@ -2,7 +2,9 @@
 terminal), never a number broken across lines; the other columns are in the files. A column of
 names (agents, pose sources such as ``my_package.estimators:MyEstimator``) is at most
 :data:`NAME_WIDTH` wide, its long names wrapped onto several lines, so one long name does not
-push the numbers beside it off the screen.
+push the numbers beside it off the screen. A cell listing several figures (``a; b; c``, one
+per training run) is broken at its ``; `` when the table would not fit otherwise, one figure a
+line, before any column is left out. This holds on a pipe or in a log as on a terminal.
 
 :func:`print_markdown` prints a Markdown report (``results.md``) with each of its tables
 fitted that way; :func:`fit_table` fits rows of values.
@@ -20,10 +22,22 @@ from rich.table import Table
 
 NAME_WIDTH = 20  # characters of a column of names; longer names wrap
 _NUMBER = re.compile(r"[-+±]?\.?\d")  # a cell starting like a number is never wrapped
+LIST = "; "  # between the figures of a cell that lists several
 
 
 def _cell(value) -> str:
     return f"{value:.3f}" if isinstance(value, float) else str(value)
+
+
+def _wrapped_name(name: str, width: int = NAME_WIDTH) -> str:
+    """``name`` in lines of at most ``width``, broken after a ``:``, ``.``, ``/`` or ``-``
+    where there is one (``my_package.`` / ``estimators:`` / ``MyEstimator``)."""
+    lines = []
+    while len(name) > width:
+        cut = max(name.rfind(mark, 1, width) for mark in ":./-") + 1 or width
+        lines.append(name[:cut])
+        name = name[cut:]
+    return "\n".join([*lines, name])
 
 
 def _names_only(column: list[str]) -> bool:
@@ -45,17 +59,31 @@ def fit_table(
     left out, the caption names them and ``rest_in`` (where they are).
     """
     cells = [[_cell(v) for v in row] for row in rows]
-    widths = []
+    widths, listed = [], []
     for i, name in enumerate(header):
         column = [row[i] for row in cells]
         header_width = max([cell_len(w) for w in name.split()] + [1])
         widest = max([cell_len(cell) for cell in column] + [header_width])
         if _names_only(column):
             widest = min(widest, max(NAME_WIDTH, header_width))
+            for row in cells:
+                row[i] = "\n".join(_wrapped_name(line, widest) for line in row[i].split("\n"))
         widths.append(widest)
+        parts = [cell_len(part) + 1 for cell in column for part in cell.split(LIST)]
+        listed.append(max([*parts, header_width]) if any(LIST in c for c in column) else widest)
+
+    def fits(keep: int) -> bool:  # the columns, and 3 characters between two
+        return sum(widths[:keep]) + 3 * (keep - 1) <= width
+
+    for i in sorted(range(len(header)), key=lambda i: listed[i] - widths[i]):
+        if fits(len(header)):
+            break
+        if listed[i] < widths[i]:  # one figure of the list a line
+            widths[i] = listed[i]
+            for row in cells:
+                row[i] = row[i].replace(LIST, ";\n")
     keep = len(header)
-    # the columns and, between two, a space of padding on each side of a blank separator
-    while keep > 1 and sum(widths[:keep]) + 3 * (keep - 1) > width:
+    while keep > 1 and not fits(keep):
         keep -= 1
     table = Table(
         title=title, box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, title_justify="left"

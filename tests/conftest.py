@@ -16,6 +16,17 @@ NOISE_FREE_ENCODERS = {
 }
 
 
+@pytest.fixture(autouse=True, scope="session")
+def measured_rates(tmp_path_factory):
+    """The runs of the tests keep their measured rates apart from the user's (subprocesses
+    inherit the variable)."""
+    import os
+
+    from stsf_gym.experiments.jobs.estimate import RATES_ENV
+
+    os.environ[RATES_ENV] = str(tmp_path_factory.mktemp("rates") / "rates.json")
+
+
 @pytest.fixture
 def make_env():
     """Factory of envs that are closed after the test."""

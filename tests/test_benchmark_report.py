@@ -15,6 +15,7 @@ from stsf_gym.experiments.benchmark.figure import paired_rows, plot_leaderboard,
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired
 from stsf_gym.experiments.benchmark.report import leaderboard_markdown
 from stsf_gym.experiments.benchmark.run import summarise_benchmark
+from stsf_gym.experiments.benchmark.small_samples import MARK, MIN_PAIRED_WORLDS
 from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.terminal_table import NAME_WIDTH, print_markdown
 
@@ -224,6 +225,21 @@ def test_terminal_tables_fit_80_columns_with_a_long_pose_source_name():
     assert max(len(line.rstrip()) for line in lines) <= 80
     header = next(i for i, line in enumerate(lines) if line.startswith("agent"))
     assert "success" in " ".join(lines[header - 2 : header + 1])  # the column stayed
-    assert not any(long_name in line for line in lines)  # wrapped at NAME_WIDTH, kept whole
-    for start in range(0, len(long_name), NAME_WIDTH):
-        assert any(long_name[start : start + NAME_WIDTH] in line for line in lines)
+    assert not any(long_name in line for line in lines)  # wrapped, kept whole
+    for part in ("my_package.", "estimators:", long_name.split(":")[1][:NAME_WIDTH]):
+        assert any(line.startswith(part) or f" {part}" in line for line in lines), part
+
+
+@pytest.mark.parametrize("worlds", [2, 6])
+def test_intervals_from_too_few_worlds_are_marked_with_a_note(worlds):
+    cells, results = [], []
+    for source in ("truth", "stsf"):
+        for seed in range(worlds):
+            cells.append({"agent": "follower", "estimator": source, "seed": seed, "values": {}})
+            results.append(_result(source == "truth"))
+    summary = summarise_benchmark(load_suite("corridor"), cells, results, {})
+    summary["worlds"] = _summary(OWN)["worlds"]
+    text = leaderboard_markdown(summary)
+    row = _table(text, "## Paired differences")[0]
+    assert row[2].endswith(MARK) == (worlds < MIN_PAIRED_WORLDS)
+    assert ("too few to separate anything" in text) == (worlds < MIN_PAIRED_WORLDS)

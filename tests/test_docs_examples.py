@@ -6,9 +6,10 @@ names), then its bash blocks, one shell each, in a scratch folder holding links 
 repository's ``configs/`` and ``examples/`` (as the repository root would) with the venv's
 ``stsf-gym`` on ``PATH``. Blocks keep their own episodes short (``--seeds 1``, the fast sensor
 mode, ``sim.max_episode_seconds``). A block that cannot run here says why in a
-``<!-- not run: REASON -->`` line right above it; a block that only includes an example
-(``--8<-- "examples/NAME.py"``, fenced as ``{.python}`` so that ruff leaves it alone) is
-run by tests/test_examples.py. Pages run two at a time.
+``<!-- not run: REASON -->`` line right above it; a block that shows an example file whole
+(``<!-- example: examples/NAME.py -->`` right above it, fenced as ``{.python}`` so that ruff
+leaves it alone) must equal the file, which tests/test_examples.py runs: the code reads the
+same on GitHub as on the site. Pages run two at a time.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 RUN = ("python", "bash")
 NOT_RUN = re.compile(r"^<!-- not run: (.+) -->$")
-SNIPPET = re.compile(r'^--8<-- "(.+)"$')
+EXAMPLE = re.compile(r"^<!-- example: (.+) -->$")
 #: At most this many blocks may be marked not run, all pages together.
 MOST_NOT_RUN = 6
 
@@ -40,6 +41,7 @@ class Block:
     language: str
     code: str
     not_run: str | None
+    example: str | None = None  # the example file the block shows whole
 
     @property
     def where(self) -> str:
@@ -55,9 +57,18 @@ def blocks(page: Path) -> list[Block]:
             opened = (number, line[3:].strip(), [])
         elif opened is not None and line.strip() == "```":
             start, language, code = opened
-            above = NOT_RUN.match(lines[start - 2]) if start > 1 else None
-            reason = above.group(1) if above else None
-            found.append(Block(page, start, language, "\n".join(code) + "\n", reason))
+            above = lines[start - 2] if start > 1 else ""
+            reason, example = NOT_RUN.match(above), EXAMPLE.match(above)
+            found.append(
+                Block(
+                    page,
+                    start,
+                    language,
+                    "\n".join(code) + "\n",
+                    reason.group(1) if reason else None,
+                    example.group(1) if example else None,
+                )
+            )
             opened = None
         elif opened is not None:
             opened[2].append(line)
@@ -65,14 +76,8 @@ def blocks(page: Path) -> list[Block]:
     return found
 
 
-def snippet(block: Block) -> str | None:
-    """The file a block only includes (``--8<-- "path"``), or None."""
-    match = SNIPPET.match(block.code.strip())
-    return match.group(1) if match else None
-
-
 def runnable(page: Path) -> list[Block]:
-    return [b for b in blocks(page) if b.language in RUN and b.not_run is None and not snippet(b)]
+    return [b for b in blocks(page) if b.language in RUN and b.not_run is None and not b.example]
 
 
 def scratch(folder: Path) -> Path:
@@ -134,13 +139,21 @@ def test_blocks_not_run_are_few_and_say_why():
         assert len(block.not_run) >= 30, f"{block.where}: say why it cannot run"
 
 
-def test_included_examples_exist_and_are_run_by_their_test():
-    included = [snippet(b) for page in PAGES for b in blocks(page) if snippet(b)]
-    assert included
+def test_shown_examples_equal_their_files_and_are_run_by_their_test():
+    shown = [b for page in PAGES for b in blocks(page) if b.example]
+    assert shown
     tests = (ROOT / "tests" / "test_examples.py").read_text()
-    for path in included:
+    for block in shown:
+        path = block.example
         assert (ROOT / path).is_file() and path.startswith("examples/"), path
+        assert block.code == (ROOT / path).read_text(), f"{block.where}: copy {path} again"
         assert Path(path).name in tests or "examples/" in path  # every example: its own test
+
+
+def test_no_page_includes_code_it_does_not_show():
+    """An include (``--8<--``) shows nothing on GitHub: the code is written out instead."""
+    for page in PAGES:
+        assert "--8<--" not in page.read_text(), page
 
 
 def test_yaml_blocks_parse():

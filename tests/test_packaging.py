@@ -196,11 +196,11 @@ def test_the_installed_wheel_works_beside_a_users_own_envs_and_agents(installed,
     assert out["pose"][0] > 0 and out["cov_finite"]
 
     demo = tmp_path / "demo"
-    args = ["demo", "--seeds", "1", "--out", demo, "--seconds", "3", "--video-seconds", "0"]
-    args += ["--workers", "1", "--set", "camera.mode=fast", "--json"]
+    args = ["demo", "--worlds", "1", "--out", demo, "--seconds", "3", "--no-video"]
+    args += ["--workers", "1", "--json"]
     summary = json.loads(_run(installed / "bin" / "stsf-gym", *args, cwd=tmp_path))
-    assert len(summary["rows"]) == 5
+    assert len(summary["rows"]) == 4
     made_by = json.loads((demo / "results.json").read_text())["provenance"]
     assert made_by["stsf_gym"]["version"] == "0.1.0"
     assert made_by["stsf_gym"]["commit"] is None  # an installed wheel is no git checkout
-    assert made_by["command"].startswith("stsf-gym demo --seeds 1")
+    assert made_by["command"].startswith("stsf-gym demo --worlds 1")

@@ -92,7 +92,9 @@ def test_a_long_name_wraps_and_keeps_the_numbers_beside_it():
     assert all(len(line.rstrip()) <= 80 for line in lines)
     assert "0.003 ± 0.001" in "\n".join(lines)
     body = next(i for i, line in enumerate(lines) if line.startswith("─")) + 1
-    assert "".join(line[:NAME_WIDTH].strip() for line in lines[body : body + 3]) == name
+    parts = [line[:NAME_WIDTH].strip() for line in lines[body : body + 4]]
+    assert "".join(parts) == name
+    assert parts[:2] == ["my_package.", "estimators:"]  # broken where the name breaks
 
 
 def test_markdown_reports_keep_their_prose():

@@ -52,7 +52,7 @@ def test_the_reward_stage_shows_a_bar_and_logs_its_evaluations(tmp_path, capfd):
     }  # fmt: skip
     out = tmp_path / "plain"
     train("ppo", "truth", out, 64, n_envs=1, overrides=plain)
-    assert "learning from reward (ppo)" in capfd.readouterr().err
+    assert "learning from reward (ppo, decisions)" in capfd.readouterr().err
     points = curve_points(out)
     assert [p["stage"] for p in points] == ["reward", "reward"]
     assert points[1]["wall_time_s"] > points[0]["wall_time_s"] > 0

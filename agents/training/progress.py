@@ -32,7 +32,7 @@ def stage_bar(stage: str, total: int, unit: str, enabled: bool, position: int = 
 def stage_bars(demonstration_episodes: int, reward_steps: int, algo: str, enabled: bool):
     """The bars of a run's stages, drawn before anything else starts (None: no such stage)."""
     stages = [("demonstrations (episodes)", demonstration_episodes, "ep")]
-    stages.append((f"learning from reward ({algo})", reward_steps, "step"))
+    stages.append((f"learning from reward ({algo}, decisions)", reward_steps, "decision"))
     made = [None, None]
     position = 0
     for index, (stage, total, unit) in enumerate(stages):

@@ -11,7 +11,7 @@ import json
 import os
 import sys
 
-from stsf_gym.cli.options import preflight
+from stsf_gym.cli.options import preflight, refuse_unknown
 from stsf_gym.cli.reports import NothingFinished
 from stsf_gym.config import ConfigError
 from stsf_gym.envs.quiet import VERBOSE_ENV
@@ -47,15 +47,18 @@ COMMANDS: dict[str, tuple[str, str]] = {
 
 def build_parser(command: str | None) -> argparse.ArgumentParser:
     """The ``stsf-gym`` argument parser: every command listed, and the options of ``command``
-    (only its module is imported, so ``stsf-gym --help`` and each command start fast)."""
+    (only its module is imported, so ``stsf-gym --help`` and each command start fast); the
+    command's own parser is its attribute ``command_parser`` (None without a command)."""
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    parser.command_parser = None
     for name, (module, help_line) in COMMANDS.items():
         sub = commands.add_parser(name, help=help_line)
         if name == command:
             handler = importlib.import_module(f"{__name__}.{module}")
             handler.add_arguments(sub)
             sub.set_defaults(run=handler.run)
+            parser.command_parser = sub
     return parser
 
 
@@ -82,7 +85,10 @@ def main(argv: list[str] | None = None) -> int:
     failed twice, or a full disk: exit code 1 (finished results kept, a rerun resumes). Any
     other exception is a bug: it propagates with its traceback (exit code 1)."""
     words = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser(_command(words)).parse_args(words)
+    parser = build_parser(_command(words))
+    if parser.command_parser is not None:  # an unknown option first: named with the one meant
+        refuse_unknown(parser.command_parser, words)
+    args = parser.parse_args(words)
     set_command(["stsf-gym", *words])
     error = f"stsf-gym {args.command}: error:"
     try:

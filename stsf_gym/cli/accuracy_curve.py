@@ -15,10 +15,10 @@ from stsf_gym.experiments.curve.run import accuracy_curve
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``accuracy-curve``."""
     options.common(parser, "out/accuracy_curve")
-    parser.add_argument(
-        "--agent",
+    options.agents(
+        parser,
         default="follower",
-        help="follower, cautious-follower, saved models, train --seeds folders and/or shipped "
+        help_text="follower, cautious-follower, saved models, train --seeds folders and/or shipped "
         "agents "
         "(pretrained:SUITE/ALGO-SOURCE: one curve per training seed), comma-separated",
     )
@@ -55,7 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> dict:
     """Run (or resume) the curve; print its report."""
     inputs.check_counts(args)
-    agents = expand_agents(inputs.names(args.agent, "--agent"))
+    agents = expand_agents(inputs.names(args.agents, "--agents"))
     estimators = inputs.pose_sources(args.estimators, empty_ok=True)  # points: optional
     levels = _levels(args.levels)
     world = None if args.suite else args.world or options.DEFAULT_WORLD

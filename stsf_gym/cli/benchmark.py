@@ -19,10 +19,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser, "out/benchmark", out_help="output folder: the results go to OUT/<suite>/"
     )
     parser.add_argument("--suite", required=True, choices=suite_names(), help="difficulty")
-    parser.add_argument(
-        "--agents",
+    options.agents(
+        parser,
         default="follower",
-        help="follower, cautious-follower, saved models, training folders (train --seeds N), "
+        help_text="follower, cautious-follower, saved models, training folders (train --seeds N), "
         "their clones (clone:FOLDER: the policy each reward stage started from) and/or shipped "
         "agents (pretrained:SUITE/ALGO-SOURCE), comma-separated; a model drives on the pose "
         "source it was trained on",

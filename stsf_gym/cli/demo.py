@@ -1,5 +1,6 @@
-"""``stsf-gym demo``: the follower on each estimator on the IRL corridor, a table, a plot and
-a video per estimator."""
+"""``stsf-gym demo``: the follower on each pose source over a few sparse-suite test worlds
+(declared arrival), a table with intervals, a paragraph saying what it shows, a trajectory
+plot and one video made from the episodes driven."""
 
 from __future__ import annotations
 
@@ -9,29 +10,32 @@ from rich.console import Console
 
 from stsf_gym.cli import inputs, options
 from stsf_gym.config import ConfigError
-from stsf_gym.experiments.demo import COLUMNS, run_demo
-from stsf_gym.results import rendered
+from stsf_gym.experiments.demo import DEMO_SUITE, DEMO_WORLDS, headline, run_demo
 from stsf_gym.terminal_table import fit_table
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``demo``."""
     options.common(parser, "out/demo")
+    parser.add_argument(
+        "--worlds",
+        type=int,
+        default=DEMO_WORLDS,
+        help=f"{DEMO_SUITE} test worlds, one episode per pose source on each ({DEMO_WORLDS})",
+    )
     parser.add_argument("--seconds", type=float, help="simulated time limit per episode")
-    parser.add_argument("--seeds", type=int, default=1, help="episodes per estimator (1)")
     options.backend(parser)
     parser.add_argument(
-        "--video-seconds",
-        type=float,
-        help="simulated seconds of each estimator's episode in its video (default: the whole "
-        "route, ten times faster than simulated time; 0: no videos)",
+        "--no-video", action="store_true", help="skip the video (made from the episodes driven)"
     )
     options.record(parser)
 
 
 def run(args: argparse.Namespace) -> dict:
-    """Run the demo; print its table and the files it wrote."""
+    """Run the demo; print its table, what it shows and the files it wrote."""
     inputs.check_counts(args)
+    if args.worlds < 1:
+        raise ConfigError(f"--worlds must be at least 1, got {args.worlds}")
     env = inputs.env_overrides(args)
     if args.seconds is not None:
         if args.seconds <= 0:
@@ -42,29 +46,29 @@ def run(args: argparse.Namespace) -> dict:
                 "episode length; give one"
             )
         env.setdefault("sim", {})["max_episode_seconds"] = args.seconds
-    if args.video_seconds is not None and args.video_seconds < 0:
-        raise ConfigError(f"--video-seconds must be >= 0, got {args.video_seconds}")
     summary = run_demo(
         args.out,
         args.seed,
         args.workers,
         env,
-        args.video_seconds,
-        args.seeds,
+        not args.no_video,
+        args.worlds,
         inputs.recording(args),
         args.backend,
         args.address,
     )
     if not args.json:
         console = Console()
-        seeds = f"seed {args.seed}" if args.seeds == 1 else f"{args.seeds} seeds from {args.seed}"
-        title = f"stsf-gym demo: follower on the IRL corridor ({seeds})"
-        cells = [rendered(row, COLUMNS) for row in summary["rows"]]
+        title = (
+            f"stsf-gym demo: the follower on {args.worlds} {DEMO_SUITE} test worlds "
+            f"(seeds {args.seed}-{args.seed + args.worlds - 1}), declared arrival"
+        )
+        cells = headline(summary["rows"])
         rows = [list(row.values()) for row in cells]
         console.print(fit_table(list(cells[0]), rows, console.width, title, "results.md"))
-        videos = [str(args.out / v) for v in summary.get("videos", {}).values()]
-        console.print(
-            f"Wrote {args.out}/results.md, results.json, {', '.join(summary['figures'])}"
-            + (f" and {', '.join(videos)}" if videos else "")
-        )
+        console.print()
+        console.print(summary["paragraph"], markup=False, highlight=False)
+        files = ["results.md", "results.json", *(f.split("/")[-1] for f in summary["figures"])]
+        files += [summary["video"]] if "video" in summary else []
+        console.print(f"\nWrote {args.out}/: {', '.join(files)}", markup=False, highlight=False)
     return summary

@@ -14,10 +14,10 @@ from stsf_gym.experiments.evaluate import evaluate_agents
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``evaluate``."""
     options.common(parser, "out/evaluate")
-    parser.add_argument(
-        "--agent",
+    options.agents(
+        parser,
         default="follower",
-        help="follower, cautious-follower, a model saved by train (DIR/model.zip), a train "
+        help_text="follower, cautious-follower, a model saved by train (DIR/model.zip), a train "
         "--seeds folder or a shipped agent (pretrained:SUITE/ALGO-SOURCE); several, "
         "comma-separated, give one "
         "comparison table; {estimator} in a path is replaced by each pose source",
@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> dict:
     world = inputs.world(args)
     summary, report = evaluate_agents(
         args.out,
-        inputs.names(args.agent, "--agent"),
+        inputs.names(args.agents, "--agents"),
         estimators,
         args.seeds,
         args.seed,

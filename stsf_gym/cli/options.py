@@ -4,6 +4,7 @@ the checks every command's options pass before any work (:func:`preflight`)."""
 from __future__ import annotations
 
 import argparse
+import difflib
 from pathlib import Path
 
 from stsf_gym.io import check_file, check_folder, remove_partial_writes
@@ -38,6 +39,24 @@ def common(
     parser.add_argument(
         "--verbose", action="store_true", help="show PyBullet's C banners (quiet by default)"
     )
+
+
+def agents(parser: argparse.ArgumentParser, help_text: str, default: str | None = None) -> None:
+    """``--agents`` (``--agent`` an alias): the agents a command runs, comma-separated."""
+    parser.add_argument("--agents", "--agent", dest="agents", default=default, help=help_text)
+
+
+def refuse_unknown(parser: argparse.ArgumentParser, words: list[str]) -> None:
+    """Before anything else is checked, exit 2 naming the first word of ``words`` (before a
+    ``--``) that looks like a long option ``parser`` does not have (neither one of its options
+    nor the start of one), with the closest it has: ``--agnets`` (did you mean --agents?)."""
+    known = [option for action in parser._actions for option in action.option_strings]
+    for word in words[: words.index("--")] if "--" in words else words:
+        name = word.split("=")[0]
+        if name.startswith("--") and not any(option.startswith(name) for option in known):
+            close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            parser.error(f"unknown option {name}{hint}; see {parser.prog} --help")
 
 
 def record(parser: argparse.ArgumentParser) -> None:

@@ -331,7 +331,7 @@ def run_episodes(
     is recorded too: a saved episode without that recording is run again."""
     extra = {"record": record} if record else {}
     jobs = [{"version": RESULT_VERSION, **asdict(spec), **extra} for spec in specs]
-    ran = run_jobs(EPISODE_JOBS, jobs, folder, desc, backend, workers, address)
+    ran = run_jobs(EPISODE_JOBS, jobs, folder, desc, backend, workers, address, unit="episode")
     results = [EpisodeResult(**r) for r in ran.results]
     for episode in results:
         write_trajectories(episode, Path(folder) / "trajectories")

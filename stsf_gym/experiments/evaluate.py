@@ -29,9 +29,9 @@ from stsf_gym.experiments.fault_runs import evaluate_faults
 from stsf_gym.experiments.plotting.consistency import plot_nees
 from stsf_gym.experiments.plotting.maps import plot_errors, plot_trajectories
 from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.result_tables import results_tables
 from stsf_gym.experiments.statistics import summarise
-from stsf_gym.io import markdown_table
-from stsf_gym.results import SCHEMA_VERSION, rendered
+from stsf_gym.results import SCHEMA_VERSION
 
 
 def evaluate(
@@ -87,7 +87,7 @@ def evaluate(
     if trained is not None:  # a learnt agent: record what it was trained on
         summary["trained"] = trained
         title += " ({algo} trained on {estimator}, {timesteps} steps)".format(**summary["trained"])
-    table = markdown_table([rendered(row) for row in rows])
+    table = results_tables(rows)
     write_report(
         out,
         summary,

@@ -22,6 +22,7 @@ import numpy as np
 from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.result_tables import results_tables
 from stsf_gym.experiments.statistics import error_curves
 from stsf_gym.io import markdown_table
 from stsf_gym.results import rendered, stat
@@ -205,7 +206,7 @@ def _write(out: Path, name: str, title: str, summary: dict, rows: list[dict]) ->
     summary = {**summary, "protocol": "reach", "paper_rows": rows}
     title += " (the paper's reach-the-goal protocol)"
     paper = markdown_table([rendered(row, headers=HEADERS) for row in rows])
-    every = markdown_table([rendered(row) for row in summary["rows"]])
+    every = results_tables(summary["rows"]).replace("\n## ", "\n### ")
     body = f"{paper}\n## All metrics\n\n{every}"
     made_by = summary["provenance"]  # the evaluation's: same episodes, same configuration
     write_report(

@@ -20,12 +20,12 @@ from tqdm import tqdm
 
 from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.experiments.reports import write_report
+from stsf_gym.experiments.result_tables import results_tables
 from stsf_gym.experiments.statistics import summarise
-from stsf_gym.io import markdown_table
 from stsf_gym.metrics import distance_to_path
 from stsf_gym.recording.log_reader import RecordedLog, read_log
 from stsf_gym.recording.replay import ReplayedRun, check_replayable, pose_source, replay
-from stsf_gym.results import SCHEMA_VERSION, rendered, stat
+from stsf_gym.results import SCHEMA_VERSION, stat
 from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import COV_LIMIT
 
@@ -71,7 +71,7 @@ def replay_logs(logs: list[str | Path], estimators: list[str], out: str | Path) 
         "unscored": [str(log.path) for log in read if log.truth is None],
         "rows": rows,
     }
-    table = markdown_table([rendered(row) for row in rows]) if rows else "No log has a truth.\n"
+    table = results_tables(rows) if rows else "No log has a truth.\n"
     config = {str(log.path): log.episode for log in read}
     seeds = [log.episode.get("seed") or 0 for log in read]
     write_report(out, summary, f"Replay of {len(read)} log(s)", table, config=config, seeds=seeds)

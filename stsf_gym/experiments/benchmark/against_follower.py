@@ -10,6 +10,7 @@ Newcombe's 95 % interval; a seed whose interval excludes 0 is above or below the
 from __future__ import annotations
 
 from stsf_gym.agents.registry import FOLLOWER
+from stsf_gym.experiments.benchmark.small_samples import interval, noted
 from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.io import markdown_table
 
@@ -55,10 +56,6 @@ def _side(paired: dict) -> str:
     if paired["low"] > 0:
         return "above"
     return "below" if paired["high"] < 0 else "level"
-
-
-def _interval(value: dict) -> str:
-    return f"{value['difference']:+.2f} ({value['low']:+.2f} to {value['high']:+.2f})"
 
 
 def _follower_row(summary: dict, estimator: str) -> dict | None:
@@ -127,8 +124,8 @@ def against_follower_markdown(summary: dict) -> str:
                     "pose source": entry["estimator"],
                     "success": f"{row['success_rate']['mean']:.2f}" if row else "-",
                     "follower": f"{follower['success_rate']['mean']:.2f}" if follower else "-",
-                    "difference (95 % CI)": _interval(paired) if paired else "-",
+                    "difference (95 % CI)": interval(paired, paired["pairs"]) if paired else "-",
                     "vs follower": _side(paired) if paired else "-",
                 }
             )
-    return text + "\n" + markdown_table(rows)
+    return text + "\n" + noted(markdown_table(rows), min(e["worlds"] for e in entries))

@@ -17,6 +17,7 @@ from __future__ import annotations
 from stsf_gym.agents.registry import CAUTIOUS_FOLLOWER, FOLLOWER
 from stsf_gym.agents.resolve import CLONE_PREFIX
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired, paired_seed_iqm
+from stsf_gym.experiments.benchmark.small_samples import interval, noted
 from stsf_gym.experiments.benchmark.trained import agent_name, training_groups
 from stsf_gym.io import markdown_table
 
@@ -69,8 +70,10 @@ def references_markdown(entries: list[dict]) -> str:
             "agent": agent_name(e["agent"]),
             "pose source": e["estimator"],
             "minus": e["reference"],
-            "success IQM difference (95 % CI)": _interval(e["success_iqm_difference"]),
-            "per run (Newcombe 95 % CI)": "; ".join(_interval(p) for p in e["paired_per_run"]),
+            "success IQM difference (95 % CI)": interval(e["success_iqm_difference"], e["worlds"]),
+            "per run (Newcombe 95 % CI)": "; ".join(
+                interval(p, e["worlds"]) for p in e["paired_per_run"]
+            ),
             "worlds": e["worlds"],
         }
         for e in entries
@@ -79,9 +82,5 @@ def references_markdown(entries: list[dict]) -> str:
         "\n## Learnt agents against their references, paired on the same worlds\n\n"
         "Success minus the reference's: over the training runs (IQM, paired two-level "
         "bootstrap over worlds and runs; a run paired with its own clone) and run by run.\n\n"
-        + markdown_table(table)
+        + noted(markdown_table(table), min(e["worlds"] for e in entries))
     )
-
-
-def _interval(value: dict) -> str:
-    return f"{value['difference']:+.2f} ({value['low']:+.2f} to {value['high']:+.2f})"

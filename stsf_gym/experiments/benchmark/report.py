@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from stsf_gym.experiments.benchmark.against_follower import against_follower_markdown
 from stsf_gym.experiments.benchmark.references import references_markdown
+from stsf_gym.experiments.benchmark.small_samples import interval, noted
 from stsf_gym.experiments.benchmark.trained import agent_name
 from stsf_gym.io import markdown_table
 
@@ -70,20 +71,19 @@ def leaderboard_markdown(summary: dict) -> str:
             f"\n## Trained agents {_where(summary['trained_paired'])}, paired run by run "
             "(success difference, Newcombe 1998, method 10)\n\n"
         )
-        text += markdown_table(
-            [
-                {
-                    "first - second": f"{_side(p['first'])} - {_side(p['second'])}",
-                    "per run (95 % CI)": "; ".join(
-                        f"{d['difference']:+.2f} ({d['low']:+.2f} to {d['high']:+.2f})"
-                        for d in p["success_difference_per_run"]
-                    ),
-                    "runs whose CI excludes 0": f"{p['runs_differing']} of "
-                    f"{len(p['success_difference_per_run'])}",
-                }
-                for p in summary["trained_paired"]
-            ]
-        )
+        runs = [d for p in summary["trained_paired"] for d in p["success_difference_per_run"]]
+        table = [
+            {
+                "first - second": f"{_side(p['first'])} - {_side(p['second'])}",
+                "per run (95 % CI)": "; ".join(
+                    interval(d, d["pairs"]) for d in p["success_difference_per_run"]
+                ),
+                "runs whose CI excludes 0": f"{p['runs_differing']} of "
+                f"{len(p['success_difference_per_run'])}",
+            }
+            for p in summary["trained_paired"]
+        ]
+        text += noted(markdown_table(table), min(d["pairs"] for d in runs))
     if summary["paired"]:
         text += "\n## Paired differences in success (Newcombe 1998, method 10) and SPL\n\n"
         pairs = []
@@ -93,15 +93,15 @@ def leaderboard_markdown(summary: dict) -> str:
                 {
                     "agent": agent_name(p["agent"]),
                     "first - second": f"{p['first']} - {p['second']}",
-                    "success difference (95 % CI)": f"{s['difference']:+.3f} "
-                    f"({s['low']:+.3f} to {s['high']:+.3f})",
+                    "success difference (95 % CI)": interval(s, s["pairs"], 3),
                     "CI excludes 0": "yes" if p["success_differs"] else "no",
                     "only first / only second": f"{s['only_first']} / {s['only_second']}",
-                    "SPL difference (95 % CI)": f"{d['difference']:+.3f} "
-                    f"({d['low']:+.3f} to {d['high']:+.3f})",
+                    "SPL difference (95 % CI)": interval(d, s["pairs"], 3),
                 }
             )
-        text += markdown_table(pairs)
+        text += noted(
+            markdown_table(pairs), min(p["success_difference"]["pairs"] for p in summary["paired"])
+        )
     if summary.get("against_references"):
         text += references_markdown(summary["against_references"])
     if summary.get("behaviour"):

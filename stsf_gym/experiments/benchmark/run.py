@@ -112,7 +112,7 @@ def benchmark(
     if record:
         cells = [{**cell, "record": record} for cell in cells]
     desc = f"benchmark {loaded.name}"
-    ran = run_jobs(CELL_JOBS, cells, out / "cells", desc, backend, workers, address)
+    ran = run_jobs(CELL_JOBS, cells, out / "cells", desc, backend, workers, address, unit="episode")
     own_sources = {
         agent: record["estimator"]
         for agent in dict.fromkeys(cell["agent"] for cell in cells)

@@ -119,7 +119,9 @@ def accuracy_curve(
     cells = curve_cells(
         agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
     )
-    ran = run_jobs(CELL_JOBS, cells, out / "cells", "accuracy curve", backend, workers, address)
+    ran = run_jobs(
+        CELL_JOBS, cells, out / "cells", "accuracy curve", backend, workers, address, unit="episode"
+    )
     summary = summarise_curve(cells, ran.results)
     summary.update(
         schema_version=SCHEMA_VERSION,

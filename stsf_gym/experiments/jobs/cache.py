@@ -21,6 +21,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from stsf_gym.experiments.jobs.estimate import Stopwatch, plan_line, slots_for
 from stsf_gym.experiments.jobs.spec import Crash, Runner
 from stsf_gym.io import write_json
 from stsf_gym.results.provenance import fingerprint
@@ -51,12 +52,16 @@ def run_cached(
     config: Callable[[dict], Mapping] | None = None,
     on_done: Callable[[dict, object], None] | None = None,
     check: Callable[[object, Mapping | None], str | None] | None = None,
+    unit: str = "job",
+    workers: int = 1,
 ) -> list:
     """``fn(job)`` for every job, its result (as a dict, when ``folder`` keeps it), in job order.
 
     ``runner`` executes the jobs still to do; each result is saved in ``folder`` (when given)
     as soon as the runner yields it, then ``on_done(job, result)`` is called. The progress bar
-    is named ``desc`` (none when empty: the caller shows progress in ``on_done``). ``config(job)``
+    is named ``desc`` and counts ``unit`` (none when ``desc`` is empty: the caller shows progress
+    in ``on_done``); before any job runs, the count to run and an estimate of their time on
+    ``workers`` processes go to stderr (:mod:`~stsf_gym.experiments.jobs.estimate`). ``config(job)``
     is the job's fully resolved configuration (every value, not only the job's overrides): part
     of the fingerprint a saved result must match to be reused. ``check(result, config)``
     says what is wrong with a saved result (None: nothing); one that fails is recomputed.
@@ -107,8 +112,12 @@ def run_cached(
             file=sys.stderr,
         )
     errors: dict[str, str] = {}
-    bar = {"total": len(jobs), "initial": len(jobs) - len(todo), "desc": desc, "disable": not desc}
-    with tqdm(**bar) as progress:
+    slots = slots_for(workers, len(todo))
+    if desc:
+        print(plan_line(desc, unit, len(jobs), todo, slots), file=sys.stderr)
+    bar = {"total": len(jobs), "initial": len(jobs) - len(todo), "desc": desc, "unit": unit}
+    clock = Stopwatch(desc, todo, slots)
+    with tqdm(**bar, disable=not desc) as progress:
         for attempt in range(1, ATTEMPTS + 1):
             failed = []
             for job, outcome in runner(fn, todo):
@@ -120,12 +129,14 @@ def run_cached(
                     tqdm.write(f"{what} failed: {outcome.error}; {then}", sys.stderr)
                     continue
                 save(job, outcome)
+                clock.tick()
                 progress.update()
                 if on_done is not None:
                     on_done(job, outcome)
             todo = failed
             if not todo:
                 break
+    clock.save()
     if todo:
         raise JobsFailed({name(job): errors[name(job)] for job in todo}, folder)
     return [load(job) for job in jobs]

@@ -38,6 +38,7 @@ def run_jobs(
     address: str | None = None,
     cpus_per_job: int = 1,
     on_done: Callable[[dict, object], None] | None = None,
+    unit: str = "job",
 ) -> Ran:
     """Run (or resume) ``jobs`` of ``kind``, each result cached in ``folder`` (None: the jobs
     keep their own state and are run every time).
@@ -45,6 +46,8 @@ def run_jobs(
     ``backend`` ``local`` runs ``workers`` processes (this process for 1); ``ray`` runs Ray
     tasks of ``cpus_per_job`` CPUs, on the cluster at ``address`` or a local instance of
     ``workers * cpus_per_job`` CPUs. ``on_done(job, result)`` is called as each job finishes.
+    The progress bar named ``desc`` counts ``unit``, after a line with the count and an estimate
+    of the time (:mod:`~stsf_gym.experiments.jobs.estimate`).
     A job that raises (or whose worker dies) is run once more, then reported in
     :class:`~stsf_gym.experiments.jobs.cache.JobsFailed` after the others finished.
     """
@@ -64,6 +67,8 @@ def run_jobs(
         config=(lambda job: configs[kind.key(job)]) if kind.resolve else None,
         on_done=on_done,
         check=kind.check,
+        unit=unit,
+        workers=workers,
     )
     return Ran(results, configs)
 

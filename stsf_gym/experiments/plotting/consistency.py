@@ -24,8 +24,15 @@ if TYPE_CHECKING:
 
 
 def plot_nees(by_estimator: dict[str, list[EpisodeResult]], path: Path) -> Path:
-    """One panel per estimator: the Monte-Carlo average NEES against time, with bounds."""
-    fig = Figure(figsize=(4.2 * len(by_estimator), 3.6))
+    """:func:`nees_figure` saved as ``path``."""
+    return save_figure(nees_figure(by_estimator), path)
+
+
+def nees_figure(by_estimator: dict[str, list[EpisodeResult]]) -> Figure:
+    """One panel per estimator: the Monte-Carlo average NEES against time, with bounds; each
+    panel titled on two lines (the name, then the runs and bounds), so no title runs into the
+    next panel's."""
+    fig = Figure(figsize=(4.2 * len(by_estimator), 3.8), layout="constrained")
     axes = fig.subplots(1, len(by_estimator), squeeze=False, sharey=True)[0]
     for ax, (name, episodes) in zip(axes, by_estimator.items(), strict=True):
         length = min(len(e.times) for e in episodes)
@@ -36,8 +43,9 @@ def plot_nees(by_estimator: dict[str, list[EpisodeResult]], path: Path) -> Path:
         ax.axhline(3.0, color="tab:green", lw=0.8)
         ax.plot(times, np.maximum(average, 1e-3), color="tab:blue", lw=0.9, label="mean NEES")
         ax.set_yscale("log")
-        ax.set(xlabel="time (s)", title=f"{name} ({len(episodes)} runs, bounds {render([lo, hi])})")
+        ax.set_xlabel("time (s)")
+        ax.set_title(f"{name}\n{len(episodes)} runs, 95 % bounds {render([lo, hi])}", fontsize=10)
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("NEES (3 dof)")
     axes[0].legend(fontsize=8)
-    return save_figure(fig, path)
+    return fig

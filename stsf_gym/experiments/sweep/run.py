@@ -30,7 +30,14 @@ def run_sweep(
     out = Path(out) if out is not None else Path("out/sweeps") / sweep.name
     cells = [_with_run_folder(cell, out) for cell in sweep.cells]
     ran = run_jobs(
-        CELL_JOBS, cells, out / "cells", f"sweep {sweep.name}", backend, workers, address
+        CELL_JOBS,
+        cells,
+        out / "cells",
+        f"sweep {sweep.name}",
+        backend,
+        workers,
+        address,
+        unit="cell",
     )
     return write_report(sweep, ran.results, out, ran.configs)
 

@@ -1,0 +1,35 @@
+"""One flag for agents on every command that runs them, and unknown options named with the
+option meant."""
+
+import pytest
+
+from stsf_gym import cli
+
+AGENT_COMMANDS = {
+    "evaluate": [],
+    "accuracy-curve": [],
+    "benchmark": ["--suite", "sparse"],
+}
+
+
+@pytest.mark.parametrize("command", AGENT_COMMANDS)
+@pytest.mark.parametrize("flag", ["--agents", "--agent"])
+def test_agents_flag_and_its_alias(command, flag):
+    argv = [command, *AGENT_COMMANDS[command], flag, "follower,cautious-follower"]
+    args = cli.build_parser(command).parse_args(argv)
+    assert args.agents == "follower,cautious-follower"
+
+
+@pytest.mark.parametrize("command", cli.COMMANDS)
+def test_an_unknown_option_names_the_close_match(command, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        cli.main([command, "--jsno"])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2
+    assert f"stsf-gym {command}: error: unknown option --jsno (did you mean --json?)" in err
+
+
+def test_a_typo_of_the_agents_flag(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["evaluate", "--agnets", "follower"])
+    assert "unknown option --agnets (did you mean --agents?)" in capsys.readouterr().err
