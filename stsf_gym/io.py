@@ -84,7 +84,7 @@ def remove_partial_writes(folder: str | Path) -> list[Path]:
 
 def write_json(path: str | Path, obj: Any) -> Path:
     """Write ``obj`` as indented JSON, atomically (numpy values as numbers); return the path."""
-    return write_atomic(path, json.dumps(obj, indent=2, default=_to_builtin) + "\n")
+    return write_atomic(path, json.dumps(obj, indent=2, default=to_builtin) + "\n")
 
 
 def save_figure(fig, path: str | Path, dpi: int = 120) -> Path:
@@ -111,7 +111,8 @@ def _cell(value: Any) -> str:
     return f"{value:.3f}" if isinstance(value, float) else str(value)
 
 
-def _to_builtin(value: Any) -> Any:
+def to_builtin(value: Any) -> Any:
+    """``value`` (a numpy array or scalar) as the Python numbers and lists JSON holds."""
     if hasattr(value, "tolist"):
         return value.tolist()
     raise TypeError(f"cannot write {type(value).__name__} as JSON")

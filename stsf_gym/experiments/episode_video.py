@@ -97,5 +97,5 @@ def record_videos(
         {"spec": asdict(s), "folder": str(folder), "seconds": seconds, "speed_up": speed_up}
         for s in specs
     ]
-    ran = run_jobs(VIDEO_JOBS, jobs, folder / "jobs", "videos", workers=workers)
+    ran = run_jobs(VIDEO_JOBS, jobs, folder / "jobs.sqlite", "videos", workers=workers)
     return {spec.estimator: done["file"] for spec, done in zip(specs, ran.results, strict=True)}

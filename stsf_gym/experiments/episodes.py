@@ -28,8 +28,6 @@ from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import TruePose, sensor_model
 from stsf_gym.yaml_layers import deep_merge
 
-RESULT_VERSION = 7  # bumped when EpisodeResult changes, so older episode files are rerun
-
 
 @dataclass(frozen=True)
 class EpisodeSpec:
@@ -327,8 +325,10 @@ def run_episodes(
     ``folder/trajectories/<episode>/``. With ``record`` (see :func:`run_episode`) each episode
     is recorded too: a saved episode without that recording is run again."""
     extra = {"record": record} if record else {}
-    jobs = [{"version": RESULT_VERSION, **asdict(spec), **extra} for spec in specs]
-    ran = run_jobs(EPISODE_JOBS, jobs, folder, desc, backend, workers, address)
+    jobs = [{**asdict(spec), **extra} for spec in specs]
+    ran = run_jobs(
+        EPISODE_JOBS, jobs, Path(folder) / "episodes.sqlite", desc, backend, workers, address
+    )
     results = [EpisodeResult(**r) for r in ran.results]
     for episode in results:
         write_trajectories(episode, Path(folder) / "trajectories")

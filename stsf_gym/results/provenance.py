@@ -205,11 +205,16 @@ def loaded_code() -> dict[str, str]:
     return code
 
 
+def package_file(path: str) -> Path:
+    """The file of the package's relative ``path`` (``envs/robot.py``) in this installation."""
+    parents = {folder.name: folder.parent for folder in _package_folders()}
+    return parents[path.split("/", 1)[0]] / path
+
+
 def timed_code(loaded: Mapping[str, str]) -> dict[str, str]:
     """``{relative path: code_digest}`` of the ``loaded`` code (:func:`loaded_code`): what a
     timing depends on, docstrings and comments left out (a second per hundred modules)."""
-    parents = {folder.name: folder.parent for folder in _package_folders()}
-    return {path: code_digest(parents[path.split("/", 1)[0]] / path) for path in loaded}
+    return {path: code_digest(package_file(path)) for path in loaded}
 
 
 @functools.cache

@@ -48,7 +48,6 @@ from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
 from stsf_gym.results.provenance import by_digest, provenance
 
-BENCHMARK_VERSION = 3  # bumped when a cell changes meaning, so older cell files are rerun
 WORLD = "generated:test"
 
 
@@ -77,7 +76,6 @@ def benchmark_cells(
                 "env": suite.episode_env,
                 "options": estimator_options(estimator),
                 "values": {"suite": suite.name, "agent": agent, "estimator": estimator},
-                "version": BENCHMARK_VERSION,
             }
         )
     return cells
@@ -112,7 +110,7 @@ def benchmark(
     if record:
         cells = [{**cell, "record": record} for cell in cells]
     desc = f"benchmark {loaded.name}"
-    ran = run_jobs(CELL_JOBS, cells, out / "cells", desc, backend, workers, address)
+    ran = run_jobs(CELL_JOBS, cells, out / "cells.sqlite", desc, backend, workers, address)
     own_sources = {
         agent: record["estimator"]
         for agent in dict.fromkeys(cell["agent"] for cell in cells)
@@ -149,7 +147,7 @@ def check_same_request(results: Path, request: dict) -> None:
         )
         raise ConfigError(
             f"{results.parent} holds the report of another benchmark ({said}); give another "
-            "--out (its cells/ folder may be copied there: finished cells are reused)"
+            "--out (its cells.sqlite may be copied there: finished cells are reused)"
         )
 
 

@@ -10,7 +10,7 @@ of the dial's levels up to which the agent reaches the goal in at least
 :data:`REQUIRED_SUCCESS` of episodes at every level.
 
 Every episode is a cell (:mod:`stsf_gym.experiments.jobs.cells`), run on the job engine's
-local or Ray backend with its resume: each finished cell is a JSON file in ``<out>/cells/``.
+local or Ray backend with its resume: each finished cell is a row of ``<out>/cells.sqlite``.
 Writes ``curve.json`` (numbers, the results schema), ``curve.md`` and ``curve.png``.
 """
 
@@ -32,7 +32,6 @@ from stsf_gym.results.provenance import by_digest, provenance
 DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
 DEFAULT_ESTIMATORS = ("odometry", "conventional", "stsf", "ekf")
 REQUIRED_SUCCESS = 0.9
-CURVE_VERSION = 1  # bumped when a curve cell changes meaning, so older cell files are rerun
 #: The dial needs no camera; the estimators see simulated detections unless ``env`` says else.
 DIAL_ENV = {"camera": {"enabled": False}}
 ESTIMATOR_ENV = {"camera": {"mode": "fast"}}
@@ -84,7 +83,6 @@ def _cells(agent, world, seeds, estimator, env, options, level=None) -> list[dic
             "env": env,
             "options": options,
             "values": {**values, "seed": seed},
-            "version": CURVE_VERSION,
         }
         for seed in seeds
     ]
@@ -119,7 +117,9 @@ def accuracy_curve(
     cells = curve_cells(
         agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
     )
-    ran = run_jobs(CELL_JOBS, cells, out / "cells", "accuracy curve", backend, workers, address)
+    ran = run_jobs(
+        CELL_JOBS, cells, out / "cells.sqlite", "accuracy curve", backend, workers, address
+    )
     summary = summarise_curve(cells, ran.results)
     summary.update(
         schema_version=SCHEMA_VERSION,

@@ -1,12 +1,12 @@
 """Where jobs run: local processes (the default) or Ray tasks.
 
 Both are runners (:data:`~stsf_gym.experiments.jobs.spec.Runner`): they yield each job's result
-as it finishes, or a :class:`~stsf_gym.experiments.jobs.spec.Crash` for a job that raised or
-whose worker died, and :func:`~stsf_gym.experiments.jobs.cache.run_cached` saves it and moves
-the progress bar, so the cached files, resume and summary are the same whichever backend ran
-them. Each job's worker reports the package modules it loaded
-(:func:`~stsf_gym.results.provenance.worker_result`), so the run's provenance lists the code
-that ran on either backend; its result is unchanged.
+as it finishes (:class:`~stsf_gym.experiments.jobs.spec.Finished`), or a
+:class:`~stsf_gym.experiments.jobs.spec.Crash` for a job that raised or whose worker died, and
+:func:`~stsf_gym.experiments.jobs.cache.run_cached` stores it and moves the progress bar, so
+the store, resume and summary are the same whichever backend ran them. Each job's worker
+reports the package modules it had loaded (:func:`finished`): the code its stored result was
+made with, and part of the run's provenance.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_compl
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
 
-from stsf_gym.experiments.jobs.spec import Crash, Runner
-from stsf_gym.results.provenance import run_reporting_modules, worker_result
+from stsf_gym.experiments.jobs.spec import Crash, Finished, Runner
+from stsf_gym.results.provenance import loaded_modules, run_reporting_modules, worker_result
 from stsf_gym.validation import ConfigError
 
 BACKENDS = ("local", "ray")
@@ -96,7 +96,7 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
                 done, _ = ray.wait(list(pending), num_returns=1)
                 job = pending.pop(done[0])
                 try:
-                    result = worker_result(ray.get(done[0]))
+                    result: Finished | Crash = finished(ray.get(done[0]))
                 except ray.exceptions.RayError as err:  # the job raised, its worker died...
                     result = Crash.of(err)
                 yield job, result
@@ -126,9 +126,11 @@ def process_runner(workers: int) -> Runner:
         if workers <= 1:
             for job in jobs:
                 try:
-                    yield job, fn(job)
+                    result = fn(job)
                 except Exception as err:
                     yield job, Crash.of(err)
+                else:
+                    yield job, Finished(result, loaded_modules())
             return
         slot, pools, lock = threading.local(), [], threading.Lock()
 
@@ -153,7 +155,7 @@ def process_runner(workers: int) -> Runner:
             try:
                 for future in as_completed(futures):
                     err = future.exception()
-                    yield futures[future], Crash.of(err) if err else worker_result(future.result())
+                    yield futures[future], Crash.of(err) if err else finished(future.result())
             finally:
                 for future in futures:
                     future.cancel()
@@ -162,6 +164,12 @@ def process_runner(workers: int) -> Runner:
                         pool.shutdown(cancel_futures=True)
 
     return run
+
+
+def finished(reply: tuple[object, list[str]]) -> Finished:
+    """A worker's :func:`~stsf_gym.results.provenance.run_reporting_modules` reply as a
+    :class:`Finished`, its modules noted as the run's."""
+    return Finished(worker_result(reply), reply[1])
 
 
 def exit_with(run_pid: int) -> None:

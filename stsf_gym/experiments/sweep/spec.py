@@ -42,7 +42,6 @@ from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.jobs.cells import cell_kind
 
-CELL_VERSION = 1  # bumped when a cell's result changes meaning, so older cell files are rerun
 FILE_KEYS = ("base", "grid", "one_at_a_time")
 BASE_DEFAULTS = {
     "kind": "evaluate",
@@ -233,4 +232,4 @@ def _cell(base: dict, point: dict, sections: tuple[str, ...], seed_offset: int) 
     cell["seed"] += seed_offset
     values = {**point, "seed": cell["seed"]} if "seed" in point else point
     options = estimator_options(cell["estimator"], **cell.get("options", {}))
-    return {**cell, "options": options, "values": values, "version": CELL_VERSION}
+    return {**cell, "options": options, "values": values}

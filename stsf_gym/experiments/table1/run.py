@@ -160,7 +160,7 @@ def run_table1(
     jobs = [{"config": cfg.__dict__, "seed": s} for s in range(seed, seed + cfg.seeds)]
     resolved = resolved_table1(cfg)
     kind = JobKind(_run_seed, lambda job: f"seed_{job['seed']}", lambda job: resolved)
-    ran = run_jobs(kind, jobs, out / "seeds", "table1", workers=workers)
+    ran = run_jobs(kind, jobs, out / "seeds.sqlite", "table1", workers=workers)
     results = [SeedResult(**r) for r in ran.results]
     rows = summarise(cfg, results)
     summary = {
