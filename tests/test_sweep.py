@@ -11,7 +11,6 @@ import sys
 import pytest
 import yaml
 
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.experiments.jobs import cells as sweep_cells
 from stsf_gym.experiments.jobs.cells import CellKind
@@ -19,6 +18,7 @@ from stsf_gym.experiments.jobs.store import read_rows
 from stsf_gym.experiments.sweep.run import run_sweep
 from stsf_gym.experiments.sweep.spec import load_sweep
 from stsf_gym.results import check_rows
+from stsf_gym.validation import ConfigError
 
 TINY = {  # 2 estimators x 1 noise key x 2 levels x 1 seed, 12 s episodes, fast camera
     "base": {

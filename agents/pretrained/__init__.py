@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.agents.sb3_agent import trained_algo
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.results.provenance import note_data_files
+from stsf_gym.validation import ConfigError
 
 PREFIX = "pretrained:"
 MODELS = Path(__file__).parent / "trained-models"  # not a package name: data, not code

@@ -23,7 +23,7 @@ import json
 from pathlib import Path
 
 from stsf_gym.agents.registry import trained_on
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.generated_env import check_distinct_worlds, world_seed_for
 from stsf_gym.envs.suite import Suite, load_suite
 from stsf_gym.envs.task import Polyline
@@ -47,6 +47,7 @@ from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
 from stsf_gym.results.provenance import by_digest, provenance
+from stsf_gym.validation import ConfigError
 
 WORLD = "generated:test"
 

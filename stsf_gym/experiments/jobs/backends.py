@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
+from typing import Any
 
 from stsf_gym.experiments.jobs.spec import Crash, Finished, Runner
 from stsf_gym.results.provenance import loaded_modules, run_reporting_modules, worker_result
@@ -81,12 +82,14 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
             "the ray backend needs Ray: pip install 'stsf-gym[ray]' (or pip install ray)"
         ) from err
 
-    def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterator[tuple[dict, object]]:
+    def run(
+        fn: Callable[[dict], object], jobs: list[dict]
+    ) -> Iterator[tuple[dict, Finished | Crash]]:
         if not jobs:
             return
         started = not ray.is_initialized()
         if started:
-            local = {} if address else {"num_cpus": workers * cpus_per_job}
+            local: dict[str, Any] = {} if address else {"num_cpus": workers * cpus_per_job}
             ray.init(address=address, include_dashboard=False, log_to_driver=False, **local)
         task = ray.remote(num_cpus=cpus_per_job, max_retries=0)(run_reporting_modules)
         task = task.options(name=getattr(fn, "__name__", "job"))  # errors name the job's function
@@ -120,7 +123,9 @@ def process_runner(workers: int) -> Runner:
     its job's result was lost with the run, and a rerun redoes it.
     """
 
-    def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterator[tuple[dict, object]]:
+    def run(
+        fn: Callable[[dict], object], jobs: list[dict]
+    ) -> Iterator[tuple[dict, Finished | Crash]]:
         if not jobs:
             return
         if workers <= 1:
@@ -134,7 +139,7 @@ def process_runner(workers: int) -> Runner:
             return
         slot, pools, lock = threading.local(), [], threading.Lock()
 
-        def in_own_process(job: dict) -> object:
+        def in_own_process(job: dict) -> tuple[object, list[str]]:
             if getattr(slot, "pool", None) is None:
                 slot.pool = ProcessPoolExecutor(
                     1,
@@ -154,8 +159,8 @@ def process_runner(workers: int) -> Runner:
             futures = {threads.submit(in_own_process, job): job for job in jobs}
             try:
                 for future in as_completed(futures):
-                    err = future.exception()
-                    yield futures[future], Crash.of(err) if err else finished(future.result())
+                    error = future.exception()
+                    yield futures[future], Crash.of(error) if error else finished(future.result())
             finally:
                 for future in futures:
                     future.cancel()

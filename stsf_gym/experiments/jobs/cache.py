@@ -120,7 +120,8 @@ def run_cached(
                     continue
                 result = outcome.result
                 if store is not None:
-                    result = asdict(result) if is_dataclass(result) else result
+                    if is_dataclass(result) and not isinstance(result, type):
+                        result = asdict(result)
                     record = code.record(outcome.modules)
                     write_row(store, name(job), job, configs[name(job)], record, result)
                     result = json.loads(json.dumps(result, default=to_builtin))
