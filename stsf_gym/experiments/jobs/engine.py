@@ -72,6 +72,8 @@ def run_jobs(
 def forget_failures(jobs: list[dict], store: Path, key: Callable[[dict], str]) -> None:
     """Delete the rows of ``jobs`` that failed (kept as results, :func:`~.spec.failure`), so
     that this run redoes them."""
+    if not store.is_file():  # nothing stored yet: nothing made before the run's checks pass
+        return
     keys = {key(job) for job in jobs}
     rows = read_rows(open_store(store))
     delete_rows(store, [k for k, row in rows.items() if k in keys and failed(row.result)])
