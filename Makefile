@@ -71,8 +71,16 @@ $(DOCS_STAMP): $(STAMP)
 docs: $(DOCS_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
+# ruff's lint and format checks, and mypy on the package laid out as installed: the link tree
+# setuptools makes for a strict editable install (build/__editable__.*), which a type checker
+# or an IDE reads as one namespace (stsf_gym.envs, stsf_gym.agents, ...).
 lint: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	rm -rf build/__editable__.*
+	$(BIN)/python -c "from setuptools import setup; setup()" -q editable_wheel --mode strict \
+		--dist-dir build/editable-wheel >/dev/null 2>&1
+	$(BIN)/mypy build/__editable__.*/stsf_gym
 
 bench: $(STAMP)
 	$(BIN)/stsf-gym bench

@@ -15,7 +15,7 @@ import zipfile
 from pathlib import Path
 
 from stsf_gym.agents.training.hyperparams import algorithm_class
-from stsf_gym.envs.config import ConfigError
+from stsf_gym.validation import ConfigError
 
 META_KEY = "stsf_meta"
 

@@ -1,9 +1,10 @@
 """Configuration entry points for users of the library (the schema lives in
 ``stsf_gym.envs.config``)."""
 
-from stsf_gym.envs.config import CONFIG_DIR, ConfigError, EnvConfig, load_config
+from stsf_gym.envs.config import CONFIG_DIR, EnvConfig, load_config
+from stsf_gym.validation import ConfigError
 
-__all__ = ["CONFIG_DIR", "ConfigError", "EnvConfig", "load_config", "parse_overrides"]
+__all__ = ["CONFIG_DIR", "EnvConfig", "load_config", "parse_overrides"]
 
 
 def parse_overrides(items: list[str]) -> dict:

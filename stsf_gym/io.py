@@ -88,9 +88,9 @@ def write_json(path: str | Path, obj: Any) -> Path:
     infinity as ``null``: Python's ``NaN`` is no JSON, and other readers refuse it); return
     the path."""
     try:
-        text = json.dumps(obj, indent=2, default=_to_builtin, allow_nan=False)
+        text = json.dumps(obj, indent=2, default=to_builtin, allow_nan=False)
     except ValueError:  # a non-finite number somewhere: the slow path, rarely taken
-        text = json.dumps(_finite(obj), indent=2, default=_to_builtin, allow_nan=False)
+        text = json.dumps(_finite(obj), indent=2, default=to_builtin, allow_nan=False)
     return write_atomic(path, text + "\n")
 
 
@@ -131,7 +131,8 @@ def _cell(value: Any) -> str:
     return f"{value:.3f}" if isinstance(value, float) else str(value)
 
 
-def _to_builtin(value: Any) -> Any:
+def to_builtin(value: Any) -> Any:
+    """``value`` (a numpy array or scalar) as the Python numbers and lists JSON holds."""
     if hasattr(value, "tolist"):
         return value.tolist()
     raise TypeError(f"cannot write {type(value).__name__} as JSON")

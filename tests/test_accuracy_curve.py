@@ -9,6 +9,7 @@ import sys
 import pytest
 
 from stsf_gym.experiments.curve.run import accuracy_curve, tolerated_ate
+from stsf_gym.experiments.jobs.store import read_rows
 from stsf_gym.results import check_rows
 
 TINY = ["--world", "straight_10m", "--seeds", "1", "--levels", "1,30", "--estimators", "odometry"]
@@ -41,7 +42,7 @@ def test_curve_files_hold_numbers(tiny_run):
     assert odometry["estimator"] == "odometry" and odometry["ate_rmse_m"]["mean"] > 0
     assert (out / "curve.png").stat().st_size > 10_000
     assert "reaches the goal in >= 90% of episodes up to ATE" in (out / "curve.md").read_text()
-    assert len(list((out / "cells").glob("*.json"))) == 3
+    assert len(read_rows(out / "cells.sqlite")) == 3
     assert summary["curves"] == on_disk["curves"]
 
 

@@ -15,9 +15,9 @@ from stsf_gym.agents.registry import make_agent, make_agents
 from stsf_gym.agents.resolve import model_path, resolve_agent, training_group
 from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.agents.trained_agent import SB3Agent, wrap_for_model
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.benchmark.trained import agent_name, expand_agents
 from stsf_gym.experiments.compare import judged_alike, seed_aggregates
+from stsf_gym.validation import ConfigError
 
 SHIPPED = "pretrained:corridor/dagger-truth"
 EKF_AGENT = "pretrained:sparse/dagger-ekf"

@@ -19,8 +19,8 @@ from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.training.hyperparams import load_hyperparams
 from stsf_gym.agents.training.train import latest_checkpoint, train
 from stsf_gym.agents.training.training_log import EpisodeLog, read_rows
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.evaluate import evaluate
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import TRUTH_STD, PoseEstimateWrapper
 
 NO_CAMERA = {"camera": {"enabled": False}}

@@ -188,7 +188,7 @@ def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
 
 def test_a_baseline_that_is_no_checkout_is_refused(tmp_path):
     from stsf_gym.bench.step import check_baseline
-    from stsf_gym.envs.config import ConfigError
+    from stsf_gym.validation import ConfigError
 
     with pytest.raises(ConfigError, match="neither a Python interpreter nor a checkout"):
         check_baseline(tmp_path)

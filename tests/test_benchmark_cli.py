@@ -8,6 +8,7 @@ import sys
 
 import pytest
 
+from stsf_gym.experiments.jobs.store import read_rows
 from stsf_gym.results import check_rows
 
 TINY = ["--suite", "corridor", "--worlds", "2", "--estimators", "truth,odometry"]
@@ -59,11 +60,10 @@ def test_benchmark_writes_the_leaderboard(tiny_benchmark):
 
 def test_benchmark_resumes(tiny_benchmark, tmp_path):
     out, summary = tiny_benchmark
-    cells = sorted((out / "cells").glob("*.json"))
-    assert len(cells) == 4
-    stamps = [cell.stat().st_mtime_ns for cell in cells]
+    stamps = {key: row.written_ns for key, row in read_rows(out / "cells.sqlite").items()}
+    assert len(stamps) == 4
     again = cli("benchmark", *TINY, "--out", str(out.parent))
-    assert [cell.stat().st_mtime_ns for cell in cells] == stamps  # nothing rerun
+    assert {k: row.written_ns for k, row in read_rows(out / "cells.sqlite").items()} == stamps
     assert again["rows"] == summary["rows"]
 
 

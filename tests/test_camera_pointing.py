@@ -6,13 +6,13 @@ both, as a hand-built stack does."""
 import numpy as np
 import pytest
 
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.episode_env import (
     EPISODE_DEFAULTS,
     episode_settings,
     make_episode_env,
     resolved_config,
 )
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 PAN = {"camera__control": "pan", "camera__mode": "fast"}

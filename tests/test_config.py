@@ -6,7 +6,8 @@ import gymnasium as gym
 import pytest
 import yaml
 
-from stsf_gym.envs.config import CONFIG_DIR, ConfigError, EnvConfig, load_config
+from stsf_gym.envs.config import CONFIG_DIR, EnvConfig, load_config
+from stsf_gym.validation import ConfigError
 
 
 def test_defaults_and_world_layers():

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import stsf_gym  # noqa: F401 - registers the ids
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.task import PathTask
+from stsf_gym.validation import ConfigError
 
 DT = 0.1
 

@@ -18,10 +18,10 @@ from stsf_gym.agents.demonstrations.dagger import demonstration_config, kept_rou
 from stsf_gym.agents.registry import make_agent
 from stsf_gym.agents.trained_agent import SB3Agent
 from stsf_gym.agents.training.train import train
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
 from stsf_gym.io import write_json
+from stsf_gym.validation import ConfigError
 
 
 def test_cloning_fits_the_expert_and_its_rare_stops():

@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 
 import stsf_gym  # noqa: F401 - registers the ids
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.suite import load_suite, suite_names
 from stsf_gym.envs.worlds.coverage import landmark_coverage
 from stsf_gym.envs.worlds.generator import generate_world
 from stsf_gym.envs.worlds.generator_config import load_generator_config
+from stsf_gym.validation import ConfigError
 
 ENV = load_config()
 SPARSE = {

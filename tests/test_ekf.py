@@ -11,10 +11,10 @@ from scipy.stats import chi2
 
 import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.agents.follower import PathFollower
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.ekf import EKFEstimator
 from stsf_gym.estimators.landmark_observation import LandmarkObservation
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import PoseEstimateWrapper, sensor_model
 
 RUN_SEED = 3  # an episode whose calibration errors make dead reckoning drift ~0.85 m in 7 m

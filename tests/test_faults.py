@@ -9,11 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
 from stsf_gym.experiments.fault_runs import recovery
 from stsf_gym.results import check_rows
+from stsf_gym.validation import ConfigError
 
 STRAIGHT = "stsf_gym/Straight10m-v0"
 SIMULATED = {"camera__mode": "fast"}  # detections simulated: the camera faults without rendering

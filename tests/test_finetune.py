@@ -23,7 +23,7 @@ from stsf_gym.agents.training.finetune import (
 from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.agents.training.stop_prior import declaring_share, set_stop_prior
 from stsf_gym.agents.training.training_log import EpisodeLog, curve_points
-from stsf_gym.envs.config import ConfigError
+from stsf_gym.validation import ConfigError
 
 
 def _weights(path) -> dict:

@@ -8,8 +8,8 @@ import pytest
 
 from stsf_gym.agents.follower import PathFollower, load_follower_config
 from stsf_gym.agents.sonar_avoidance import SonarAvoidance
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
+from stsf_gym.validation import ConfigError
 
 BODY_RADIUS, MAX_RANGE, SONARS = 0.25, 5.0, 16
 

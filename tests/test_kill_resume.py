@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import sqlite3
 import subprocess
 import sys
 import time
@@ -16,6 +17,8 @@ from pathlib import Path
 
 import pytest
 import yaml
+
+from stsf_gym.experiments.jobs.store import read_rows
 
 CLI = [sys.executable, "-m", "stsf_gym.cli"]
 FAST = ["--set", "camera.mode=fast", "--set", "sim.max_episode_seconds=20"]
@@ -50,22 +53,29 @@ FINETUNE += " --set demonstrations.cloning.epochs=2 --set n_eval_episodes=1 --se
 FINETUNE += " --set checkpoint_freq=32 --set n_steps=32 --set batch_size=32 --set n_epochs=2"
 FINETUNE += " --set env.sim.max_episode_seconds=6 --set train_env.sim.max_episode_seconds=6"
 FINETUNE += " --set finetune.timesteps=192 --set finetune.value_warmup_steps=32"
-#: command (after ``stsf-gym``), the units it saves as they finish (glob under --out)
+#: command (after ``stsf-gym``), where it saves its units as they finish (under --out): a
+#: store (its rows) or a glob (its files)
 COMMANDS = {
-    "fig10": ([*"reproduce fig10 --seeds 2 --workers 2".split(), *FAST], "fig10/episodes/*.json"),
-    "fig11": ([*"reproduce fig11 --seeds 1 --workers 2".split(), *FAST], "fig11/episodes/*.json"),
+    "fig10": (
+        [*"reproduce fig10 --seeds 2 --workers 2".split(), *FAST],
+        "fig10/episodes/episodes.sqlite",
+    ),
+    "fig11": (
+        [*"reproduce fig11 --seeds 1 --workers 2".split(), *FAST],
+        "fig11/episodes/episodes.sqlite",
+    ),
     "table1": (
         "reproduce table1 --seeds 3 --workers 1 --set frames_per_place=2".split(),
-        "table1/seeds/*.json",
+        "table1/seeds.sqlite",
     ),
     "accuracy-curve": (
         [*CURVE.split(), "--estimators", "odometry", "--workers", "2", *FAST],
-        "cells/*.json",
+        "cells.sqlite",
     ),
-    "sweep": ("sweep {sweep} --workers 2".split(), "tiny/cells/*.json"),
+    "sweep": ("sweep {sweep} --workers 2".split(), "tiny/cells.sqlite"),
     "benchmark": (  # on the true pose: each route ends at its goal (odometry's may not)
         "benchmark --suite corridor --worlds 3 --estimators truth --workers 2".split(),
-        "corridor/cells/*.json",
+        "corridor/cells.sqlite",
     ),
     "train": (
         [*TRAIN.split(), "--set", "env.sim.max_episode_seconds=3"],
@@ -92,19 +102,30 @@ def _finish(argv: list[str]) -> dict:
     return json.loads(done.stdout)
 
 
-def _kill_after_first_unit(argv: list[str], units: list[Path], pattern: str, out: Path) -> None:
-    """Start the command in its own process group; SIGKILL the group once a unit is saved."""
+def _units(out: Path, pattern: str) -> dict[str, int]:
+    """``{unit: when it was written}`` of the saved units: rows of a store, or files."""
+    if pattern.endswith(".sqlite"):
+        try:
+            return {key: row.written_ns for key, row in read_rows(out / pattern).items()}
+        except sqlite3.OperationalError:  # being written: not yet
+            return {}
+    return {str(unit): unit.stat().st_mtime_ns for unit in sorted(out.glob(pattern))}
+
+
+def _kill_after_first_unit(argv: list[str], pattern: str, out: Path) -> dict[str, int]:
+    """Start the command in its own process group; SIGKILL the group once a unit is saved;
+    return the units saved by then."""
     run = subprocess.Popen(
         argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
     )
     deadline = time.monotonic() + 300
-    while not list(out.glob(pattern)):
+    while not _units(out, pattern):
         assert run.poll() is None, "the command finished before it could be killed"
         assert time.monotonic() < deadline, "no unit saved in 300 s"
         time.sleep(0.02)
     os.killpg(run.pid, signal.SIGKILL)
     run.wait()
-    units += sorted(out.glob(pattern))
+    return _units(out, pattern)
 
 
 def _comparable(value, out: Path):
@@ -129,13 +150,14 @@ def test_a_killed_command_resumes_to_the_uninterrupted_result(name, tmp_path):
     reference = _finish(_argv(name, tmp_path / "reference", tmp_path))
     out = tmp_path / "killed"
     argv, (_, pattern) = _argv(name, out, tmp_path), COMMANDS[name]
-    units: list[Path] = []
-    _kill_after_first_unit(argv, units, pattern, out)
-    stamps = {unit: unit.stat().st_mtime_ns for unit in units}
+    stamps = _kill_after_first_unit(argv, pattern, out)
     for path in out.rglob("*.json"):  # whatever the kill left is whole
         json.loads(path.read_text())
+    for store in out.rglob("*.sqlite"):
+        read_rows(store)
     resumed = _finish(argv)
-    assert {unit: unit.stat().st_mtime_ns for unit in units} == stamps  # nothing recomputed
+    now = _units(out, pattern)
+    assert {unit: now.get(unit) for unit in stamps} == stamps  # nothing recomputed
     assert not list(out.rglob(".*.tmp"))
     if name == "train":  # a resumed run ends where an uninterrupted one does
         assert resumed["timesteps"] == reference["timesteps"] == 640

@@ -11,8 +11,8 @@ import pytest
 
 from stsf_gym.agents import pretrained
 from stsf_gym.agents.registry import make_agent
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.experiments.benchmark.trained import expand_agents, training_group
+from stsf_gym.validation import ConfigError
 
 SHIPPED = pretrained.names()
 

@@ -15,11 +15,13 @@ from worker_jobs import import_module
 
 import stsf_gym.envs.config as env_config
 import stsf_gym.results.behaviour as behaviour
+import stsf_gym.results.freshness as freshness
 import stsf_gym.results.provenance as provenance
 from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.training.train import latest_checkpoint, train
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.jobs.backends import make_runner
+from stsf_gym.experiments.jobs.store import read_rows
 from stsf_gym.yaml_layers import CONFIG_DIR
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -60,8 +62,9 @@ def test_the_code_a_run_loaded_includes_what_only_its_workers_imported(monkeypat
     monkeypatch.delitem(sys.modules, module, raising=False)  # this process never imports it
     assert path not in provenance.provenance()["stsf_gym"]["loaded_code"]
     jobs = [{"module": module, "n": n} for n in range(2)]
-    done = make_runner("local", workers=2)(import_module, jobs)
-    assert sorted(result for _, result in done) == [0, 1]  # the results as the jobs returned
+    done = list(make_runner("local", workers=2)(import_module, jobs))
+    assert sorted(finished.result for _, finished in done) == [0, 1]  # as the jobs returned
+    assert all(path in finished.modules for _, finished in done)  # each job's own code
     assert module not in sys.modules
     code = provenance.provenance()["stsf_gym"]["loaded_code"]
     assert code[path] == provenance.file_digest(ROOT / path)
@@ -71,11 +74,12 @@ def test_the_code_a_run_loaded_includes_what_only_its_workers_imported(monkeypat
 
 
 def _episode_stamps(folder):
-    return {f.name: f.stat().st_mtime_ns for f in sorted((folder / "episodes").glob("*.json"))}
+    rows = read_rows(folder / "episodes" / "episodes.sqlite")
+    return {key: row.written_ns for key, row in rows.items()}
 
 
 @pytest.mark.slow
-def test_an_edited_default_or_a_new_behaviour_version_recomputes_saved_episodes(
+def test_an_edited_default_or_an_edited_module_recomputes_saved_episodes(
     tmp_path, monkeypatch, capsys
 ):
     run = lambda: evaluate(  # noqa: E731
@@ -102,10 +106,13 @@ def test_an_edited_default_or_a_new_behaviour_version_recomputes_saved_episodes(
     run()
     stamps = _episode_stamps(tmp_path)
     monkeypatch.setattr(provenance, "source_digest", lambda: "edited-bytes")
-    run()  # a rewrite that keeps every number: reused
+    monkeypatch.setitem(behaviour.VERSIONS, "estimation", behaviour.VERSIONS["estimation"] + 1)
+    run()  # other bytes, a declared version: neither decides; the code computes the same
     assert _episode_stamps(tmp_path) == stamps
     capsys.readouterr()
-    monkeypatch.setitem(behaviour.VERSIONS, "estimation", behaviour.VERSIONS["estimation"] + 1)
+    digest = freshness.code_digest
+    edited_module = lambda file: "edited" if file.name == "dead_reckoning.py" else digest(file)  # noqa: E731
+    monkeypatch.setattr(freshness, "code_digest", edited_module)
     third, _ = run()
     assert "made by other code or settings" in capsys.readouterr().err
     assert _episode_stamps(tmp_path) != stamps

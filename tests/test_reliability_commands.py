@@ -15,6 +15,7 @@ import pytest
 from stsf_gym.agents import pretrained
 from stsf_gym.experiments.jobs.cells import cell_name
 from stsf_gym.experiments.jobs.engine import forget_failures
+from stsf_gym.experiments.jobs.store import open_store, read_rows, write_row
 from stsf_gym.validation import ConfigError
 
 SHIPPED = pretrained.MODELS / "corridor" / "dagger-truth"  # trained on the corridor suite, truth
@@ -110,21 +111,23 @@ def test_an_unreachable_ray_address_fails_at_once(run_cli, tmp_path, argv):
     assert code == 2 and f"--address {address}: nothing answers there" in err
 
 
-def test_a_cut_short_cell_file_is_redone_not_raised(tmp_path):
-    """A killed write (a cell file cut short) and a failed cell are forgotten, so the rerun
-    redoes them; a finished cell's file stays."""
+def test_a_failed_cell_is_forgotten_and_a_store_that_is_no_store_set_aside(tmp_path, capsys):
+    """A failed cell's row is deleted, so the rerun redoes it; a finished cell's row stays.
+    A file under the store's name that is not SQLite is set aside, not raised."""
     cells = [
         {"kind": "evaluate", "estimator": e, "seed": 0, "values": {"estimator": e}}
-        for e in ("ekf", "stsf", "mcl")
+        for e in ("stsf", "mcl")
     ]
-    folder = tmp_path / "cells"
-    folder.mkdir()
-    cut, failed, finished = (folder / f"{cell_name(cell)}.json" for cell in cells)
-    cut.write_text('{"job": {"kind": "eval')
-    failed.write_text(json.dumps({"job": cells[1], "result": {"error": "RuntimeError: bug"}}))
-    finished.write_text(json.dumps({"job": cells[2], "result": {"metrics": {}}}))
-    forget_failures(cells, folder, cell_name)
-    assert not cut.exists() and not failed.exists() and finished.exists()
+    store = tmp_path / "cells.sqlite"
+    store.write_text('{"job": {"kind": "eval')  # a cell file of old, cut short
+    open_store(store)
+    assert "not a readable store" in capsys.readouterr().err
+    assert (tmp_path / "cells.sqlite.unreadable").is_file()
+    failed, finished = cells
+    write_row(store, cell_name(failed), failed, "c", {"m.py": "1"}, {"error": "RuntimeError"})
+    write_row(store, cell_name(finished), finished, "c", {"m.py": "1"}, {"metrics": {}})
+    forget_failures(cells, store, cell_name)
+    assert list(read_rows(store)) == [cell_name(finished)]
 
 
 def test_another_benchmark_into_a_reports_folder_is_refused(run_cli, tmp_path):

@@ -11,8 +11,8 @@ import cv2
 import numpy as np
 import pytest
 
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.rendering.map_view import ESTIMATE_COLOURS, INSET_FRACTION, TRUTH
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 

@@ -6,8 +6,9 @@ reward config for which any of these fails is refused under the declare protocol
 import numpy as np
 import pytest
 
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.task import PathTask
+from stsf_gym.validation import ConfigError
 
 DT = 0.5  # s per hand-built step
 TIME_LIMIT = 150.0  # s: the training legs' limit (configs/agents/ppo.yaml)

@@ -11,9 +11,10 @@ from stsf_gym.agents.decision_interval import DecisionInterval
 from stsf_gym.agents.registry import FollowerAgent, make_agent
 from stsf_gym.agents.trained_agent import SB3Agent
 from stsf_gym.envs.action_layout import ActionLayout
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.start_pose import draw_leg
 from stsf_gym.envs.task import PathTask, Polyline
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 STOP_TASK = {"protocol": "declare", "stop_action": True}

@@ -11,13 +11,14 @@ import sys
 import pytest
 import yaml
 
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.experiments.jobs import cells as sweep_cells
 from stsf_gym.experiments.jobs.cells import CellKind
+from stsf_gym.experiments.jobs.store import read_rows
 from stsf_gym.experiments.sweep.run import run_sweep
 from stsf_gym.experiments.sweep.spec import load_sweep
 from stsf_gym.results import check_rows
+from stsf_gym.validation import ConfigError
 
 TINY = {  # 2 estimators x 1 noise key x 2 levels x 1 seed, 12 s episodes, fast camera
     "base": {
@@ -122,7 +123,7 @@ def test_train_cells_carry_trainer_options_and_check_them(tmp_path):
 def test_local_sweep_writes_summary_and_resumes(local_run, monkeypatch):
     path, out, summary = local_run
     assert summary["cells"] == summary["finished"] == 4 and summary["failed"] == []
-    assert len(list((out / "cells").glob("*.json"))) == 4
+    assert len(read_rows(out / "cells.sqlite")) == 4
     assert (out / "errors.png").stat().st_size > 0
     groups = {
         (g["values"]["estimator"], g["values"]["env.encoders.radius_error_std"]): g["metrics"]
@@ -133,13 +134,13 @@ def test_local_sweep_writes_summary_and_resumes(local_run, monkeypatch):
     odometry = [groups["odometry", level]["final_error_m"]["mean"] for level in (0.0033, 0.0264)]
     assert odometry[0] != odometry[1]  # the swept noise reached the env
     table = (out / "results.md").read_text()
-    stamps = {f: f.stat().st_mtime_ns for f in (out / "cells").glob("*.json")}
+    stamps = {k: row.written_ns for k, row in read_rows(out / "cells.sqlite").items()}
     calls = []
     monkeypatch.setitem(sweep_cells.CELL_KINDS, "evaluate", CellKind(calls.append))
     again = run_sweep(path, out, workers=1)
     assert calls == [] and again["groups"] == summary["groups"]
     assert (out / "results.md").read_text() == table
-    assert {f: f.stat().st_mtime_ns for f in stamps} == stamps
+    assert {k: row.written_ns for k, row in read_rows(out / "cells.sqlite").items()} == stamps
 
 
 def fake_cell(cell: dict) -> dict:
@@ -193,9 +194,7 @@ def test_ray_gives_the_local_table(local_run, tmp_path):
         ray.shutdown()
     assert on_ray["groups"] == summary["groups"]
     assert (tmp_path / "results.md").read_text() == (out / "results.md").read_text()
-    assert sorted(f.name for f in (tmp_path / "cells").iterdir()) == sorted(
-        f.name for f in (out / "cells").iterdir()
-    )
+    assert sorted(read_rows(tmp_path / "cells.sqlite")) == sorted(read_rows(out / "cells.sqlite"))
 
 
 def test_a_sweep_on_a_suite_runs_its_test_worlds_and_task():

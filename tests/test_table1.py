@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.experiments.table1.measure import Place, average_features, measure_rows, range_step
 from stsf_gym.experiments.table1.run import (
     PAPER_TABLE1,
@@ -17,6 +17,7 @@ from stsf_gym.experiments.table1.run import (
     summarise,
 )
 from stsf_gym.results import check_rows
+from stsf_gym.validation import ConfigError
 
 F, CENTRE = 600.0, np.array([319.5, 239.5])
 K = np.array([[F, 0, CENTRE[0]], [0, F, CENTRE[1]], [0, 0, 1]])

@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 import yaml
 
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.worlds.generator import generate_world, path_clearance, world_tree
 from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.envs.worlds.layout import Rect, boundary_walls
 from stsf_gym.envs.worlds.visibility import CameraView, path_samples, seen_matrix
 from stsf_gym.experiments.generated_worlds import write_world_yaml
+from stsf_gym.validation import ConfigError
 
 ENV = load_config()
 GEN = load_generator_config()

@@ -9,9 +9,8 @@ from conftest import id_matrix, run_rl_zoo3
 import stsf_gym
 from stsf_gym.agents.training.hyperparams import load_hyperparams
 from stsf_gym.agents.zoo import hyperparams, zoo_section
-from stsf_gym.envs.config import deep_merge
 from stsf_gym.envs.suite import load_suite
-from stsf_gym.yaml_layers import SUITE_DIR
+from stsf_gym.yaml_layers import SUITE_DIR, deep_merge
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -11,13 +11,16 @@ Each lives in ``trained-models/<suite>/<algo>-<pose source>/``: ``seed-S.zip`` p
 seed (the model, its settings inside it), ``seed-S.json`` (its ``train.json``: code digest, config,
 machine, validation rounds) and ``agent.json`` (the summary ``stsf-gym agents`` lists, and
 what the agent saw when it was shipped: the policy's inputs over the first
-:data:`SEEN_STEPS` decisions of a fixed test world, by seed). A change of the code that moves
+:data:`SEEN_STEPS` decisions of a fixed test world, by seed). ``trained-models/manifest.json``
+holds the SHA-256 digest of every shipped file; a model is read only when its bytes match it
+(:func:`models`). A change of the code that moves
 what an agent sees (its sensors, its observation, its action layout) makes it **stale**
 (:func:`stale`): it must be trained again.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import shutil
@@ -26,12 +29,14 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.agents.sb3_agent import trained_algo
-from stsf_gym.envs.config import ConfigError
+from stsf_gym.io import write_json
 from stsf_gym.results.provenance import note_data_files
+from stsf_gym.validation import ConfigError
 
 PREFIX = "pretrained:"
 MODELS = Path(__file__).parent / "trained-models"  # not a package name: data, not code
 ALIASES = MODELS / "aliases.json"  # "<suite>/<old name>" -> "<suite>/<algo>-<pose source>"
+MANIFEST = "manifest.json"  # in MODELS: {"files": {"<suite>/<agent>/<file>": sha256 hex}}
 SEEN_STEPS = 40  # decisions of the fixed episode whose inputs are kept (20 s at 0.5 s)
 SEEN_WORLD_SEED = 0  # the test world of that episode
 SEEN_TOLERANCE = 1e-5  # inputs within this of the shipped ones are the same
@@ -94,11 +99,42 @@ def folder(name: str) -> Path:
 
 
 def models(name: str) -> list[Path]:
-    """The model file of each training seed of shipped agent ``name`` (each counted as code
-    the run loaded, so results quoted from it go stale when it is shipped again)."""
+    """The model file of each training seed of shipped agent ``name``, each checked against
+    the manifest (ConfigError for bytes it does not list) and counted as code the run loaded,
+    so results quoted from it go stale when it is shipped again."""
     files = [folder(name) / f"seed-{seed}.zip" for seed in summary(name)["seeds"]]
+    listed = manifest(MODELS)
+    for file in files:
+        key = file.relative_to(MODELS).as_posix()
+        if listed.get(key) != sha256(file):
+            raise ConfigError(
+                f"{file}: its bytes are not those {MODELS / MANIFEST} lists for {key}; "
+                "ship the agent again (`stsf-gym agents --ship`)"
+            )
     note_data_files(files)
     return files
+
+
+def sha256(path: Path) -> str:
+    """SHA-256 (hex) of the file ``path``."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def manifest(models: Path) -> dict[str, str]:
+    """``{"<suite>/<agent>/<file>": sha256}`` of the shipped agents under ``models``, as its
+    manifest lists them (nothing without one)."""
+    path = models / MANIFEST
+    return json.loads(path.read_text())["files"] if path.is_file() else {}
+
+
+def manifest_of(models: Path) -> dict:
+    """The manifest the shipped agents under ``models`` have now: each file's digest."""
+    files = sorted(
+        p
+        for p in models.glob("*/*/*")
+        if p.is_file() and valid_name(PREFIX + f"{p.parent.parent.name}/{p.parent.name}")
+    )
+    return {"files": {p.relative_to(models).as_posix(): sha256(p) for p in files}}
 
 
 def summary(name: str) -> dict:
@@ -218,4 +254,5 @@ def ship(training: Path, suite: str, replace: bool = False) -> str:
         swap_in(built, target)
     finally:
         shutil.rmtree(built, ignore_errors=True)  # gone once swapped in
+    write_json(MODELS / MANIFEST, manifest_of(MODELS))
     return name

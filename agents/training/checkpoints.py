@@ -25,8 +25,8 @@ from stsf_gym.agents.training.training_log import (
     EVALUATIONS_JSON,
     drop_rows_after,
 )
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.io import write_atomic
+from stsf_gym.validation import ConfigError
 
 PREFIX = "model"  # checkpoints are checkpoints/model_<timesteps>_steps.zip
 

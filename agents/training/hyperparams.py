@@ -26,15 +26,9 @@ from stsf_gym.agents.decision_interval import DEFAULT_DECISION_STEPS
 from stsf_gym.agents.demonstrations.dagger import DemonstrationConfig, demonstration_config
 from stsf_gym.agents.observation import ObservationConfig, observation_config
 from stsf_gym.agents.rl.residual import ResidualConfig
-from stsf_gym.envs.config import (
-    CONFIG_DIR,
-    ConfigError,
-    build,
-    deep_merge,
-    overrides_to_tree,
-    read_yaml,
-)
+from stsf_gym.envs.config import CONFIG_DIR, build, overrides_to_tree, read_yaml
 from stsf_gym.validation import (
+    ConfigError,
     Count,
     KeySources,
     NonNegative,
@@ -43,7 +37,7 @@ from stsf_gym.validation import (
     check_number,
     require,
 )
-from stsf_gym.yaml_layers import shown
+from stsf_gym.yaml_layers import deep_merge, shown
 
 #: Supported algorithms: name -> "module:class" of the stable-baselines3 learner.
 ALGORITHMS: dict[str, str] = {"ppo": "stable_baselines3:PPO", "sac": "stable_baselines3:SAC"}

@@ -28,11 +28,11 @@ from stsf_gym.agents.training.hyperparams import (
     update_size,
 )
 from stsf_gym.agents.training.training_envs import env_id_for, evaluation_world
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.envs.generated_env import generated_label
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import resolved_config
 from stsf_gym.results.provenance import fingerprint, provenance
+from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import check_pose_source
 from stsf_gym.yaml_layers import deep_merge, overrides_to_tree
 

@@ -15,7 +15,8 @@ import math
 import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration
-from stsf_gym.envs.config import CalibrationErrorConfig, ConfigError
+from stsf_gym.envs.config import CalibrationErrorConfig
+from stsf_gym.validation import ConfigError
 
 #: Maps OpenCV camera axes to OpenGL camera axes (and back): flip y and z.
 CV_TO_GL = np.diag([1.0, -1.0, -1.0, 1.0])

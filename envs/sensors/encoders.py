@@ -14,8 +14,9 @@ import math
 
 import numpy as np
 
-from stsf_gym.envs.config import ConfigError, EncoderConfig
+from stsf_gym.envs.config import EncoderConfig
 from stsf_gym.geometry import OdometryCalibration, compiled
+from stsf_gym.validation import ConfigError
 
 
 class WheelEncoders:

@@ -6,12 +6,13 @@ import math
 
 import numpy as np
 
-from stsf_gym.envs.config import ConfigError, SonarConfig
+from stsf_gym.envs.config import SonarConfig
 from stsf_gym.envs.rendering.scene import Scene
 from stsf_gym.envs.sensors.plane_cast import PlaneCaster
 from stsf_gym.envs.sensors.sonar_beam import beam_ranges, corrupt
 from stsf_gym.envs.simulator import Simulator
 from stsf_gym.geometry import compiled
+from stsf_gym.validation import ConfigError
 
 
 class SonarRing:

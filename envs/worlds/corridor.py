@@ -11,11 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stsf_gym.envs.config import ConfigError, LandmarkSpec, WorldConfig
+from stsf_gym.envs.config import LandmarkSpec, WorldConfig
 from stsf_gym.envs.rendering.scene import Board, Box, Cylinder
 from stsf_gym.envs.sensors.camera import PinholeCamera
 from stsf_gym.envs.simulator import Simulator
 from stsf_gym.geometry import compiled
+from stsf_gym.validation import ConfigError
 from stsf_gym.vision.landmarks import (
     board_corners,
     landmark_image,

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from stsf_gym.envs.config import ConfigError, EnvConfig, WorldConfig, build
+from stsf_gym.envs.config import EnvConfig, WorldConfig, build
 from stsf_gym.envs.worlds.coverage import board_centres, coverage_of
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig
 from stsf_gym.envs.worlds.layout import DIRECTIONS, Rect, boundary_walls
@@ -39,6 +39,7 @@ from stsf_gym.envs.worlds.visibility import (
     sample_arc_lengths,
     seen_matrix,
 )
+from stsf_gym.validation import ConfigError
 
 CAP = 3  # decimals of every coordinate in a generated world (millimetres)
 

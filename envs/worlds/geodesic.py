@@ -142,7 +142,7 @@ def route_geodesic_length(
     world: WorldConfig,
     start: Sequence[float],
     body_radius: float,
-    goals: Sequence[Sequence[float]] | None = None,
+    goals: Sequence[Sequence[float]] | np.ndarray | None = None,
 ) -> float:
     """The length (m) of the shortest collision-free route from ``start`` (x, y) through
     ``goals`` in order (default: the world's, :attr:`WorldConfig.goals`) for a disc robot of

@@ -248,8 +248,8 @@ def check_baseline(baseline: Path) -> None:
     :data:`~stsf_gym.layers.MAPPED_FOLDERS`), naming what it lacks, before any case runs.
     """
     # this process's own helpers: the file also runs as a script on a baseline's package
-    from stsf_gym.envs.config import ConfigError
     from stsf_gym.layers import MAPPED_FOLDERS
+    from stsf_gym.validation import ConfigError
 
     if baseline.is_file() and os.access(baseline, os.X_OK):
         probe = [str(baseline), "-c", f"import stsf_gym; print({PROBE_REPLY!r})"]

@@ -6,10 +6,11 @@ import argparse
 
 from stsf_gym.cli import inputs, options
 from stsf_gym.cli.reports import failed_cells, print_markdown
-from stsf_gym.config import ConfigError, parse_overrides
+from stsf_gym.config import parse_overrides
 from stsf_gym.envs.suite import suite_names
 from stsf_gym.experiments.benchmark.trained import expand_agents
 from stsf_gym.experiments.curve.run import accuracy_curve
+from stsf_gym.validation import ConfigError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -7,9 +7,9 @@ import argparse
 from pathlib import Path
 
 from stsf_gym.agents import pretrained
-from stsf_gym.config import ConfigError
 from stsf_gym.envs.suite import suite_names
 from stsf_gym.io import markdown_table
+from stsf_gym.validation import ConfigError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -9,7 +9,7 @@ from stsf_gym.bench import run_bench, run_step_bench
 from stsf_gym.bench.step import check_baseline
 from stsf_gym.cli import options
 from stsf_gym.cli.reports import print_markdown
-from stsf_gym.config import ConfigError
+from stsf_gym.validation import ConfigError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

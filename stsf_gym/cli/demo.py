@@ -9,9 +9,9 @@ import argparse
 from rich.console import Console
 
 from stsf_gym.cli import inputs, options
-from stsf_gym.config import ConfigError
 from stsf_gym.experiments.demo import DEMO_SUITE, DEMO_WORLDS, headline, run_demo
 from stsf_gym.terminal_table import fit_table
+from stsf_gym.validation import ConfigError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

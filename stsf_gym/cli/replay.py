@@ -7,8 +7,8 @@ from pathlib import Path
 
 from stsf_gym.cli import inputs, options
 from stsf_gym.cli.reports import print_markdown
-from stsf_gym.config import ConfigError
 from stsf_gym.recording import require_recording
+from stsf_gym.validation import ConfigError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

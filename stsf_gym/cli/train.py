@@ -17,10 +17,11 @@ from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.agents.training.train import train
 from stsf_gym.agents.training.training_envs import check_training_env
 from stsf_gym.cli import inputs, options
-from stsf_gym.config import ConfigError, parse_overrides
+from stsf_gym.config import parse_overrides
 from stsf_gym.envs.suite import suite_names
 from stsf_gym.experiments.campaign import campaign_jobs, run_campaign
 from stsf_gym.experiments.jobs.estimate import plan_line, record_rate, work_key
+from stsf_gym.validation import ConfigError
 
 TRAIN_DESC = "train"  # its measured rates: seconds per run of the same settings
 

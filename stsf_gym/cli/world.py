@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 
 from stsf_gym.cli import inputs, options
-from stsf_gym.config import ConfigError
 from stsf_gym.experiments.generated_worlds import plot_world_grid, write_world_yaml
+from stsf_gym.validation import ConfigError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

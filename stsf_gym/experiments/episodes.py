@@ -29,8 +29,6 @@ from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import TruePose, sensor_model
 from stsf_gym.yaml_layers import deep_merge
 
-RESULT_VERSION = 7  # bumped when EpisodeResult changes, so older episode files are rerun
-
 
 @dataclass(frozen=True)
 class EpisodeSpec:
@@ -330,8 +328,17 @@ def run_episodes(
     ``folder/trajectories/<episode>/``. With ``record`` (see :func:`run_episode`) each episode
     is recorded too: a saved episode without that recording is run again."""
     extra = {"record": record} if record else {}
-    jobs = [{"version": RESULT_VERSION, **asdict(spec), **extra} for spec in specs]
-    ran = run_jobs(EPISODE_JOBS, jobs, folder, desc, backend, workers, address, unit="episode")
+    jobs = [{**asdict(spec), **extra} for spec in specs]
+    ran = run_jobs(
+        EPISODE_JOBS,
+        jobs,
+        Path(folder) / "episodes.sqlite",
+        desc,
+        backend,
+        workers,
+        address,
+        unit="episode",
+    )
     results = [EpisodeResult(**r) for r in ran.results]
     for episode in results:
         write_trajectories(episode, Path(folder) / "trajectories")

@@ -15,7 +15,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.agents.registry import check_agents, trained_on
-from stsf_gym.envs.config import ConfigError
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.benchmark.trained import expand_agents
 from stsf_gym.experiments.compare import compare
@@ -32,6 +31,7 @@ from stsf_gym.experiments.reports import write_report
 from stsf_gym.experiments.result_tables import results_tables
 from stsf_gym.experiments.statistics import summarise
 from stsf_gym.results import SCHEMA_VERSION
+from stsf_gym.validation import ConfigError
 
 
 def evaluate(

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stsf_gym.envs.config import ConfigError, load_config, read_yaml
+from stsf_gym.envs.config import load_config, read_yaml
 from stsf_gym.envs.fault_spec import fault_span
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.episodes import (
@@ -38,6 +38,7 @@ from stsf_gym.experiments.plotting.maps import plot_errors
 from stsf_gym.experiments.reports import write_report
 from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, rendered, stat
+from stsf_gym.validation import ConfigError
 
 RECOVERY_FLOOR = 0.10  # m: an error under this counts as recovered whatever it was before
 PRE_FAULT_SECONDS = 10.0  # s of simulated time before the first fault: the pre-fault level

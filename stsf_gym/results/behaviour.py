@@ -73,7 +73,7 @@ def subsystem(path: str) -> str | None:
 
 def behaviour(paths: Iterable[str]) -> dict[str, int]:
     """``{subsystem: version}`` of the subsystems the code ``paths`` belong to."""
-    names = {subsystem(path) for path in paths} - {None}
+    names = {name for path in paths if (name := subsystem(path)) is not None}
     return {name: VERSIONS[name] for name in sorted(names)}
 
 
@@ -89,7 +89,7 @@ def _without_docstrings(tree: ast.AST) -> ast.AST:
         if isinstance(body, list) and body and isinstance(body[0], ast.Expr):
             value = body[0].value
             if isinstance(value, ast.Constant) and isinstance(value.value, str):
-                node.body = body[1:] or [ast.Pass()]
+                setattr(node, "body", body[1:] or [ast.Pass()])  # noqa: B010 - any node's body
     return tree
 
 

@@ -156,8 +156,8 @@ def loaded_modules() -> list[str]:
     paths (``stsf_gym/wrappers/estimate.py``, ``envs/simulator.py``), sorted."""
     folders = _package_folders()
     files = {getattr(module, "__file__", None) for module in list(sys.modules.values())}
-    found = {_relative(Path(os.path.abspath(f)), folders) for f in files if f and f.endswith(".py")}
-    return sorted(found - {None})
+    paths = (Path(os.path.abspath(f)) for f in files if f and f.endswith(".py"))
+    return sorted({found for path in paths if (found := _relative(path, folders)) is not None})
 
 
 def run_reporting_modules(fn: Callable[..., T], *args: Any) -> tuple[T, list[str]]:
@@ -175,7 +175,8 @@ def note_data_files(paths: Iterable[Path]) -> None:
     """Count the package files ``paths`` (a shipped agent's models) as code this run loaded:
     results made with other bytes there are stale."""
     folders = _package_folders()
-    _data_files.update(_relative(Path(os.path.abspath(path)), folders) for path in paths)
+    found = (_relative(Path(os.path.abspath(path)), folders) for path in paths)
+    _data_files.update(path for path in found if path is not None)
 
 
 def worker_result(reply: tuple[T, list[str]]) -> T:
@@ -191,25 +192,30 @@ def loaded_code() -> dict[str, str]:
     package data files it read (:func:`note_data_files`)."""
     folders = _package_folders()
     configs = {
-        _relative(path, folders)
+        found
         for folder in folders
         for path in folder.rglob("*.yaml")
-        if "__pycache__" not in path.parts
+        if "__pycache__" not in path.parts and (found := _relative(path, folders)) is not None
     }
     parents = {folder.name: folder.parent for folder in folders}
     code = {}
-    for path in sorted({*loaded_modules(), *_worker_modules, *configs, *_data_files} - {None}):
+    for path in sorted({*loaded_modules(), *_worker_modules, *configs, *_data_files}):
         parent = parents.get(path.split("/", 1)[0])
         if parent is not None and (parent / path).is_file():
             code[path] = file_digest(parent / path)
     return code
 
 
+def package_file(path: str) -> Path:
+    """The file of the package's relative ``path`` (``envs/robot.py``) in this installation."""
+    parents = {folder.name: folder.parent for folder in _package_folders()}
+    return parents[path.split("/", 1)[0]] / path
+
+
 def timed_code(loaded: Mapping[str, str]) -> dict[str, str]:
     """``{relative path: code_digest}`` of the ``loaded`` code (:func:`loaded_code`): what a
     timing depends on, docstrings and comments left out (a second per hundred modules)."""
-    parents = {folder.name: folder.parent for folder in _package_folders()}
-    return {path: code_digest(parents[path.split("/", 1)[0]] / path) for path in loaded}
+    return {path: code_digest(package_file(path)) for path in loaded}
 
 
 @functools.cache

@@ -23,7 +23,7 @@ import json
 from pathlib import Path
 
 from stsf_gym.agents.registry import trained_on
-from stsf_gym.envs.config import ConfigError, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.generated_env import check_distinct_worlds, world_seed_for
 from stsf_gym.envs.suite import Suite, load_suite
 from stsf_gym.envs.task import Polyline
@@ -47,8 +47,8 @@ from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
 from stsf_gym.results.provenance import by_digest, provenance
+from stsf_gym.validation import ConfigError
 
-BENCHMARK_VERSION = 3  # bumped when a cell changes meaning, so older cell files are rerun
 WORLD = "generated:test"
 
 
@@ -77,7 +77,6 @@ def benchmark_cells(
                 "env": suite.episode_env,
                 "options": estimator_options(estimator),
                 "values": {"suite": suite.name, "agent": agent, "estimator": estimator},
-                "version": BENCHMARK_VERSION,
             }
         )
     return cells
@@ -112,7 +111,9 @@ def benchmark(
     if record:
         cells = [{**cell, "record": record} for cell in cells]
     desc = f"benchmark {loaded.name}"
-    ran = run_jobs(CELL_JOBS, cells, out / "cells", desc, backend, workers, address, unit="episode")
+    ran = run_jobs(
+        CELL_JOBS, cells, out / "cells.sqlite", desc, backend, workers, address, unit="episode"
+    )
     own_sources = {
         agent: record["estimator"]
         for agent in dict.fromkeys(cell["agent"] for cell in cells)
@@ -149,7 +150,7 @@ def check_same_request(results: Path, request: dict) -> None:
         )
         raise ConfigError(
             f"{results.parent} holds the report of another benchmark ({said}); give another "
-            "--out (its cells/ folder may be copied there: finished cells are reused)"
+            "--out (its cells.sqlite may be copied there: finished cells are reused)"
         )
 
 

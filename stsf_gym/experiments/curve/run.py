@@ -10,7 +10,7 @@ of the dial's levels up to which the agent reaches the goal in at least
 :data:`REQUIRED_SUCCESS` of episodes at every level.
 
 Every episode is a cell (:mod:`stsf_gym.experiments.jobs.cells`), run on the job engine's
-local or Ray backend with its resume: each finished cell is a JSON file in ``<out>/cells/``.
+local or Ray backend with its resume: each finished cell is a row of ``<out>/cells.sqlite``.
 Writes ``curve.json`` (numbers, the results schema), ``curve.md`` and ``curve.png``.
 """
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from stsf_gym.envs.config import deep_merge, load_config
+from stsf_gym.envs.config import load_config
 from stsf_gym.envs.generated_env import parse_world
 from stsf_gym.episode_env import NOT_CONFIG, estimator_options
 from stsf_gym.experiments.curve.inputs import DIAL, check_request, curve_world
@@ -28,11 +28,11 @@ from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
 from stsf_gym.results.provenance import by_digest, provenance
+from stsf_gym.yaml_layers import deep_merge
 
 DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
 DEFAULT_ESTIMATORS = ("odometry", "conventional", "stsf", "ekf")
 REQUIRED_SUCCESS = 0.9
-CURVE_VERSION = 1  # bumped when a curve cell changes meaning, so older cell files are rerun
 #: The dial needs no camera; the estimators see simulated detections unless ``env`` says else.
 DIAL_ENV = {"camera": {"enabled": False}}
 ESTIMATOR_ENV = {"camera": {"mode": "fast"}}
@@ -84,7 +84,6 @@ def _cells(agent, world, seeds, estimator, env, options, level=None) -> list[dic
             "env": env,
             "options": options,
             "values": {**values, "seed": seed},
-            "version": CURVE_VERSION,
         }
         for seed in seeds
     ]
@@ -120,7 +119,14 @@ def accuracy_curve(
         agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
     )
     ran = run_jobs(
-        CELL_JOBS, cells, out / "cells", "accuracy curve", backend, workers, address, unit="episode"
+        CELL_JOBS,
+        cells,
+        out / "cells.sqlite",
+        "accuracy curve",
+        backend,
+        workers,
+        address,
+        unit="episode",
     )
     summary = summarise_curve(cells, ran.results)
     summary.update(

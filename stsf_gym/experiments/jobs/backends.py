@@ -1,12 +1,12 @@
 """Where jobs run: local processes (the default) or Ray tasks.
 
 Both are runners (:data:`~stsf_gym.experiments.jobs.spec.Runner`): they yield each job's result
-as it finishes, or a :class:`~stsf_gym.experiments.jobs.spec.Crash` for a job that raised or
-whose worker died, and :func:`~stsf_gym.experiments.jobs.cache.run_cached` saves it and moves
-the progress bar, so the cached files, resume and summary are the same whichever backend ran
-them. Each job's worker reports the package modules it loaded
-(:func:`~stsf_gym.results.provenance.worker_result`), so the run's provenance lists the code
-that ran on either backend; its result is unchanged.
+as it finishes (:class:`~stsf_gym.experiments.jobs.spec.Finished`), or a
+:class:`~stsf_gym.experiments.jobs.spec.Crash` for a job that raised or whose worker died, and
+:func:`~stsf_gym.experiments.jobs.cache.run_cached` stores it and moves the progress bar, so
+the store, resume and summary are the same whichever backend ran them. Each job's worker
+reports the package modules it had loaded (:func:`finished`): the code its stored result was
+made with, and part of the run's provenance.
 """
 
 from __future__ import annotations
@@ -21,10 +21,11 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
+from typing import Any
 
 from stsf_gym.experiments.jobs.orphan_watchdog import start_watchdog
-from stsf_gym.experiments.jobs.spec import Crash, Runner
-from stsf_gym.results.provenance import run_reporting_modules, worker_result
+from stsf_gym.experiments.jobs.spec import Crash, Finished, Runner
+from stsf_gym.results.provenance import loaded_modules, run_reporting_modules, worker_result
 from stsf_gym.validation import ConfigError
 
 BACKENDS = ("local", "ray")
@@ -118,13 +119,15 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
             "the ray backend needs Ray: pip install 'stsf-gym[ray]' (or pip install ray)"
         ) from err
 
-    def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterator[tuple[dict, object]]:
+    def run(
+        fn: Callable[[dict], object], jobs: list[dict]
+    ) -> Iterator[tuple[dict, Finished | Crash]]:
         if not jobs:
             return
         started = not ray.is_initialized()
         watchdog = None
         if started:
-            local = {} if address else {"num_cpus": workers * cpus_per_job}
+            local: dict[str, Any] = {} if address else {"num_cpus": workers * cpus_per_job}
             ray.init(address=address, include_dashboard=False, log_to_driver=False, **local)
             watchdog = None if address else start_watchdog()  # a kill leaves no Ray agents
         task = ray.remote(num_cpus=cpus_per_job, max_retries=0)(run_reporting_modules)
@@ -135,7 +138,7 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
                 done, _ = ray.wait(list(pending), num_returns=1)
                 job = pending.pop(done[0])
                 try:
-                    result = worker_result(ray.get(done[0]))
+                    result: Finished | Crash = finished(ray.get(done[0]))
                 except ray.exceptions.RayError as err:  # the job raised, its worker died...
                     result = Crash.of(err)
                 yield job, result
@@ -161,19 +164,23 @@ def process_runner(workers: int) -> Runner:
     its job's result was lost with the run, and a rerun redoes it.
     """
 
-    def run(fn: Callable[[dict], object], jobs: list[dict]) -> Iterator[tuple[dict, object]]:
+    def run(
+        fn: Callable[[dict], object], jobs: list[dict]
+    ) -> Iterator[tuple[dict, Finished | Crash]]:
         if not jobs:
             return
         if workers <= 1:
             for job in jobs:
                 try:
-                    yield job, fn(job)
+                    result = fn(job)
                 except Exception as err:
                     yield job, Crash.of(err)
+                else:
+                    yield job, Finished(result, loaded_modules())
             return
         slot, pools, lock = threading.local(), [], threading.Lock()
 
-        def in_own_process(job: dict) -> object:
+        def in_own_process(job: dict) -> tuple[object, list[str]]:
             if getattr(slot, "pool", None) is None:
                 slot.pool = ProcessPoolExecutor(
                     1,
@@ -193,8 +200,8 @@ def process_runner(workers: int) -> Runner:
             futures = {threads.submit(in_own_process, job): job for job in jobs}
             try:
                 for future in as_completed(futures):
-                    err = future.exception()
-                    yield futures[future], Crash.of(err) if err else worker_result(future.result())
+                    error = future.exception()
+                    yield futures[future], Crash.of(error) if error else finished(future.result())
             finally:
                 for future in futures:
                     future.cancel()
@@ -203,6 +210,12 @@ def process_runner(workers: int) -> Runner:
                         pool.shutdown(cancel_futures=True)
 
     return run
+
+
+def finished(reply: tuple[object, list[str]]) -> Finished:
+    """A worker's :func:`~stsf_gym.results.provenance.run_reporting_modules` reply as a
+    :class:`Finished`, its modules noted as the run's."""
+    return Finished(worker_result(reply), reply[1])
 
 
 def exit_with(run_pid: int) -> None:

@@ -4,7 +4,8 @@ Evaluate, compare, demo, the sweep, the benchmark, the accuracy curve, Table I, 
 the training campaign each make their own list of jobs and write their own report; between the
 two, :func:`run_jobs` forgets the failures a rerun must redo, resolves every job's
 configuration once, runs the jobs still to do on the chosen backend (local processes or Ray)
-and caches each result as it finishes.
+and stores each result as it finishes (one SQLite file per run,
+:mod:`~stsf_gym.experiments.jobs.store`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from pathlib import Path
 from stsf_gym.experiments.jobs.backends import make_runner
 from stsf_gym.experiments.jobs.cache import run_cached
 from stsf_gym.experiments.jobs.spec import JobKind, failed
+from stsf_gym.experiments.jobs.store import delete_rows, open_store, read_rows
 
 
 @dataclass(frozen=True)
@@ -31,7 +33,7 @@ class Ran:
 def run_jobs(
     kind: JobKind,
     jobs: list[dict],
-    folder: str | Path | None,
+    store: str | Path | None,
     desc: str = "jobs",
     backend: str = "local",
     workers: int = 2,
@@ -40,8 +42,8 @@ def run_jobs(
     on_done: Callable[[dict, object], None] | None = None,
     unit: str = "job",
 ) -> Ran:
-    """Run (or resume) ``jobs`` of ``kind``, each result cached in ``folder`` (None: the jobs
-    keep their own state and are run every time).
+    """Run (or resume) ``jobs`` of ``kind``, each result stored in ``store`` (an SQLite file;
+    None: the jobs keep their own state and are run every time).
 
     ``backend`` ``local`` runs ``workers`` processes (this process for 1); ``ray`` runs Ray
     tasks of ``cpus_per_job`` CPUs, on the cluster at ``address`` or a local instance of
@@ -52,15 +54,15 @@ def run_jobs(
     :class:`~stsf_gym.experiments.jobs.cache.JobsFailed` after the others finished.
     """
     runner = make_runner(backend, workers, address, cpus_per_job)
-    if folder is not None:
-        folder = Path(folder)
+    if store is not None:
+        store = Path(store)
         jobs = [json.loads(json.dumps(job)) for job in jobs]  # as they are saved and read back
-        forget_failures(jobs, folder, kind.key)
+        forget_failures(jobs, store, kind.key)
     configs = {kind.key(job): kind.resolve(job) for job in jobs} if kind.resolve else {}
     results = run_cached(
         kind.run,
         jobs,
-        folder,
+        store,
         kind.key,
         runner,
         desc,
@@ -73,16 +75,11 @@ def run_jobs(
     return Ran(results, configs)
 
 
-def forget_failures(jobs: list[dict], folder: Path, key: Callable[[dict], str]) -> None:
-    """Delete the files of failed jobs (kept as results, :func:`~.spec.failure`), and of jobs
-    whose file cannot be read (cut short by a kill, edited), so that this run redoes them."""
-    for job in jobs:
-        file = folder / f"{key(job)}.json"
-        if not file.is_file():
-            continue
-        try:
-            forget = failed(json.loads(file.read_text())["result"])
-        except (ValueError, KeyError, TypeError):  # not JSON, or not a job's record
-            forget = True
-        if forget:
-            file.unlink()
+def forget_failures(jobs: list[dict], store: Path, key: Callable[[dict], str]) -> None:
+    """Delete the rows of ``jobs`` that failed (kept as results, :func:`~.spec.failure`), so
+    that this run redoes them."""
+    if not store.is_file():  # nothing stored yet: nothing made before the run's checks pass
+        return
+    keys = {key(job) for job in jobs}
+    rows = read_rows(open_store(store))
+    delete_rows(store, [k for k, row in rows.items() if k in keys and failed(row.result)])

@@ -1,10 +1,10 @@
-"""What the job engine runs: a kind of job, and what a job that failed leaves behind.
+"""What the job engine runs: a kind of job, what a finished job hands back, what a failed one
+leaves behind.
 
-A job is a JSON-friendly dict that carries its own ``version`` (bumped by its kind when its
-result changes meaning, so older cached results are rerun). Its :class:`JobKind` says how to
-run one (in a worker process or a Ray task, so it must be a module-level function), its key
-(the file name of its cached result, unique within a run) and its resolved configuration
-(every value it runs with: part of the fingerprint a cached result must match).
+A job is a JSON-friendly dict. Its :class:`JobKind` says how to run one (in a worker process
+or a Ray task, so it must be a module-level function), its key (unique within a run) and its
+resolved configuration (every value it runs with: what a stored result must match, with the
+code it ran with, :mod:`stsf_gym.results.freshness`).
 """
 
 from __future__ import annotations
@@ -28,6 +28,15 @@ class JobKind:
 
 
 @dataclass(frozen=True)
+class Finished:
+    """What a runner yields for a job that returned: its result and the package modules its
+    process had loaded (relative paths), the code the result was made with."""
+
+    result: object
+    modules: list[str]
+
+
+@dataclass(frozen=True)
 class Crash:
     """What a runner yields for a job whose worker raised or died: the error, in words."""
 
@@ -42,8 +51,8 @@ class Crash:
         return cls(f"{type(err).__name__}: {first_line}")
 
 
-#: Runs ``fn`` on each job, yielding ``(job, result or Crash)`` in the order they finish.
-Runner = Callable[[Callable[[dict], object], list[dict]], Iterable[tuple[dict, object]]]
+#: Runs ``fn`` on each job, yielding ``(job, Finished or Crash)`` in the order they finish.
+Runner = Callable[[Callable[[dict], object], list[dict]], Iterable[tuple[dict, Finished | Crash]]]
 
 
 def failure(err: BaseException, details: str = "") -> dict:

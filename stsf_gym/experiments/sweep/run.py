@@ -1,6 +1,6 @@
 """``stsf-gym sweep FILE``: run the cells of a sweep file and summarise them.
 
-Each cell's result is its own JSON file in ``<out>/cells/``, written when the cell finishes;
+Each cell's result is a row of ``<out>/cells.sqlite``, written when the cell finishes;
 a rerun skips finished cells and retries failed ones. The file is read by
 :mod:`stsf_gym.experiments.sweep.spec`, the summary written by
 :mod:`stsf_gym.experiments.sweep.report`.
@@ -32,7 +32,7 @@ def run_sweep(
     ran = run_jobs(
         CELL_JOBS,
         cells,
-        out / "cells",
+        out / "cells.sqlite",
         f"sweep {sweep.name}",
         backend,
         workers,

@@ -29,20 +29,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from stsf_gym.agents.registry import make_agent
-from stsf_gym.envs.config import (
-    CONFIG_DIR,
-    ConfigError,
-    deep_merge,
-    load_config,
-    overrides_to_tree,
-    read_yaml,
-)
+from stsf_gym.envs.config import CONFIG_DIR, load_config, overrides_to_tree, read_yaml
 from stsf_gym.envs.generated_env import generated_label, parse_world
 from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.jobs.cells import cell_kind
+from stsf_gym.validation import ConfigError
+from stsf_gym.yaml_layers import deep_merge
 
-CELL_VERSION = 1  # bumped when a cell's result changes meaning, so older cell files are rerun
 FILE_KEYS = ("base", "grid", "one_at_a_time")
 BASE_DEFAULTS = {
     "kind": "evaluate",
@@ -233,4 +227,4 @@ def _cell(base: dict, point: dict, sections: tuple[str, ...], seed_offset: int) 
     cell["seed"] += seed_offset
     values = {**point, "seed": cell["seed"]} if "seed" in point else point
     options = estimator_options(cell["estimator"], **cell.get("options", {}))
-    return {**cell, "options": options, "values": values, "version": CELL_VERSION}
+    return {**cell, "options": options, "values": values}

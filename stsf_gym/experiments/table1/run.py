@@ -20,15 +20,7 @@ from typing import Annotated
 
 import numpy as np
 
-from stsf_gym.envs.config import (
-    CONFIG_DIR,
-    ConfigError,
-    build,
-    deep_merge,
-    load_config,
-    overrides_to_tree,
-    read_yaml,
-)
+from stsf_gym.envs.config import CONFIG_DIR, build, load_config, overrides_to_tree, read_yaml
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.experiments.jobs.spec import JobKind
@@ -42,8 +34,8 @@ from stsf_gym.fusion import stereo_range_bound
 from stsf_gym.geometry import wrap_angle
 from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, finite_or_none, stat
-from stsf_gym.validation import Count, Positive, Range, require
-from stsf_gym.yaml_layers import shown
+from stsf_gym.validation import ConfigError, Count, Positive, Range, require
+from stsf_gym.yaml_layers import deep_merge, shown
 
 #: Table I of the paper: world distance, conventional estimate and error, STSF estimate and error.
 PAPER_TABLE1 = [
@@ -160,7 +152,7 @@ def run_table1(
     jobs = [{"config": cfg.__dict__, "seed": s} for s in range(seed, seed + cfg.seeds)]
     resolved = resolved_table1(cfg)
     kind = JobKind(_run_seed, lambda job: f"seed_{job['seed']}", lambda job: resolved)
-    ran = run_jobs(kind, jobs, out / "seeds", "table1", workers=workers, unit="seed")
+    ran = run_jobs(kind, jobs, out / "seeds.sqlite", "table1", workers=workers, unit="seed")
     results = [SeedResult(**r) for r in ran.results]
     rows = summarise(cfg, results)
     summary = {
