@@ -77,7 +77,7 @@ docs: $(DOCS_STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
-	rm -rf build/__editable__.*
+	rm -rf build/__editable__.* && mkdir -p build/editable-wheel
 	$(BIN)/python -c "from setuptools import setup; setup()" -q editable_wheel --mode strict \
 		--dist-dir build/editable-wheel >/dev/null 2>&1
 	$(BIN)/mypy build/__editable__.*/stsf_gym

@@ -60,7 +60,9 @@ class ActiveFollower(CautiousFollower):
         """The map's boards and walls as the camera's pointing sees them."""
         self.pointer = pointer
         self.pan_margin = math.radians(PAN_MARGIN_DEG)
-        self._phase, self._phase_goal, self._view_arc = None, None, None
+        self._phase: str | None = None
+        self._phase_goal: int | None = None  # the goal (its goals_left) the phase belongs to
+        self._view_arc: float | None = None
         self.detours = 0  # goals at which it drove to a viewpoint (for the behaviour report)
 
     def _drive(self, pose: np.ndarray, sonar: np.ndarray | None) -> np.ndarray:
@@ -105,7 +107,7 @@ class ActiveFollower(CautiousFollower):
         """Drive to the viewpoint and look there; once sure or the look is spent, drive back to
         the goal and declare there."""
         along = self.path.project(self._pose)
-        if self._phase == THERE:
+        if self._phase == THERE and self._view_arc is not None:
             if abs(along - self._view_arc) > ARRIVED_M:
                 return self._go_to(self._view_arc)
             if not self._sure() and self._waited < self._budget - 1e-9:
@@ -157,11 +159,13 @@ class ActiveFollowerAgent(CautiousFollowerAgent):
         """An active follower of this episode's path, told the task's settings and the map."""
         super().begin(env)
         landmarks, walls = robot_map(env)
-        robot = env.unwrapped.config.robot
+        robot = env.unwrapped.config.robot  # type: ignore[attr-defined]
         pointer = LandmarkPointer(
             landmarks, walls, robot.camera_forward, math.radians(robot.pan_limit_deg)
         )
-        self.follower.configure_activity(pointer)
+        follower = self.follower
+        assert isinstance(follower, ActiveFollower)
+        follower.configure_activity(pointer)
 
     def config(self) -> dict:
         """The cautious follower's settings and the activity's constants."""

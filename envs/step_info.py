@@ -27,7 +27,7 @@ def stop_info(stops: Sequence[Stop]) -> dict:
     """``last_stop`` of ``info``: the latest of ``stops`` as ``{goal, time, position (2,),
     true_distance_m, success}``, or :data:`NO_STOP` if none."""
     if not stops:
-        return {**NO_STOP, "position": NO_STOP["position"].copy()}
+        return {**NO_STOP, "position": np.array(NO_STOP["position"], copy=True)}
     stop = stops[-1]
     return {
         "goal": int(stop.goal),

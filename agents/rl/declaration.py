@@ -91,7 +91,7 @@ class DiscreteActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
         layout = env.get_wrapper_attr("action_layout")
         if tuple(layout.names) != ("v", "w", "stop"):
             raise ValueError(f"DiscreteActions needs the action [v, w, stop], got {layout.names}")
-        robot = env.unwrapped.config.robot
+        robot = env.unwrapped.config.robot  # type: ignore[attr-defined]
         self.action_names = tuple(name for name, *_ in DISCRETE_ACTIONS)
         self._table = np.array(
             [

@@ -38,7 +38,7 @@ class MapView:
     """The map of ``env``'s current world seen from an estimated pose (see the module)."""
 
     def __init__(self, env: gym.Env, scale: float) -> None:
-        cfg = env.unwrapped.config
+        cfg = env.unwrapped.config  # type: ignore[attr-defined]
         landmarks, walls = robot_map(env)
         self.scale = scale
         self._centres = np.array([lm.centre[:2] for lm in landmarks.values()]).reshape(-1, 2)

@@ -70,7 +70,9 @@ class ResidualFollower(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.action_layout = ActionLayout(("v", "w", "hold"))
         self.action_space = self.action_layout.space
         proposal = spaces.Box(-1.0, 1.0, (3,), np.float32)
-        self.observation_space = spaces.Dict({**env.observation_space.spaces, PROPOSAL: proposal})
+        inner_space = env.observation_space
+        assert isinstance(inner_space, spaces.Dict), inner_space
+        self.observation_space = spaces.Dict({**inner_space.spaces, PROPOSAL: proposal})
         self.follower = FollowerAgent()
         self._proposal = np.zeros(3, np.float32)
 

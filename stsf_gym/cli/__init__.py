@@ -50,14 +50,14 @@ def build_parser(command: str | None) -> argparse.ArgumentParser:
     command's own parser is its attribute ``command_parser`` (None without a command)."""
     parser = argparse.ArgumentParser(prog="stsf-gym", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    parser.command_parser = None
+    parser.command_parser = None  # type: ignore[attr-defined]
     for name, (module, help_line) in COMMANDS.items():
         sub = commands.add_parser(name, help=help_line)
         if name == command:
             handler = importlib.import_module(f"{__name__}.{module}")
             handler.add_arguments(sub)
             sub.set_defaults(run=handler.run)
-            parser.command_parser = sub
+            parser.command_parser = sub  # type: ignore[attr-defined]
     return parser
 
 
@@ -85,8 +85,9 @@ def main(argv: list[str] | None = None) -> int:
     other exception is a bug: it propagates with its traceback (exit code 1)."""
     words = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(_command(words))
-    if parser.command_parser is not None:  # an unknown option first: named with the one meant
-        refuse_unknown(parser.command_parser, words)
+    command_parser = getattr(parser, "command_parser", None)
+    if command_parser is not None:  # an unknown option first: named with the one meant
+        refuse_unknown(command_parser, words)
     args = parser.parse_args(words)
     set_command(["stsf-gym", *words])
     error = f"stsf-gym {args.command}: error:"

@@ -127,11 +127,9 @@ def plan(jobs: list[dict], workers: int) -> str:
     (:mod:`~stsf_gym.experiments.jobs.estimate`)."""
     first = jobs[0]
     run = resolve_run(
-        *(first[k] for k in ("algo", "estimator", "timesteps", "seed", "world", "config")),
-        first["overrides"],
-        first["n_envs"],
-        first["suite"],
-    )
+        first["algo"], first["estimator"], first["timesteps"], first["seed"], first["world"],
+        first["config"], first["overrides"], first["n_envs"], first["suite"],
+    )  # fmt: skip
     for job in jobs:
         check_out(
             Path(job["out"]), run_kind(run.algo, job["estimator"], job["world"], job["suite"])

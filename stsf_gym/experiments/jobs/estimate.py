@@ -116,7 +116,8 @@ def record_rate(desc: str, key: str, seconds: float, jobs: int) -> None:
     ``key`` (:func:`work_key`) and as its ``last``."""
     rates = _rates()
     rate = {"seconds": round(seconds, 2), "jobs": jobs}
-    kept = rates.get(desc) if isinstance(rates.get(desc), dict) else {}
+    earlier = rates.get(desc)
+    kept: dict = earlier if isinstance(earlier, dict) else {}
     rates[desc] = {**kept, key: rate, "last": rate}
     try:
         rates_file().parent.mkdir(parents=True, exist_ok=True)
