@@ -91,7 +91,8 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         if not isinstance(config, ObservationConfig):  # a mapping, as a JSON spec holds it
             config = observation_config(config)
         # recorded as plain values, so the env's spec survives EnvSpec.to_json/from_json
-        gym.utils.RecordConstructorArgs.__init__(self, config=asdict(config))
+        recorded = {**asdict(config), "lookahead": list(config.lookahead)}  # as JSON reads it
+        gym.utils.RecordConstructorArgs.__init__(self, config=recorded)
         gym.ObservationWrapper.__init__(self, env)
         missing = sorted({"pose", *TASK_KEYS} - set(env.observation_space.spaces))
         if "pose" in missing:
