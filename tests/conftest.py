@@ -160,3 +160,22 @@ def run_rl_zoo3(env_id: str, folder, *arguments: str):
         cwd=folder,
         env={**os.environ, "PYTHONPATH": str(root)},
     )
+
+
+def interrupt_in_the_third_rollout(monkeypatch, run) -> None:
+    """``run()`` (a tiny training of :data:`TINY_LEARNER`'s rollouts of 32) stopped by a
+    KeyboardInterrupt once past 70 timesteps, in its third rollout, as Ctrl-C stops it."""
+    from stsf_gym.agents.training.training_log import EpisodeLog
+
+    original = EpisodeLog._on_step
+
+    def interrupt(self):
+        original(self)
+        if self.num_timesteps > 70:
+            raise KeyboardInterrupt
+        return True
+
+    monkeypatch.setattr(EpisodeLog, "_on_step", interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        run()
+    monkeypatch.setattr(EpisodeLog, "_on_step", original)

@@ -10,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from conftest import TINY_LEARNER, train_tiny_learner
+from conftest import TINY_LEARNER, interrupt_in_the_third_rollout, train_tiny_learner
 from stable_baselines3 import PPO
 
 from stsf_gym.agents.sb3_agent import model_metadata
@@ -22,7 +22,7 @@ from stsf_gym.agents.training.finetune import (
 )
 from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.agents.training.stop_prior import declaring_share, set_stop_prior
-from stsf_gym.agents.training.training_log import EpisodeLog, curve_points
+from stsf_gym.agents.training.training_log import curve_points
 from stsf_gym.validation import ConfigError
 
 
@@ -50,18 +50,7 @@ def test_finetuning_starts_from_the_clone_and_resumes_to_the_same_weights(
     assert stages == {"demonstrations", "reward"}  # both stages on the learning curve
 
     interrupted = tmp_path / "interrupted"
-    original = EpisodeLog._on_step
-
-    def interrupt_in_the_third_rollout(self):
-        original(self)
-        if self.num_timesteps > 70:
-            raise KeyboardInterrupt
-        return True
-
-    monkeypatch.setattr(EpisodeLog, "_on_step", interrupt_in_the_third_rollout)
-    with pytest.raises(KeyboardInterrupt):
-        train_tiny_learner(interrupted)
-    monkeypatch.setattr(EpisodeLog, "_on_step", original)
+    interrupt_in_the_third_rollout(monkeypatch, lambda: train_tiny_learner(interrupted))
     assert not (interrupted / "model.zip").exists()
     resumed = train_tiny_learner(interrupted)
     assert resumed["resumed_from"] == 64 and resumed["timesteps"] == 96

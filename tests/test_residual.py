@@ -7,12 +7,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from conftest import TINY_LEARNER, interrupt_in_the_third_rollout
 from stable_baselines3 import PPO
 
 from stsf_gym.agents.follower_agent import FollowerAgent
 from stsf_gym.agents.policy_stack import policy_stack
 from stsf_gym.agents.rl.residual import ResidualConfig, ResidualFollower, start_as_follower
-from stsf_gym.agents.training.training_log import EpisodeLog
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import make_episode_env
 
@@ -99,18 +99,12 @@ def test_a_fresh_policy_starts_with_a_zero_mean_and_the_configured_exploration()
         stack.close()
 
 
+#: The tiny learner's settings for the residual stage: no demonstrations, its reward budget
+#: and warm-up under ``residual.finetune``.
 TINY_RESIDUAL = {
-    "n_eval_episodes": 1,
-    "eval_freq": 64,
-    "env.sim.max_episode_seconds": 6.0,
-    "train_env.sim.max_episode_seconds": 6.0,
-    "train_env.task.leg_min": 1.0,
-    "train_env.task.leg_max": 1.5,
-    "n_steps": 32,
-    "batch_size": 32,
-    "n_epochs": 2,
-    "residual.finetune.timesteps": 96,
-    "residual.finetune.value_warmup_steps": 32,
+    **{k: v for k, v in TINY_LEARNER.items() if not k.startswith(("demonstrations", "finetune"))},
+    "residual.finetune.timesteps": TINY_LEARNER["finetune.timesteps"],
+    "residual.finetune.value_warmup_steps": TINY_LEARNER["finetune.value_warmup_steps"],
 }
 
 
@@ -143,18 +137,7 @@ def test_the_residual_stage_records_its_algo_and_resumes_to_the_same_weights(tmp
     finally:
         env.close()
     interrupted = tmp_path / "interrupted"
-    original = EpisodeLog._on_step
-
-    def interrupt_in_the_third_rollout(self):
-        original(self)
-        if self.num_timesteps > 70:
-            raise KeyboardInterrupt
-        return True
-
-    monkeypatch.setattr(EpisodeLog, "_on_step", interrupt_in_the_third_rollout)
-    with pytest.raises(KeyboardInterrupt):
-        train_tiny_residual(interrupted)
-    monkeypatch.setattr(EpisodeLog, "_on_step", original)
+    interrupt_in_the_third_rollout(monkeypatch, lambda: train_tiny_residual(interrupted))
     resumed = train_tiny_residual(interrupted)
     assert resumed["resumed_from"] == 64 and resumed["timesteps"] == 96
     ours, theirs = _weights(interrupted / "model.zip"), _weights(whole / "model.zip")
