@@ -246,25 +246,34 @@ def test_an_episode_as_the_code_writes_it_passes_its_check():
 
 
 def test_a_saved_result_that_fails_its_check_is_recomputed_and_named(tmp_path, capsys):
+    import sqlite3
+
     from stsf_gym.experiments.jobs.cache import run_cached
     from stsf_gym.experiments.jobs.checks import cell_problem
+    from stsf_gym.experiments.jobs.spec import Finished
 
     def runner(fn, jobs):
-        return ((job, fn(job)) for job in jobs)
+        return ((job, Finished(fn(job), ["stsf_gym/metrics.py"])) for job in jobs)
 
     def run(job: dict) -> dict:
         return {"outcome": "goal", "navigation": {"stops": [stop(0.1, True)]}}
 
+    def stored() -> str:
+        with sqlite3.connect(store) as db:
+            return db.execute("SELECT result FROM results WHERE key = 'cell'").fetchone()[0]
+
+    store = tmp_path / "cells.sqlite"
     jobs = [{"seed": 0}]
-    args = (jobs, tmp_path, lambda job: "cell", runner, "cells", lambda job: RADIUS)
+    args = (jobs, store, lambda job: "cell", runner, "cells", lambda job: RADIUS)
     run_cached(run, *args, check=cell_problem)
-    saved = tmp_path / "cell.json"
-    saved.write_text(saved.read_text().replace("0.1", "5.0"))  # a stop 5 m off, a success
+    edited = stored().replace("0.1", "5.0")  # a stop 5 m off, marked a success, by hand
+    with sqlite3.connect(store) as db:
+        db.execute("UPDATE results SET result = ? WHERE key = 'cell'", (edited,))
     assert run_cached(run, *args, check=cell_problem) == [run({})]
     err = capsys.readouterr().err
     assert "1 saved result(s) in" in err and "fail their own check" in err
     assert "(e.g. cell: stops[0] is marked a success 5 m from its goal" in err
-    assert '"true_distance_m": 0.1' in saved.read_text()  # recomputed
+    assert '"true_distance_m": 0.1' in stored()  # recomputed
 
 
 def test_json_files_hold_no_nan(tmp_path):

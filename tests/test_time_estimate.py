@@ -7,6 +7,7 @@ import pytest
 from stsf_gym.experiments.jobs import estimate
 from stsf_gym.experiments.jobs.cache import run_cached
 from stsf_gym.experiments.jobs.estimate import Stopwatch, duration, plan_line, work_key
+from stsf_gym.experiments.jobs.spec import Finished
 
 
 @pytest.fixture(autouse=True)
@@ -58,12 +59,13 @@ def test_run_cached_says_its_plan_on_stderr_before_the_first_job(tmp_path, capsy
     def runner(fn, jobs):
         said.append(capsys.readouterr().err)  # what was printed before any job ran
         for job in jobs:
-            yield job, fn(job)
+            yield job, Finished(fn(job), ["stsf_gym/metrics.py"])
 
-    run_cached(lambda job: job["seed"], _jobs(3), tmp_path, lambda j: str(j["seed"]), runner,
+    store = tmp_path / "seeds.sqlite"
+    run_cached(lambda job: job["seed"], _jobs(3), store, lambda j: str(j["seed"]), runner,
                "table1", unit="seed")  # fmt: skip
     assert "table1: 3 seed(s) to run on 1 process(es)" in said[0]
-    run_cached(lambda job: job["seed"], _jobs(3), tmp_path, lambda j: str(j["seed"]), runner,
+    run_cached(lambda job: job["seed"], _jobs(3), store, lambda j: str(j["seed"]), runner,
                "table1", unit="seed")  # fmt: skip
     assert "table1: all 3 seed(s) already done" in said[1]
 
