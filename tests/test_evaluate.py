@@ -6,6 +6,7 @@ import pytest
 
 import stsf_gym.experiments.episodes as episodes
 from stsf_gym.experiments.evaluate import evaluate
+from stsf_gym.experiments.jobs.store import read_rows
 from stsf_gym.results import SCHEMA_VERSION, check_rows
 from stsf_gym.results.schema import NEES_VERDICTS
 
@@ -27,9 +28,9 @@ def test_evaluate_writes_table_figures_and_resumes(tmp_path, monkeypatch):
         lines = (folder / "estimate.txt").read_text().splitlines()
         assert len(lines) == 1 + 41 and len(lines[1].split()) == 8  # header, t = 0 and 40 steps
         assert (folder / "truth.txt").read_text().splitlines()[-1].startswith("4.0")
-    files = sorted((tmp_path / "episodes").glob("*.json"))
-    assert len(files) == 2
-    stamps = [f.stat().st_mtime_ns for f in files]
+    store = tmp_path / "episodes" / "episodes.sqlite"
+    stamps = {key: row.written_ns for key, row in read_rows(store).items()}
+    assert len(stamps) == 2  # one row per episode
 
     def interrupted(job):
         raise KeyboardInterrupt
@@ -37,10 +38,10 @@ def test_evaluate_writes_table_figures_and_resumes(tmp_path, monkeypatch):
     monkeypatch.setattr(episodes, "run_episode", interrupted)
     again, _ = evaluate(tmp_path, ["odometry"], seeds=2, world="straight_10m", workers=1, env=FAST)
     assert again["rows"] == summary["rows"]  # nothing rerun: both episodes were kept
-    assert [f.stat().st_mtime_ns for f in files] == stamps
+    assert {key: row.written_ns for key, row in read_rows(store).items()} == stamps
     with pytest.raises(KeyboardInterrupt):  # a third seed is new work: it runs (and stops)
         evaluate(tmp_path, ["odometry"], seeds=3, world="straight_10m", workers=1, env=FAST)
-    assert len(list((tmp_path / "episodes").glob("*.json"))) == 2  # earlier results intact
+    assert len(read_rows(store)) == 2  # earlier results intact
 
 
 @pytest.mark.slow
@@ -152,4 +153,4 @@ def test_evaluate_on_ray_gives_the_local_rows(tmp_path):
         return [{k: v for k, v in row.items() if k != "ms_per_step"} for row in rows]
 
     assert untimed(on_ray["rows"]) == untimed(local["rows"])
-    assert len(list((tmp_path / "ray" / "episodes").glob("*.json"))) == 2
+    assert len(read_rows(tmp_path / "ray" / "episodes" / "episodes.sqlite")) == 2

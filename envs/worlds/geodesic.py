@@ -34,7 +34,6 @@ from itertools import pairwise
 
 import numpy as np
 import shapely
-from scipy.sparse.csgraph import dijkstra
 from shapely.affinity import rotate, translate
 from shapely.geometry.polygon import orient
 
@@ -129,6 +128,8 @@ class FreeSpace:
         to_corners = self.free_lengths(np.repeat(ends, count, 0), np.tile(self.corners, (2, 1)))
         graph[:2, 2:] = to_corners.reshape(2, count)
         graph[2:, :2] = graph[:2, 2:].T
+        from scipy.sparse.csgraph import dijkstra  # here: the env's import path stays SciPy-free
+
         length = float(dijkstra(graph, directed=False, indices=0)[1])
         if not np.isfinite(length):
             raise ValueError(

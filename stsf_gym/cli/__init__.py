@@ -84,6 +84,8 @@ def main(argv: list[str] | None = None) -> int:
     failed twice, or a full disk: exit code 1 (finished results kept, a rerun resumes). Any
     other exception is a bug: it propagates with its traceback (exit code 1)."""
     words = sys.argv[1:] if argv is None else list(argv)
+    if "--verbose" in words:  # before the parser: building it loads PyBullet, banners and all
+        os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
     parser = build_parser(_command(words))
     command_parser = getattr(parser, "command_parser", None)
     if command_parser is not None:  # an unknown option first: named with the one meant
@@ -93,9 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     error = f"stsf-gym {args.command}: error:"
     try:
         preflight(args)
-        if args.verbose:
-            os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
-        else:
+        if not args.verbose:
             _silence_c_stdout()
         result = args.run(args)
     except (
