@@ -50,10 +50,10 @@ DEFAULT_DECLARATION = "stop-goes-on"  # the pilot's choice: docs/agents/rl-from-
 
 
 def rl_hyperparams(suite: str, estimator: str) -> Hyperparams:
-    """The trainer's settings for ``suite`` driven on ``estimator`` (PPO's file, ``suites``
-    section and the suite id's section)."""
+    """The trainer's settings for ``suite`` driven on ``estimator`` (PPO's file: its ``suites``
+    and ``rl-ready`` sections and the suite id's section)."""
     return load_hyperparams(
-        "ppo", env_id_for(generated_label("train"), estimator, suite), suite=True
+        "ppo", env_id_for(generated_label("train"), estimator, suite), rl_ready=True
     )
 
 

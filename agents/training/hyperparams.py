@@ -54,6 +54,7 @@ RESERVED = {
     "_init_setup_model", "action_noise", "rollout_buffer_class", "replay_buffer_class",
 }  # fmt: skip
 SUITES = "suites"  # the section for training on a benchmark suite (declared arrival)
+RL_READY = "rl-ready"  # over ``suites``: the RL-ready ids' learner (agents/rl/ready.py)
 ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leaky_relu": "LeakyReLU"}
 #: Where ``load_hyperparams``'s ``overrides`` come from, as errors name it.
 OVERRIDES = "--set"
@@ -198,25 +199,32 @@ def load_hyperparams(
     path: str | Path | None = None,
     overrides: dict[str, Any] | None = None,
     suite: bool = False,
+    rl_ready: bool = False,
 ) -> Hyperparams:
     """The ``default`` section of ``path`` (``configs/agents/<algo>.yaml``), with the ``suites``
-    section when training on a suite, the ``env_id`` section and then ``overrides`` (flat
-    ``key.sub=value`` or nested) over it. ``algo``'s learner names the file."""
+    section when training on a suite, the ``rl-ready`` section for the RL-ready ids, the
+    ``env_id`` section and then ``overrides`` (flat ``key.sub=value`` or nested) over it.
+    ``algo``'s learner names the file."""
     cls = algorithm_class(algo)
     path = Path(path or CONFIG_DIR / "agents" / f"{learner_of(algo)}.yaml")
     data = read_yaml(path)
     for section, body in data.items():
-        if section not in ("default", SUITES) and section not in gym.registry:
+        if section not in ("default", SUITES, RL_READY) and section not in gym.registry:
             close = difflib.get_close_matches(str(section), list(gym.registry), n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ConfigError(
-                f"{path}: unknown section {section!r}{hint}; use 'default' or a registered "
-                "env id such as 'stsf_gym/Corridor-Truth-v0'"
+                f"{path}: unknown section {section!r}{hint}; use 'default', 'suites', "
+                "'rl-ready' or a registered env id such as 'stsf_gym/Corridor-Truth-v0'"
             )
         if not isinstance(body, dict):
             raise ConfigError(f"{path}: section {section!r} must be a mapping, got {body!r}")
     chosen = env_id if env_id in data else "default"
-    sections = ["default", *([SUITES] if suite else []), *([env_id] if env_id else [])]
+    sections = [
+        "default",
+        *([SUITES] if suite or rl_ready else []),
+        *([RL_READY] if rl_ready else []),
+        *([env_id] if env_id else []),
+    ]
     layers = [(f"{shown(path)} [{name}]", data.get(name, {})) for name in sections]
     layers.append((OVERRIDES, overrides_to_tree(overrides or {})))
     merged: dict = {}

@@ -13,7 +13,7 @@ decisions per second.
 Usage::
 
     python benchmarks/studies/declaration_pilot.py [--suite corridor]
-        [--designs stop-goes-on,discrete] [--algo ppo|sac] [--decisions 40960] [--seed 0]
+        [--designs stop-goes-on,discrete] [--algo ppo|sac] [--decisions 204800] [--seed 0]
         [--out benchmarks/results/declaration-pilot]
 
 Each design's unit (``<out>/<algo>-<design>/result.json``) is written when it finishes; a rerun
@@ -25,10 +25,12 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import shutil
 import time
 from pathlib import Path
 
 import numpy as np
+import torch
 from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.callbacks import EvalCallback
 from stable_baselines3.common.env_util import make_vec_env
@@ -66,6 +68,39 @@ def leg_outcomes(monitor_dir: Path) -> dict:
     }
 
 
+def unit_settings(suite: str, algo: str, decisions: int, eval_every: int, seed: int) -> dict:
+    """What a unit's result depends on besides its design: a unit run with other settings is
+    run again (its result kept beside, as ``result.<n>.json``)."""
+    hp = rl_hyperparams(suite, "truth")
+    learner = {"policy_kwargs": hp.training.policy_kwargs, **hp.algo_kwargs}
+    return {
+        "suite": suite,
+        "decisions": decisions,
+        "eval_every": eval_every,
+        "seed": seed,
+        "learner": learner if algo == "ppo" else {"sac": "SB3 defaults, net_arch [256, 256]"},
+    }
+
+
+def finished(unit: Path, settings: dict) -> bool:
+    """Whether ``unit`` holds a result of ``settings``; one of other settings is set aside."""
+    result = unit / "result.json"
+    if not result.is_file():
+        return False
+    if json.loads(result.read_text()).get("settings") == settings:
+        return True
+    kept = next(
+        unit / f"result.{n}.json"
+        for n in range(1, 1000)
+        if not (unit / f"result.{n}.json").exists()
+    )
+    result.rename(kept)
+    for working in ("monitor", "eval"):
+        shutil.rmtree(unit / working, ignore_errors=True)
+    print(f"{unit}: its result ran with other settings; kept as {kept.name}, running again")
+    return False
+
+
 def run_design(
     suite: str, design: str, algo: str, decisions: int, eval_every: int, seed: int, out: Path
 ) -> dict:
@@ -87,8 +122,14 @@ def run_design(
     )
     policy_kwargs = policy_kwargs_for_sb3(hp.training.policy_kwargs)
     if algo == "ppo":
-        ppo = {k: v for k, v in hp.algo_kwargs.items()}
-        model = PPO("MlpPolicy", venv, seed=seed, policy_kwargs=policy_kwargs, device="cpu", **ppo)
+        model = PPO(
+            "MlpPolicy",
+            venv,
+            seed=seed,
+            policy_kwargs=policy_kwargs,
+            device="cpu",
+            **hp.algo_kwargs,
+        )
     else:
         model = SAC(
             "MlpPolicy",
@@ -106,6 +147,7 @@ def run_design(
         deterministic=True,
         verbose=0,
     )
+    torch.set_num_threads(1)  # as the trainer: the learner leaves the cores to the env processes
     started, before = time.perf_counter(), reference_ms()
     model.learn(decisions, callback=callback, progress_bar=True)
     seconds = time.perf_counter() - started
@@ -119,6 +161,7 @@ def run_design(
         "seed": seed,
         "decisions": decisions,
         "env_id": env_id,
+        "settings": unit_settings(suite, algo, decisions, eval_every, seed),
         "wall_time_s": seconds,
         "decisions_per_second": decisions / seconds,
         "reference_ms_before": before,
@@ -141,14 +184,15 @@ def main() -> None:
     parser.add_argument("--suite", default="corridor")
     parser.add_argument("--designs", default="stop-goes-on,discrete")
     parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo")
-    parser.add_argument("--decisions", type=int, default=40_960)
-    parser.add_argument("--eval-every", type=int, default=20_480)
+    parser.add_argument("--decisions", type=int, default=204_800)
+    parser.add_argument("--eval-every", type=int, default=40_960)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/declaration-pilot"))
     args = parser.parse_args()
     for design in args.designs.split(","):
         unit = args.out / f"{args.algo}-{design}"
-        if (unit / "result.json").is_file():
+        settings = unit_settings(args.suite, args.algo, args.decisions, args.eval_every, args.seed)
+        if finished(unit, settings):
             print(f"{unit}: finished, skipped")
             continue
         result = run_design(
