@@ -1,10 +1,12 @@
 """The staged trainer's reward stage: fine-tuning starts from the clone, its warm-up leaves the
 actor alone, an interrupted stage resumes to the weights an uninterrupted one ends with; plain
-RL starts from a STOP prior; ``algo`` records what ran; settings fail naming key and file."""
+RL on a suite learns as the RL-ready ids; ``algo`` records what ran; settings fail naming key
+and file."""
 
 from __future__ import annotations
 
 import json
+import math
 
 import gymnasium as gym
 import numpy as np
@@ -125,21 +127,31 @@ def test_a_fresh_policy_declares_at_its_prior_share_of_decisions():
     assert declaring_share(model.policy, observations, 2) == pytest.approx(0.0025, rel=0.2)
 
 
-def test_plain_ppo_on_a_suite_starts_from_the_prior_and_records_ppo(tmp_path):
+def test_plain_ppo_on_a_suite_learns_as_the_rl_ready_ids_and_records_ppo(tmp_path):
     from stable_baselines3.common.vec_env import DummyVecEnv
 
+    from stsf_gym.agents.rl.declaration import GOES_ON_FALSE_STOP
+    from stsf_gym.agents.rl.ready import rl_hyperparams
     from stsf_gym.agents.training.train import create_model
     from stsf_gym.agents.training.training_envs import make_vec_env
 
     plain = {"demonstrations.expert_episodes": 0, "train_env.sim.max_episode_seconds": 3.0}
     run = resolve_run("ppo", "truth", 1024, 0, "irl_corridor", None, plain, 1, "corridor")
     assert run.algo == "ppo" and not run.demonstrating
+    assert run.meta["provenance"]["config"]["declaration"] == "stop-goes-on"
+    assert run.train_env["task"]["false_stop_ends"] is False
+    assert run.train_env["reward"]["false_stop"] == GOES_ON_FALSE_STOP
+    assert run.env.get("task", {}).get("false_stop_ends", True)  # evaluation: the task itself
+    ids = rl_hyperparams("corridor", "truth").training.policy_kwargs
+    assert run.hp.training.policy_kwargs == ids  # the RL-ready ids' learner
     venv = make_vec_env(1, tmp_path, "train", **run.env_spec(True))
     assert isinstance(venv, DummyVecEnv)
     try:
         model = create_model(run, tmp_path, venv)
         obs = torch.as_tensor(venv.reset(), dtype=torch.float32)
-        assert declaring_share(model.policy, obs, 2) < 0.01
+        assert 0.3 < declaring_share(model.policy, obs, 2) < 0.7  # no prior: a false stop goes on
+        std = torch.exp(model.policy.log_std).detach().numpy()
+        assert std == pytest.approx([math.exp(ids["log_std_init"])] * 3)
         assert model.stsf_meta["algo"] == "ppo"
     finally:
         venv.close()

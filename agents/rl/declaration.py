@@ -31,6 +31,8 @@ from gymnasium import spaces
 
 #: reward.false_stop of the training legs where a false stop goes on (see the module).
 GOES_ON_FALSE_STOP = -1.0
+#: The RL-ready ids' design, and plain RL's on a suite in ``stsf-gym train`` (docs/rl.md).
+DEFAULT_DECLARATION = "stop-goes-on"
 
 #: Habitat-style discrete actions: (name, v in m/s, w in rad/s, declares). Forward at the
 #: paper's 0.122 m/s is 6 cm a 0.5 s decision, a quarter of the 0.25 m goal radius; turns at

@@ -34,7 +34,7 @@ import gymnasium as gym
 
 from stsf_gym.agents.observation import observation_config
 from stsf_gym.agents.policy_stack import policy_stack
-from stsf_gym.agents.rl.declaration import DiscreteActions
+from stsf_gym.agents.rl.declaration import DEFAULT_DECLARATION, DiscreteActions
 from stsf_gym.agents.rl.declaration import declaration as design_of
 from stsf_gym.agents.training.hyperparams import Hyperparams, load_hyperparams
 from stsf_gym.agents.training.settings import suite_env
@@ -46,7 +46,6 @@ from stsf_gym.wrappers import TRUTH
 from stsf_gym.yaml_layers import deep_merge
 
 SPLITS = ("train", "val", "test")
-DEFAULT_DECLARATION = "stop-goes-on"  # the pilot's choice: docs/agents/rl-from-scratch.md
 
 
 def rl_hyperparams(suite: str, estimator: str) -> Hyperparams:

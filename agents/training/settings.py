@@ -10,7 +10,10 @@ what will run as ``algo`` (:data:`~stsf_gym.agents.training.hyperparams.METHODS`
 - ``dagger+ppo``: the same, then PPO on the env's reward from the clone (``finetune``);
 - ``ppo`` / ``sac``: reward alone, for ``n_timesteps``. Asked for by name, ``ppo`` runs what
   the settings enable: with demonstrations it is recorded as ``dagger`` (no reward budget)
-  or ``dagger+ppo``, never as what did not run.
+  or ``dagger+ppo``, never as what did not run. On a suite, reward alone is the RL-ready
+  ids' learner (:mod:`~stsf_gym.agents.rl.ready`): the file's ``rl-ready`` section over
+  ``suites``, and training legs declared by :data:`DEFAULT_DECLARATION` (recorded as the
+  run's ``declaration``).
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from stsf_gym.agents.rl.declaration import DEFAULT_DECLARATION, Declaration, declaration
 from stsf_gym.agents.rl.residual import ResidualConfig
 from stsf_gym.agents.training.hyperparams import (
     RESIDUAL,
@@ -52,6 +56,7 @@ class RunSettings:
     env: dict  # the evaluation env's settings
     train_env: dict  # the training envs' (env with train_env over it)
     meta: dict  # what every saved model carries (agents/sb3_agent.py)
+    declaration: Declaration | None = None  # plain RL on a suite: how its legs declare
 
     @property
     def demonstrating(self) -> bool:
@@ -144,6 +149,10 @@ def resolve_run(
         world = generated_label("train")
     env_id = env_id_for(world, estimator, suite)
     hp = load_hyperparams(algo, env_id, config, overrides, suite is not None)
+    design = None
+    if suite is not None and not hp.demonstrations.enabled and hp.residual is None:
+        hp = load_hyperparams(algo, env_id, config, overrides, rl_ready=True)
+        design = declaration(DEFAULT_DECLARATION)  # reward alone: as the RL-ready ids learn
     cfg = hp.training
     on_command_line = overrides_to_tree(overrides or {}).get("env", {})
     env = cfg.env if suite is None else suite_env(hp, suite, on_command_line)
@@ -175,6 +184,7 @@ def resolve_run(
         "algo": recorded,
         "hyperparams": hyperparams,
         "observation": observation,
+        **({"declaration": design.name} if design else {}),
     }
     meta = {
         "algo": recorded,
@@ -197,7 +207,8 @@ def resolve_run(
         ),
         "provenance": provenance(resolved, [seed]),
     }
-    train_env = deep_merge(env, cfg.train_env)
+    train_env = deep_merge(deep_merge(env, cfg.train_env), design.training_env() if design else {})
     return RunSettings(
-        recorded, hp, world, estimator, suite, seed, n_envs, reward_steps, env, train_env, meta
-    )
+        recorded, hp, world, estimator, suite, seed, n_envs, reward_steps, env, train_env, meta,
+        design,
+    )  # fmt: skip

@@ -66,8 +66,9 @@ __all__ = [
 
 
 def create_model(run: RunSettings, out: Path, train_env):
-    """A fresh model; plain RL's STOP entry starts from its prior (:func:`set_stop_prior`), the
-    residual learner's mean correction from 0 (:func:`start_as_follower`)."""
+    """A fresh model; the residual learner's mean correction starts from 0
+    (:func:`start_as_follower`); plain RL's STOP entry from its prior (:func:`set_stop_prior`)
+    unless a false stop on its legs goes on (the run's ``declaration``)."""
     cfg = run.hp.training
     cls = FinetunePPO if run.finetuning else algorithm_class(run.algo)
     model = cls(
@@ -83,7 +84,12 @@ def create_model(run: RunSettings, out: Path, train_env):
     if run.residual is not None:  # before any update, it drives as the follower does
         start_as_follower(model.policy, run.residual)
     layout = train_env.get_attr("action_layout", [0])[0]
-    if not run.demonstrating and "stop" in layout and hasattr(model.policy, "action_net"):
+    goes_on = run.declaration is not None and run.declaration.goes_on
+    if (
+        not (run.demonstrating or goes_on)
+        and "stop" in layout
+        and hasattr(model.policy, "action_net")
+    ):
         set_stop_prior(model.policy, layout.index("stop"), cfg.initial_stop_probability)
     return model
 
