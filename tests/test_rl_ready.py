@@ -10,7 +10,7 @@ import pytest
 from stable_baselines3 import PPO
 
 import stsf_gym
-from stsf_gym.agents.rl.declaration import DISCRETE_ACTIONS, GOES_ON_FALSE_STOP
+from stsf_gym.agents.rl.declaration import DISCRETE_ACTIONS, GOES_ON_FALSE_STOP, GradedFalseStop
 from stsf_gym.agents.rl.ready import episode_decisions
 from stsf_gym.envs.suite import suite_names
 
@@ -103,6 +103,69 @@ def test_a_false_stop_on_a_training_leg_costs_and_the_leg_goes_on():
         assert terminated and not info["success"]
     finally:
         val.close()
+
+
+class _Stops(gym.Env):
+    """Stops at the given true distances, one a step, each costing the flat goes-on cost."""
+
+    observation_space = gym.spaces.Box(-1, 1, (1,))
+    action_space = gym.spaces.Box(-1, 1, (1,))
+
+    def __init__(self, distances: list[float], radius: float = 0.25) -> None:
+        self.distances, self.radius, self.count = distances, radius, 0
+
+    def reset(self, *, seed=None, options=None):
+        self.count = 0
+        return np.zeros(1, np.float32), {"stops": 0, "last_stop": {"success": False}}
+
+    def step(self, action):
+        d = self.distances[self.count]
+        self.count += 1
+        success = d <= self.radius
+        reward = 10.0 if success else GOES_ON_FALSE_STOP
+        last = {"success": success, "true_distance_m": d}
+        return (
+            np.zeros(1, np.float32),
+            reward,
+            success,
+            False,
+            {"stops": self.count, "last_stop": last},
+        )
+
+
+def test_a_graded_false_stop_costs_the_progress_of_its_distance_and_never_pays():
+    env = GradedFalseStop(_Stops([3.0, 0.6, 0.3, 0.2]), progress=1.0)
+    env.reset()
+    rewards = [env.step(np.zeros(1))[1] for _ in range(4)]
+    assert rewards[:3] == pytest.approx([-1.0, -0.6, -0.3])  # capped at the flat cost
+    assert all(r < 0 for r in rewards[:3]) and rewards[3] == 10.0  # the correct stop pays
+    with pytest.raises(ValueError, match=r"reward\.progress"):
+        GradedFalseStop(_Stops([]), progress=0.0)
+
+
+def test_graded_declaration_on_the_id_grades_training_legs_only():
+    env = gym.make("stsf_gym/RL-Corridor-Truth-v0", declaration="stop-graded")
+    try:
+        env.reset(seed=3)  # a leg's goal is 2-10 m ahead: a stop at once costs the flat cost
+        _, reward, terminated, _, info = env.step(np.array([0.0, 0.0, 1.0], np.float32))
+        assert info["last_stop"]["true_distance_m"] >= 1.0 and not terminated
+        assert reward == pytest.approx(GOES_ON_FALSE_STOP, abs=0.05)
+        assert any(isinstance(w, GradedFalseStop) for w in _wrappers(env))
+    finally:
+        env.close()
+    val = gym.make("stsf_gym/RL-Corridor-Truth-v0", split="val", declaration="stop-graded")
+    try:
+        assert not any(isinstance(w, GradedFalseStop) for w in _wrappers(val))
+    finally:
+        val.close()
+
+
+def _wrappers(env: gym.Env) -> list[gym.Env]:
+    found = []
+    while isinstance(env, gym.Wrapper):
+        found.append(env)
+        env = env.env
+    return found
 
 
 def test_discrete_actions_drive_and_declare():

@@ -10,6 +10,10 @@ the training legs and the action a policy emits:
 - ``stop-goes-on``: the same action; on training legs a stop off the goal costs
   :data:`GOES_ON_FALSE_STOP` and the leg goes on (``task.false_stop_ends: false``), so trying
   to declare is not ended for trying and a declaration near the goal is met by chance.
+- ``stop-graded``: as ``stop-goes-on``, but a false stop costs the progress reward of the
+  distance it falls short of the goal (``reward.progress`` per metre, true distance), at most
+  :data:`GOES_ON_FALSE_STOP` (:class:`GradedFalseStop`): a stop nearer the goal costs less,
+  so the return tells a learner which way a declaration would have paid.
 - ``discrete``: Habitat PointNav's discrete actions (:data:`DISCRETE_ACTIONS`: STOP is one of
   seven), on legs where a false stop goes on, as above.
 
@@ -57,6 +61,7 @@ class Declaration:
     name: str
     goes_on: bool  # a false stop on a training leg costs and the leg goes on
     discrete: bool
+    graded: bool = False  # that cost graded by the distance to the goal (GradedFalseStop)
 
     def training_env(self) -> dict:
         """The env settings the design adds to the training legs."""
@@ -70,6 +75,7 @@ DECLARATIONS = {
     for d in (
         Declaration("stop", goes_on=False, discrete=False),
         Declaration("stop-goes-on", goes_on=True, discrete=False),
+        Declaration("stop-graded", goes_on=True, discrete=False, graded=True),
         Declaration("discrete", goes_on=True, discrete=True),
     )
 }
@@ -110,3 +116,36 @@ class DiscreteActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
         if not 0 <= index < len(self._table):
             raise ValueError(f"action must be 0..{len(self._table) - 1}, got {action!r}")
         return self._table[index].copy()
+
+
+class GradedFalseStop(gym.Wrapper, gym.utils.RecordConstructorArgs):
+    """A false stop's cost graded by how far it falls short (training legs of ``stop-graded``,
+    over an env whose false stop costs :data:`GOES_ON_FALSE_STOP` and goes on).
+
+    A stop ``d`` metres from its goal (``info["last_stop"]["true_distance_m"]``, judged at
+    the true position as the task judges it) costs ``min(progress * d, -GOES_ON_FALSE_STOP)``:
+    the progress reward those metres would have paid. Every false stop still costs (``d`` is
+    above the goal radius), so none pays better than none; the correct stop pays the goal.
+    """
+
+    def __init__(self, env: gym.Env, progress: float) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, progress=progress)
+        gym.Wrapper.__init__(self, env)
+        if progress <= 0:
+            raise ValueError(f"GradedFalseStop needs reward.progress > 0, got {progress:g}")
+        self._progress = progress
+        self._stops = 0
+
+    def reset(self, **kwargs):
+        self._stops = 0
+        return self.env.reset(**kwargs)
+
+    def step(self, action):
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        stops = int(info["stops"])
+        last = info["last_stop"]
+        if stops > self._stops and not last["success"]:
+            cost = min(self._progress * float(last["true_distance_m"]), -GOES_ON_FALSE_STOP)
+            reward = float(reward) - GOES_ON_FALSE_STOP - cost  # the flat cost, given back graded
+        self._stops = stops
+        return observation, reward, terminated, truncated, info

@@ -34,7 +34,7 @@ import gymnasium as gym
 
 from stsf_gym.agents.observation import observation_config
 from stsf_gym.agents.policy_stack import policy_stack
-from stsf_gym.agents.rl.declaration import DEFAULT_DECLARATION, DiscreteActions
+from stsf_gym.agents.rl.declaration import DEFAULT_DECLARATION, DiscreteActions, GradedFalseStop
 from stsf_gym.agents.rl.declaration import declaration as design_of
 from stsf_gym.agents.training.hyperparams import Hyperparams, load_hyperparams
 from stsf_gym.agents.training.settings import suite_env
@@ -99,6 +99,10 @@ def make_rl_env(
     the id's (``sim__max_episode_seconds=60``, ...)."""
     env, hp = rl_settings(suite, estimator, split, declaration)
     features = observation_config({**asdict(hp.observation), **(observation or {})})
+    design = design_of(declaration)
     estimating = make_episode_env(generated_label(split), estimator, env, **overrides)
+    if design.graded and split == "train":
+        progress = estimating.unwrapped.config.reward.progress  # type: ignore[attr-defined]
+        estimating = GradedFalseStop(estimating, progress)
     stack = policy_stack(estimating, features, hp.training.decision_steps)
-    return DiscreteActions(stack) if design_of(declaration).discrete else stack
+    return DiscreteActions(stack) if design.discrete else stack

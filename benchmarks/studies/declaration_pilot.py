@@ -13,7 +13,7 @@ decisions per second.
 Usage::
 
     python benchmarks/studies/declaration_pilot.py [--suite corridor]
-        [--designs stop-goes-on,discrete] [--algo ppo|sac] [--decisions 204800] [--seed 0]
+        [--designs stop-goes-on,stop-graded,discrete] [--algo ppo|sac] [--decisions 204800] [--seed 0]
         [--out benchmarks/results/declaration-pilot]
 
 Each design's unit (``<out>/<algo>-<design>/result.json``) is written when it finishes; a rerun
@@ -182,7 +182,7 @@ def run_design(
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", default="corridor")
-    parser.add_argument("--designs", default="stop-goes-on,discrete")
+    parser.add_argument("--designs", default="stop-goes-on,stop-graded,discrete")
     parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo")
     parser.add_argument("--decisions", type=int, default=204_800)
     parser.add_argument("--eval-every", type=int, default=40_960)
