@@ -13,7 +13,8 @@ decisions per second.
 Usage::
 
     python benchmarks/studies/declaration_pilot.py [--suite corridor]
-        [--designs stop-goes-on,stop-graded,discrete] [--algo ppo|sac] [--decisions 204800] [--seed 0]
+        [--designs stop-goes-on,stop-graded,discrete] [--algo ppo|sac]
+        [--decisions 204800] [--seed 0]
         [--out benchmarks/results/declaration-pilot]
 
 Each design's unit (``<out>/<algo>-<design>/result.json``) is written when it finishes; a rerun
