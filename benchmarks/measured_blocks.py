@@ -18,7 +18,7 @@ behaviour, not by bytes (:mod:`stsf_gym.results.behaviour`):
 A block that names no results is **not tied**; it must be listed in
 ``benchmarks/measured_not_tied.yaml`` with the reason, so the list stays visible.
 
-Rules (``tests/test_measured_blocks.py`` runs them in ``make test``): markers pair up and names
+Rules (``tests/docs/test_measured_blocks.py`` runs them in ``make test``): markers pair up and names
 are unique; a tied block's files exist, carry provenance and are shown in its text; an untied
 block is listed with a reason, and the list names no other block; README.md's blocks are
 current (the README quotes no stale figure).

@@ -38,8 +38,8 @@ ROOT = Path(__file__).resolve().parent.parent
 #: namespace; a wheel installs them all under ``stsf_gym/``. Written here once for the code
 #: (these checks, the docs' API pages, the provenance of results, the step bench's
 #: ``--baseline`` checkout); setuptools reads no Python, so ``pyproject.toml``'s
-#: ``[tool.setuptools] package-dir`` repeats it for the build, and ``tests/test_layers.py``
-#: fails when the two differ.
+#: ``[tool.setuptools] package-dir`` repeats it for the build, and
+#: ``tests/package/test_layers.py`` fails when the two differ.
 PACKAGE_DIRS = {
     "stsf_gym": "stsf_gym",
     "stsf_gym.envs": "envs",

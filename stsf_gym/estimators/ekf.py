@@ -68,7 +68,7 @@ that treats systematic errors as white averages them away and becomes overconfid
   below the error the calibration leaves.
 
 The Joseph form and the gate keep single updates from breaking ``P``; the average NEES against
-the true pose (``tests/test_ekf.py``) checks the whole.
+the true pose (``tests/estimators/test_ekf.py``) checks the whole.
 """
 
 from __future__ import annotations
