@@ -1,11 +1,14 @@
 """``stsf-gym bench``: each case measures in its own process; targets are judged correctly."""
 
+from __future__ import annotations
+
 import pytest
 from helpers import ROOT
 
 from stsf_gym.bench.report import to_markdown
 from stsf_gym.bench.speed import run_case
 from stsf_gym.bench.targets import targets
+from stsf_gym.validation import ConfigError
 
 
 @pytest.fixture(scope="module")
@@ -188,7 +191,6 @@ def test_the_step_section_runs_side_by_side_with_a_checkout(tmp_path):
 
 def test_a_baseline_that_is_no_checkout_is_refused(tmp_path):
     from stsf_gym.bench.step import check_baseline
-    from stsf_gym.validation import ConfigError
 
     with pytest.raises(ConfigError, match="neither a Python interpreter nor a checkout"):
         check_baseline(tmp_path)
@@ -212,3 +214,17 @@ def test_process_costs_are_measured_in_fresh_processes():
     assert 0 < costs["import_env_s"] < costs["first_step_s"]
     assert costs["import_training_s"] > 0
     assert costs["first_step_references"] == 1e3 * costs["first_step_s"] / 50.0
+
+
+# --- a baseline that says nothing ------------------------------------------------------------
+
+
+def test_a_baseline_that_exits_0_saying_nothing_is_refused(run_cli, tmp_path):
+    true = tmp_path / "true"  # as /bin/true: any arguments, exit 0, no output
+    true.write_text("#!/bin/sh\nexit 0\n")
+    true.chmod(0o755)
+    code, err = run_cli(
+        "bench", "--step-only", "--baseline", str(true), "--out", str(tmp_path / "o")
+    )
+    assert code == 2 and err.strip().endswith("exited 0 and printed nothing)")
+    assert not (tmp_path / "o").exists()

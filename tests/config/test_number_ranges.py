@@ -13,7 +13,7 @@ import pytest
 from stsf_gym.agents.training.hyperparams import load_hyperparams
 from stsf_gym.envs.config import load_config
 from stsf_gym.estimators.base import PoseEstimator
-from stsf_gym.validation import ConfigError, Range, check_number
+from stsf_gym.validation import ConfigError, Positive, Range, build, check_number
 from stsf_gym.wrappers import EstimateError, PoseEstimateWrapper, check_estimate
 
 CORRIDOR_ID = "stsf_gym/Corridor-Truth-v0"
@@ -194,3 +194,22 @@ def test_the_wrapper_blames_the_estimator_not_the_action(make_env):
         env.step(np.zeros(2, np.float32))
     with pytest.raises(EstimateError, match=f"pose source '{name}' returned the pose"):
         env.step(np.zeros(2, np.float32))
+
+
+# --- settings typed as a union ---------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class OptionalLimit:
+    """A setting typed ``X | None``: each member of the union is checked."""
+
+    limit: Positive | None = None
+
+
+def test_a_union_typed_setting_checks_each_member():
+    assert build(OptionalLimit, {"limit": None}, "x").limit is None
+    assert build(OptionalLimit, {"limit": 2}, "x").limit == 2.0
+    with pytest.raises(ConfigError, match=r"x\.limit must be a number, got True"):
+        build(OptionalLimit, {"limit": True}, "x")
+    with pytest.raises(ConfigError, match=r"x\.limit must be > 0, got -1"):
+        build(OptionalLimit, {"limit": -1}, "x")

@@ -3,6 +3,8 @@ action and the camera alone; the pointing wrapper over it takes the pan entry ou
 action, points the camera and runs the unknown-start search; ``make_episode_env`` stacks
 both, as a hand-built stack does."""
 
+from __future__ import annotations
+
 import numpy as np
 import pytest
 
@@ -98,3 +100,19 @@ def test_the_episode_layering_is_written_once():
     assert camera["control"] == "pan"
     camera = resolved_config("irl_corridor", "odometry", {"camera": {"control": "none"}})
     assert camera["env"]["camera"]["control"] == "none"
+
+
+def test_camera_pointing_with_no_estimate_under_it_says_what_it_needs(make_env):
+    from stsf_gym.wrappers.pointing import CameraPointingWrapper
+
+    env = make_env("stsf_gym/Corridor-v0", camera={"mode": "fast", "control": "pan"})
+    with pytest.raises(ValueError, match="it needs a PoseEstimateWrapper under it"):
+        CameraPointingWrapper(env)
+
+
+def test_an_estimate_over_an_estimate_is_refused(make_env):
+    from stsf_gym.wrappers import PoseEstimateWrapper
+
+    env = make_env("stsf_gym/Corridor-Truth-v0", camera={"mode": "fast"})
+    with pytest.raises(ValueError, match="has 'pose' already \\(pose source 'truth'\\)"):
+        PoseEstimateWrapper(env, "odometry")

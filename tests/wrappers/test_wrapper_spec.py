@@ -1,6 +1,8 @@
 """Gymnasium's wrapper conventions: hand-built stacks pass both env checkers and re-create
 from their ``spec``."""
 
+from __future__ import annotations
+
 import warnings
 
 import gymnasium as gym
@@ -11,7 +13,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from helpers import id_matrix, registered_ids
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-from stsf_gym.agents.observation import PolicyObservation
+from stsf_gym.agents.observation import PolicyObservation, observation_config
 from stsf_gym.wrappers import POSE_SOURCES, PoseEstimateWrapper
 
 
@@ -81,3 +83,17 @@ def test_spec_json_round_trip_on_every_id(env_id):
         gym.make(spec).close()
     finally:
         env.close()
+
+
+def test_a_policy_stack_survives_its_own_json_spec():
+    env = gym.make("stsf_gym/Suite-Corridor-Truth-v0", camera={"enabled": False})
+    env = PolicyObservation(env, observation_config({"lookahead": [0.0, 1.0], "scale": 2.0}))
+    again = gym.make(EnvSpec.from_json(env.spec.to_json()))
+    try:
+        assert again.get_wrapper_attr("config") == env.get_wrapper_attr("config")
+        first, _ = env.reset(seed=3)
+        second, _ = again.reset(seed=3)
+        np.testing.assert_array_equal(first, second)
+    finally:
+        env.close()
+        again.close()
