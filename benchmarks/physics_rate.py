@@ -26,7 +26,7 @@ import numpy as np
 
 import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.envs import simulator
-from stsf_gym.estimators.odometry import integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import integrate_wheel_travel
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "envs"))

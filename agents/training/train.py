@@ -29,8 +29,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from stsf_gym.agents.demonstrations.dagger import run_demonstrations, stage_episodes
+from stsf_gym.agents.model_files import META_KEY
 from stsf_gym.agents.rl.residual import start_as_follower
-from stsf_gym.agents.sb3_agent import META_KEY
 from stsf_gym.agents.training.checkpoints import (
     finished_summary,
     latest_checkpoint,

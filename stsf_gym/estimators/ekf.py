@@ -79,13 +79,13 @@ from typing import ClassVar
 import numpy as np
 
 from stsf_gym.estimators.base import MapLandmark, SensorModel, chi_square_gate
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
     LandmarkObservation,
     observe,
     robot_pose_from_landmark,
 )
+from stsf_gym.estimators.odometry_estimator import OdometryEstimator
 from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import EKFSettings
 from stsf_gym.geometry import wrap_angle

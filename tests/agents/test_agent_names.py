@@ -10,10 +10,10 @@ import pytest
 
 from stsf_gym.agents import pretrained
 from stsf_gym.agents.decision_interval import DecisionInterval
+from stsf_gym.agents.model_files import trained_algo
 from stsf_gym.agents.observation import PolicyObservation, observation_config
 from stsf_gym.agents.registry import make_agent, make_agents
 from stsf_gym.agents.resolve import model_path, resolve_agent, training_group
-from stsf_gym.agents.sb3_agent import trained_algo
 from stsf_gym.agents.trained_agent import SB3Agent, wrap_for_model
 from stsf_gym.experiments.benchmark.trained import agent_name, expand_agents
 from stsf_gym.experiments.compare import judged_alike, seed_aggregates

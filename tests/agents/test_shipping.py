@@ -280,7 +280,7 @@ def test_a_fine_tuned_agent_ships_without_optimizer_moments_and_with_its_own_val
     the listing's val success is the fine-tuned model's, not its clone's."""
     import numpy as np
 
-    from stsf_gym.agents.sb3_agent import load_model
+    from stsf_gym.agents.model_files import load_model
 
     folder, summary = tiny_learner
     record = json.loads((folder / "train.json").read_text())

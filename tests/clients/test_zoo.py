@@ -8,8 +8,8 @@ from helpers import id_matrix, run_rl_zoo3
 import stsf_gym
 from stsf_gym.agents.training.hyperparams import load_hyperparams
 from stsf_gym.agents.zoo import hyperparams, zoo_section
+from stsf_gym.config_files import SUITE_DIR, deep_merge
 from stsf_gym.envs.suite import load_suite
-from stsf_gym.yaml_layers import SUITE_DIR, deep_merge
 
 
 def test_every_estimating_id_has_a_section():

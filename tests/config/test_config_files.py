@@ -10,8 +10,8 @@ import re
 import pytest
 
 from stsf_gym.config import parse_overrides
+from stsf_gym.config_files import MAX_CONFIG_BYTES, read_yaml
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import MAX_CONFIG_BYTES, read_yaml
 
 # --- numbers a user types -------------------------------------------------------------------
 

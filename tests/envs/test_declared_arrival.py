@@ -22,8 +22,8 @@ def task(route=None, **settings) -> PathTask:
 
 
 def _straight() -> dict:
+    from stsf_gym.config_files import CONFIG_DIR
     from stsf_gym.envs.config import read_yaml
-    from stsf_gym.yaml_layers import CONFIG_DIR
 
     return read_yaml(CONFIG_DIR / "worlds" / "straight_10m.yaml")
 

@@ -9,7 +9,7 @@ from helpers import NOISE_FREE_ENCODERS
 
 from stsf_gym.envs.config import load_config
 from stsf_gym.envs.drive_controller import VelocityController
-from stsf_gym.estimators.odometry import integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import integrate_wheel_travel
 
 STRAIGHT = "stsf_gym/Straight10m-v0"
 

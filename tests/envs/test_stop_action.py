@@ -138,8 +138,8 @@ def test_the_decision_interval_holds_the_action_and_the_estimator_sees_every_ste
 
 def test_a_held_stop_declares_once(make_env):
     route = {"route": [[3.0, 0.0], [10.0, 0.0]]}
+    from stsf_gym.config_files import CONFIG_DIR
     from stsf_gym.envs.config import read_yaml
-    from stsf_gym.yaml_layers import CONFIG_DIR
 
     world = {**read_yaml(CONFIG_DIR / "worlds" / "straight_10m.yaml"), **route}
     env = PoseEstimateWrapper(
@@ -163,7 +163,7 @@ def _layers(env, bottom) -> list[str]:
 def test_training_and_evaluation_build_the_same_policy_stack(make_env, tmp_path, monkeypatch):
     import types
 
-    from stsf_gym.agents import sb3_agent
+    from stsf_gym.agents import model_files
     from stsf_gym.agents.training.train import make_training_env
 
     settings = {"task": STOP_TASK, "camera": {"enabled": False}}
@@ -179,7 +179,7 @@ def test_training_and_evaluation_build_the_same_policy_stack(make_env, tmp_path,
     model = types.SimpleNamespace(
         observation_space=trained.observation_space, action_space=trained.action_space
     )
-    monkeypatch.setattr(sb3_agent, "load_model", lambda path: model)
+    monkeypatch.setattr(model_files, "load_model", lambda path: model)
     env = PoseEstimateWrapper(
         make_env("stsf_gym/Straight10m-v0", task=STOP_TASK, **NO_CAMERA), "truth"
     )

@@ -12,7 +12,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import stsf_gym
-from stsf_gym.yaml_layers import SUITE_DIR
+from stsf_gym.config_files import SUITE_DIR
 
 NO_CAMERA = {"camera": {"enabled": False}}
 SUITE_IDS = [

@@ -8,11 +8,11 @@ import typing
 import pytest
 import yaml
 
+from stsf_gym.config_files import CONFIG_DIR
 from stsf_gym.estimators import ESTIMATORS, estimator_class, estimator_settings, make_estimator
 from stsf_gym.estimators import settings as settings_module
 from stsf_gym.validation import ConfigError, Range
 from stsf_gym.wrappers import PoseEstimateWrapper
-from stsf_gym.yaml_layers import CONFIG_DIR
 
 
 def _yaml(name: str) -> dict:

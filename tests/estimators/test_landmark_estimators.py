@@ -10,10 +10,10 @@ import pytest
 from stsf_gym.agents.follower import PathFollower
 from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
-from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.odometry_model import OdometryNoise
 from stsf_gym.estimators.pose_errors import PoseErrors
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episode
-from stsf_gym.experiments.figures import PATH_ONLY
+from stsf_gym.experiments.fig10_11 import PATH_ONLY
 from stsf_gym.experiments.statistics import nees_consistency
 from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 

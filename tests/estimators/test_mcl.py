@@ -9,13 +9,13 @@ import pytest
 
 import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.agents.follower import PathFollower
+from stsf_gym.config_files import CONFIG_DIR
 from stsf_gym.envs.config import read_yaml
 from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.landmark_observation import observe
 from stsf_gym.estimators.references import mcl as mcl_module
 from stsf_gym.experiments.global_localization import localize
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import CONFIG_DIR
 
 
 def test_global_localization_from_a_uniform_prior():

@@ -87,7 +87,7 @@ def test_register_and_bad_names():
 
 
 SUBCLASSES = '''
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
+from stsf_gym.estimators.odometry_estimator import OdometryEstimator
 from stsf_gym.estimators.landmark_fusion import STSFEstimator
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 
 from stsf_gym.estimators.landmark_fusion import _Seen
-from stsf_gym.estimators.odometry import OdometryNoise, integrate_wheel_travel, odometry_step
+from stsf_gym.estimators.odometry_model import OdometryNoise, integrate_wheel_travel, odometry_step
 
 
 def test_baseline_error_is_slip_plus_the_calibration_jacobian():

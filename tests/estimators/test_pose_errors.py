@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from stsf_gym.estimators.odometry import (
+from stsf_gym.estimators.odometry_model import (
     OdometryNoise,
     integrate_wheel_travel,
     odometry_step,

@@ -14,7 +14,7 @@ import pytest
 
 import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.estimators import make_estimator
-from stsf_gym.estimators.odometry import integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import integrate_wheel_travel
 from stsf_gym.estimators.references.floor import EpisodeMeasurements, batch_floor
 from stsf_gym.estimators.references.measurements import (
     CONSIDERED,

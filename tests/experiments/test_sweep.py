@@ -198,7 +198,7 @@ def test_ray_gives_the_local_table(local_run, tmp_path):
 
 
 def test_a_sweep_on_a_suite_runs_its_test_worlds_and_task():
-    from stsf_gym.yaml_layers import CONFIG_DIR
+    from stsf_gym.config_files import CONFIG_DIR
 
     sweep = load_sweep(CONFIG_DIR / "sweeps" / "sonar_beam.yaml")
     assert len(sweep.cells) == 2 * 2 * 20

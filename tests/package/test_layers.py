@@ -57,7 +57,7 @@ def test_the_import_graph_points_one_way():
         "stsf_gym.geometry",
         "stsf_gym.vision.landmarks",
         "stsf_gym.validation",
-        "stsf_gym.yaml_layers",
+        "stsf_gym.config_files",
         "stsf_gym.camera_model",
     }
     assert (
@@ -114,7 +114,7 @@ def test_layers_command_prints_the_graph():
     assert done.returncode == 0, done.stdout
     assert re.search(
         r"stsf_gym\.wrappers +-> stsf_gym\.estimators, stsf_gym\.geometry, "
-        r"stsf_gym\.state_history, stsf_gym\.validation\n",
+        r"stsf_gym\.validation\n",
         done.stdout,
     )
     assert done.stdout.rstrip().endswith("violations:\n  none")

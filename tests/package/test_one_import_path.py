@@ -10,7 +10,7 @@ import subprocess
 import pytest
 from helpers import ROOT
 
-HOMES = {"ConfigError": "stsf_gym.validation", "deep_merge": "stsf_gym.yaml_layers"}
+HOMES = {"ConfigError": "stsf_gym.validation", "deep_merge": "stsf_gym.config_files"}
 
 
 def _imports() -> list[tuple[str, int, str, str]]:

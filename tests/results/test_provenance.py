@@ -17,12 +17,12 @@ import stsf_gym.envs.config as env_config
 import stsf_gym.results.behaviour as behaviour
 import stsf_gym.results.freshness as freshness
 import stsf_gym.results.provenance as provenance
-from stsf_gym.agents.sb3_agent import model_metadata
+from stsf_gym.agents.model_files import model_metadata
 from stsf_gym.agents.training.train import latest_checkpoint, train
+from stsf_gym.config_files import CONFIG_DIR
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.jobs.backends import make_runner
 from stsf_gym.experiments.jobs.store import read_rows
-from stsf_gym.yaml_layers import CONFIG_DIR
 
 FAST = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 3.0}}
 TINY_PPO = {
@@ -109,8 +109,10 @@ def test_an_edited_default_or_an_edited_module_recomputes_saved_episodes(
     assert _episode_stamps(tmp_path) == stamps
     capsys.readouterr()
     digest = freshness.code_digest
-    edited_module = lambda file: "edited" if file.name == "dead_reckoning.py" else digest(file)  # noqa: E731
-    monkeypatch.setattr(freshness, "code_digest", edited_module)
+    edited = "odometry_estimator.py"
+    monkeypatch.setattr(
+        freshness, "code_digest", lambda file: "edited" if file.name == edited else digest(file)
+    )
     third, _ = run()
     assert "made by other code or settings" in capsys.readouterr().err
     assert _episode_stamps(tmp_path) != stamps

@@ -7,7 +7,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from stsf_gym.estimators import make_estimator
-from stsf_gym.estimators.odometry import integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import integrate_wheel_travel
 from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import PoseEstimateWrapper
 

@@ -13,9 +13,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
+from stsf_gym.agents.model_files import model_metadata
 from stsf_gym.agents.observation import ObservationConfig, PolicyObservation
 from stsf_gym.agents.registry import make_agent
-from stsf_gym.agents.sb3_agent import model_metadata
 from stsf_gym.agents.training.hyperparams import load_hyperparams
 from stsf_gym.agents.training.train import latest_checkpoint, train
 from stsf_gym.agents.training.training_log import EpisodeLog, read_rows

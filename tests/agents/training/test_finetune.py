@@ -13,7 +13,7 @@ import torch
 from helpers import TINY_LEARNER, interrupt_in_the_third_rollout, train_tiny_learner
 from stable_baselines3 import PPO
 
-from stsf_gym.agents.sb3_agent import model_metadata
+from stsf_gym.agents.model_files import model_metadata
 from stsf_gym.agents.training.finetune import (
     FinetunePPO,
     actor_parameters,

@@ -123,7 +123,7 @@ def _weights(path) -> dict:
 
 @pytest.mark.slow
 def test_the_residual_stage_records_its_algo_and_resumes_to_the_same_weights(tmp_path, monkeypatch):
-    from stsf_gym.agents.sb3_agent import model_metadata
+    from stsf_gym.agents.model_files import model_metadata
     from stsf_gym.agents.trained_agent import SB3Agent
 
     whole = tmp_path / "whole"

@@ -14,6 +14,7 @@ import yaml
 from helpers import ROOT
 
 from stsf_gym.agents import pretrained
+from stsf_gym.config_files import SUITE_DIR
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.experiments.benchmark.run import benchmark_cells
@@ -24,7 +25,6 @@ from stsf_gym.experiments.benchmark.trained import (
     paired_across_sources,
 )
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import SUITE_DIR
 
 
 def test_train_val_and_test_worlds_are_disjoint():

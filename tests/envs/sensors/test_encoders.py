@@ -6,7 +6,7 @@ from helpers import NOISE_FREE_ENCODERS
 
 from stsf_gym.envs.config import load_config
 from stsf_gym.envs.sensors.encoders import WheelEncoders
-from stsf_gym.estimators.odometry import integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import integrate_wheel_travel
 
 
 def dead_reckon(env, actions, seed=0):

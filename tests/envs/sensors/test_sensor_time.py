@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from stsf_gym.estimators import make_estimator
-from stsf_gym.state_history import FRAME_KEYS, StateHistory
 from stsf_gym.wrappers import PoseEstimateWrapper, sensor_model
+from stsf_gym.wrappers.state_history import FRAME_KEYS, StateHistory
 
 STRAIGHT = "stsf_gym/Straight10m-v0"
 FAST = {"camera__mode": "fast", "camera__pan_deg": 30.0}  # a board in view from the start

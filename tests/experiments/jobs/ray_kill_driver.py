@@ -1,5 +1,5 @@
-"""A driver for tests/experiments/jobs/test_ray_addresses.py: starts a local Ray through the job engine's
-runner, prints its pid once Ray runs under the watchdog, and waits to be killed."""
+"""A driver for tests/experiments/jobs/test_ray_addresses.py: starts a local Ray through the job
+engine's runner, prints its pid once Ray runs under the watchdog, and waits to be killed."""
 
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from test_table1 import DISTANCES, NORMAL, K, synthetic_places
 
-from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.odometry_model import OdometryNoise
 from stsf_gym.estimators.references.measurements import OdometryLeg
 from stsf_gym.experiments.table1.joint import (
     carried,

@@ -2,7 +2,7 @@ import json
 
 import pytest
 
-from stsf_gym.experiments.figures import FIG11_ESTIMATORS, fig10, fig11
+from stsf_gym.experiments.fig10_11 import FIG11_ESTIMATORS, fig10, fig11
 from stsf_gym.results import check_rows
 
 SHORT = {"sim": {"max_episode_seconds": 3.0}}

@@ -3,7 +3,7 @@ import pytest
 
 from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.estimators import SensorModel, make_estimator
-from stsf_gym.estimators.odometry import OdometryNoise, integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import OdometryNoise, integrate_wheel_travel
 from stsf_gym.geometry import OdometryCalibration
 from stsf_gym.vision.landmarks import LandmarkPattern
 

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from stsf_gym.config_files import deep_merge
 from stsf_gym.experiments.episodes import EpisodeResult
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.reports import write_report
@@ -26,7 +27,6 @@ from stsf_gym.experiments.result_tables import results_tables
 from stsf_gym.experiments.statistics import error_curves
 from stsf_gym.io import markdown_table
 from stsf_gym.results import rendered, stat
-from stsf_gym.yaml_layers import deep_merge
 
 FIG10_PAPER = {
     "odometry": "about 0.40 m off after 10 m; max 0.212 m in x, 0.405 m in y",

@@ -7,7 +7,7 @@ from typing import ClassVar
 import numpy as np
 
 from stsf_gym.estimators.base import PoseEstimator, SensorModel
-from stsf_gym.estimators.odometry import odometry_step
+from stsf_gym.estimators.odometry_model import odometry_step
 from stsf_gym.estimators.pose_errors import PoseErrors
 from stsf_gym.estimators.settings import OdometrySettings
 
