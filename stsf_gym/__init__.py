@@ -24,7 +24,8 @@ import math
 
 from gymnasium.envs.registration import register, registry
 
-__version__ = "0.1.0"
+#: The package version, declared here only (``pyproject.toml`` reads it; CHANGELOG.md by version).
+__version__ = "0.2.0"
 
 #: Registered environment ids and the world each one loads from ``configs/worlds``.
 ENV_WORLDS: dict[str, str] = {

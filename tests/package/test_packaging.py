@@ -20,6 +20,7 @@ from helpers import ROOT
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
+from stsf_gym import __version__
 from stsf_gym.layers import PACKAGE_DIRS
 
 #: Repository folder -> the import package's folder in the wheel (the package-dir mapping).
@@ -80,7 +81,8 @@ def built(tmp_path_factory) -> dict[str, Path]:
 def test_the_wheel_holds_one_namespace_with_every_module_and_config(built):
     names = zipfile.ZipFile(built["wheel"]).namelist()
     tops = {name.split("/")[0] for name in names}
-    assert tops == {"stsf_gym", built["wheel"].name.split("-")[0] + "-0.1.0.dist-info"}, tops
+    dist_info = built["wheel"].name.split("-")[0] + f"-{__version__}.dist-info"
+    assert tops == {"stsf_gym", dist_info}, tops
     expected = {
         f"{package}/{path.relative_to(ROOT / folder).as_posix()}"
         for folder, package in FOLDERS.items()
@@ -116,7 +118,8 @@ VENV_OWN = {"pip", "setuptools", "wheel"}
 def core_closure(wheel: Path) -> set[str]:
     """The distributions the wheel's core needs (its requirements without an extra, and
     theirs, as installed here), by canonical name."""
-    metadata = zipfile.ZipFile(wheel).read("stsf_gym-0.1.0.dist-info/METADATA").decode()
+    dist_info = f"stsf_gym-{__version__}.dist-info"
+    metadata = zipfile.ZipFile(wheel).read(f"{dist_info}/METADATA").decode()
     todo = [
         line.split(":", 1)[1] for line in metadata.splitlines() if line.startswith("Requires-Dist:")
     ]
@@ -201,6 +204,6 @@ def test_the_installed_wheel_works_beside_a_users_own_envs_and_agents(installed,
     summary = json.loads(_run(installed / "bin" / "stsf-gym", *args, cwd=tmp_path))
     assert len(summary["rows"]) == 4
     made_by = json.loads((demo / "results.json").read_text())["provenance"]
-    assert made_by["stsf_gym"]["version"] == "0.1.0"
+    assert made_by["stsf_gym"]["version"] == __version__
     assert made_by["stsf_gym"]["commit"] is None  # an installed wheel is no git checkout
     assert made_by["command"].startswith("stsf-gym demo --worlds 1")

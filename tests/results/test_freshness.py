@@ -6,6 +6,7 @@ declared override names modules the golden episodes pin."""
 from __future__ import annotations
 
 import pytest
+from helpers import load_script
 
 import stsf_gym.results.freshness as freshness
 from stsf_gym.experiments.jobs.cache import run_cached
@@ -96,6 +97,5 @@ def test_an_equivalent_rewrite_is_declared_only_where_the_goldens_prove_it(monke
 
 @pytest.mark.parametrize("path", sorted(freshness.EQUIVALENT) or ["none declared"])
 def test_each_declared_equivalence_is_pinned_by_the_golden_episodes(path):
-    from test_step_equality import PINNED
-
-    assert path == "none declared" or subsystem(path) in PINNED
+    pinned = load_script("tests/behaviour/test_step_equality.py").PINNED
+    assert path == "none declared" or subsystem(path) in pinned

@@ -17,6 +17,7 @@ import stsf_gym.envs.config as env_config
 import stsf_gym.results.behaviour as behaviour
 import stsf_gym.results.freshness as freshness
 import stsf_gym.results.provenance as provenance
+from stsf_gym import __version__
 from stsf_gym.agents.model_files import model_metadata
 from stsf_gym.agents.training.train import latest_checkpoint, train
 from stsf_gym.config_files import CONFIG_DIR
@@ -40,7 +41,7 @@ def test_a_results_file_names_code_packages_config_seeds_and_command(tmp_path):
     evaluate(tmp_path, ["odometry"], seeds=2, seed=5, world="straight_10m", workers=1, env=FAST)
     made_by = json.loads((tmp_path / "results.json").read_text())["provenance"]
     code = made_by["stsf_gym"]
-    assert code["version"] == "0.1.0" and len(code["source_digest"]) == 16
+    assert code["version"] == __version__ and len(code["source_digest"]) == 16
     assert code["commit"] is None or len(code["commit"]) == 40  # a checkout: its commit
     assert {"gymnasium", "pybullet", "numpy", "torch"} <= set(made_by["packages"])
     assert made_by["seeds"] == [5, 6]
