@@ -43,7 +43,7 @@ import yaml
 
 from stsf_gym.agents.pretrained import ALIASES, MODELS, PREFIX
 from stsf_gym.results.behaviour import VERSIONS, code_digest
-from stsf_gym.results.provenance import file_digest
+from stsf_gym.results.code_identity import file_digest
 
 ROOT = Path(__file__).resolve().parent.parent
 NOT_TIED = Path("benchmarks/measured_not_tied.yaml")  # relative to the repository

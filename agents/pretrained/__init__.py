@@ -30,7 +30,7 @@ import numpy as np
 
 from stsf_gym.agents.model_files import trained_algo
 from stsf_gym.io import write_json
-from stsf_gym.results.provenance import note_data_files
+from stsf_gym.results.code_identity import note_data_files
 from stsf_gym.validation import ConfigError
 
 PREFIX = "pretrained:"

@@ -1,7 +1,7 @@
 """Checkpoints of a training run, each written atomically, and the resume from them.
 
 A checkpoint made by other code or another resolved configuration (its
-:func:`~stsf_gym.results.provenance.fingerprint`, ``made_by``, differs) is not resumed: the
+:func:`~stsf_gym.results.fingerprint.fingerprint`, ``made_by``, differs) is not resumed: the
 run says so, moves the old checkpoints to ``stale-checkpoints/`` and starts afresh.
 """
 

@@ -32,7 +32,8 @@ from stsf_gym.config_files import deep_merge, overrides_to_tree
 from stsf_gym.envs.generated_env import generated_label
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import resolved_config
-from stsf_gym.results.provenance import fingerprint, provenance
+from stsf_gym.results.fingerprint import fingerprint
+from stsf_gym.results.provenance import provenance
 from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import check_pose_source
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 
 from stsf_gym.results.behaviour import code_digest
-from stsf_gym.results.provenance import package_file
+from stsf_gym.results.code_identity import package_file
 
 #: ``{relative path: earlier code digests}`` declared to compute what today's module does.
 EQUIVALENT: dict[str, frozenset[str]] = {}

@@ -87,7 +87,7 @@ def test_a_shipped_name_expands_to_its_seeds_and_groups_under_its_name():
 
 def test_a_run_that_names_a_shipped_agent_counts_its_models_as_loaded_code():
     """Results quoted from a shipped agent go stale when it is shipped again."""
-    from stsf_gym.results.provenance import file_digest, loaded_code
+    from stsf_gym.results.code_identity import file_digest, loaded_code
 
     models = expand_agents(["pretrained:corridor/ppo-truth"])
     code = loaded_code()

@@ -16,7 +16,7 @@ import pytest
 from helpers import ROOT
 
 from stsf_gym.results.behaviour import VERSIONS, code_digest
-from stsf_gym.results.provenance import file_digest
+from stsf_gym.results.code_identity import file_digest
 
 SPEC = importlib.util.spec_from_file_location(
     "measured_blocks", ROOT / "benchmarks" / "measured_blocks.py"

@@ -13,7 +13,7 @@ from stsf_gym.experiments.jobs.cache import run_cached
 from stsf_gym.experiments.jobs.spec import Finished
 from stsf_gym.experiments.jobs.store import read_rows
 from stsf_gym.results.behaviour import subsystem
-from stsf_gym.results.provenance import package_file
+from stsf_gym.results.code_identity import package_file
 
 #: The modules each kind of job loads: an episode scored in its worker, a Table I seed.
 MODULES = {

@@ -11,7 +11,7 @@ import zipfile
 import pytest
 from helpers import ROOT
 
-from stsf_gym.results import provenance
+from stsf_gym.results import command
 
 #: An absolute path of a machine: its user, work or scratch folders.
 MACHINE_PATH = re.compile(r"(?<![\w.~-])/(?:work|tmp|home|root|Users|mnt|media|srv|opt)/\w")
@@ -42,7 +42,7 @@ def test_no_page_result_or_shipped_agent_names_a_path_of_a_machine():
 
 
 @pytest.mark.parametrize(
-    ("argv", "command"),
+    ("argv", "typed"),
     [
         (
             ["stsf-gym", "bench", "--baseline", "/srv/old", "--out", "/srv/runs/b"],
@@ -62,10 +62,10 @@ def test_no_page_result_or_shipped_agent_names_a_path_of_a_machine():
         ),
     ],
 )
-def test_a_command_names_its_absolute_paths(monkeypatch, argv, command):
-    monkeypatch.setattr(provenance, "_command", None)
-    provenance.set_command(argv)
-    assert provenance.command_line() == command
+def test_a_command_names_its_absolute_paths(monkeypatch, argv, typed):
+    monkeypatch.setattr(command, "_command", None)
+    command.set_command(argv)
+    assert command.command_line() == typed
 
 
 def test_paths_inside_a_named_one_are_named_through_it_in_a_results_file():
@@ -75,7 +75,7 @@ def test_paths_inside_a_named_one_are_named_through_it_in_a_results_file():
         "rows": [{"figure": "/runs/b/success.png", "other": "/runs/a/truthy"}],
         "n": 3,
     }
-    assert provenance.portable(results, argv) == {
+    assert command.portable(results, argv) == {
         "agent": "MODEL/seed-0/model.zip",
         "rows": [{"figure": "OUT/success.png", "other": "/runs/a/truthy"}],
         "n": 3,

@@ -15,6 +15,7 @@ from worker_jobs import import_module
 
 import stsf_gym.envs.config as env_config
 import stsf_gym.results.behaviour as behaviour
+import stsf_gym.results.code_identity as code_identity
 import stsf_gym.results.freshness as freshness
 import stsf_gym.results.provenance as provenance
 from stsf_gym import __version__
@@ -24,6 +25,8 @@ from stsf_gym.config_files import CONFIG_DIR
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.jobs.backends import make_runner
 from stsf_gym.experiments.jobs.store import read_rows
+from stsf_gym.results import command
+from stsf_gym.results.fingerprint import config_digest
 
 FAST = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 3.0}}
 TINY_PPO = {
@@ -37,7 +40,7 @@ TINY_PPO = {
 
 
 def test_a_results_file_names_code_packages_config_seeds_and_command(tmp_path):
-    provenance.set_command(["stsf-gym", "evaluate", "--seeds", "2"])
+    command.set_command(["stsf-gym", "evaluate", "--seeds", "2"])
     evaluate(tmp_path, ["odometry"], seeds=2, seed=5, world="straight_10m", workers=1, env=FAST)
     made_by = json.loads((tmp_path / "results.json").read_text())["provenance"]
     code = made_by["stsf_gym"]
@@ -57,7 +60,7 @@ def test_a_results_file_names_code_packages_config_seeds_and_command(tmp_path):
 
 def test_the_code_a_run_loaded_includes_what_only_its_workers_imported(monkeypatch):
     module, path = "stsf_gym.recording.qos", "stsf_gym/recording/qos.py"
-    monkeypatch.setattr(provenance, "_worker_modules", set())  # no earlier test's workers
+    monkeypatch.setattr(code_identity, "_worker_modules", set())  # no earlier test's workers
     monkeypatch.delitem(sys.modules, module, raising=False)  # this process never imports it
     assert path not in provenance.provenance()["stsf_gym"]["loaded_code"]
     jobs = [{"module": module, "n": n} for n in range(2)]
@@ -66,7 +69,7 @@ def test_the_code_a_run_loaded_includes_what_only_its_workers_imported(monkeypat
     assert all(path in finished.modules for _, finished in done)  # each job's own code
     assert module not in sys.modules
     code = provenance.provenance()["stsf_gym"]["loaded_code"]
-    assert code[path] == provenance.file_digest(ROOT / path)
+    assert code[path] == code_identity.file_digest(ROOT / path)
     assert code["stsf_gym/results/provenance.py"]  # a module this process imported
     assert "configs/default.yaml" in code and "configs/faults/soak.yaml" in code  # every config
     assert list(code) == sorted(code)
@@ -104,7 +107,7 @@ def test_an_edited_default_or_an_edited_module_recomputes_saved_episodes(
     monkeypatch.setattr(env_config, "CONFIG_DIR", CONFIG_DIR)
     run()
     stamps = _episode_stamps(tmp_path)
-    monkeypatch.setattr(provenance, "source_digest", lambda: "edited-bytes")
+    monkeypatch.setattr(code_identity, "source_digest", lambda: "edited-bytes")
     monkeypatch.setitem(behaviour.VERSIONS, "estimation", behaviour.VERSIONS["estimation"] + 1)
     run()  # other bytes, a declared version: neither decides; the code computes the same
     assert _episode_stamps(tmp_path) == stamps
@@ -138,5 +141,5 @@ def test_a_checkpoint_of_other_code_is_set_aside_not_resumed(tmp_path, monkeypat
 
 @pytest.mark.parametrize("config", [{"a": 1, "b": [1, 2]}, {"b": [1, 2], "a": 1}])
 def test_a_config_digest_ignores_key_order_and_sees_values(config):
-    assert provenance.config_digest(config) == provenance.config_digest({"a": 1, "b": [1, 2]})
-    assert provenance.config_digest({**config, "a": 2}) != provenance.config_digest(config)
+    assert config_digest(config) == config_digest({"a": 1, "b": [1, 2]})
+    assert config_digest({**config, "a": 2}) != config_digest(config)

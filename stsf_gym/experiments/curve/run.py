@@ -28,7 +28,8 @@ from stsf_gym.experiments.jobs.cells import CELL_JOBS
 from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
-from stsf_gym.results.provenance import by_digest, provenance
+from stsf_gym.results.fingerprint import by_digest
+from stsf_gym.results.provenance import provenance
 
 DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
 DEFAULT_ESTIMATORS = ("odometry", "conventional", "stsf", "ekf")
