@@ -1,9 +1,9 @@
-"""Saved stable-baselines3 agents: what they were trained on, and a policy for evaluation.
+"""Model files of saved stable-baselines3 agents: checked, digested and loaded, and what they were
+trained on (the agent that drives with one: :class:`~stsf_gym.agents.trained_agent.SB3Agent`).
 
 ``stsf-gym train`` stores a ``stsf_meta`` mapping in every saved model (algorithm,
 estimator, world, env overrides, policy-input settings, wall time so far); it travels inside
-the ``.zip`` with the model, so a model file alone is enough to evaluate it
-(:class:`~stsf_gym.agents.trained_agent.SB3Agent`).
+the ``.zip`` with the model, so a model file alone is enough to evaluate it.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Differential-drive dead reckoning from wheel travel, with propagated covariance."""
+"""The odometry's model: differential-drive dead reckoning from wheel travel, its noise and the
+covariance it propagates (the estimator on it: :mod:`~stsf_gym.estimators.odometry_estimator`)."""
 
 from __future__ import annotations
 
