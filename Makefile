@@ -59,7 +59,7 @@ test-slow: $(STAMP)
 # RLlib pins its own Gymnasium release, so it gets a venv of its own.
 test-rllib:
 	$(MAKE) VENV=.venv-rllib EXTRAS=dev,rllib .venv-rllib/.installed
-	.venv-rllib/bin/python -m pytest -q tests/test_rllib.py
+	.venv-rllib/bin/python -m pytest -q tests/clients/test_rllib.py
 
 # The documentation site (mkdocs.yml): strict, so a broken link, a page missing from the
 # navigation or a public name without a docstring fails. Installs the docs extra once.

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.agents.sonar_avoidance import AvoidanceConfig, SonarAvoidance
+from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.config import CONFIG_DIR, build, overrides_to_tree, read_yaml
 from stsf_gym.envs.task import Polyline
 from stsf_gym.geometry import bounded
-from stsf_gym.yaml_layers import deep_merge
 
 
 @dataclass(frozen=True)

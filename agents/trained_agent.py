@@ -1,7 +1,7 @@
 """A model saved by ``stsf-gym train`` as an agent: the env it was trained for, the policy stack it
 was trained behind, and its settings checked against any env it is given.
 
-A saved model carries what it was trained on (``stsf_meta``, :mod:`~stsf_gym.agents.sb3_agent`):
+A saved model carries what it was trained on (``stsf_meta``, :mod:`~stsf_gym.agents.model_files`):
 the world or suite, the pose source, the env settings (its STOP entry among them), the policy's
 observation settings and its decision interval. :func:`wrap_for_model` puts an env under that
 stack, and refuses an env whose settings differ from the model's (another STOP layout, another
@@ -27,7 +27,7 @@ def wrap_for_model(env: gym.Env, model: str | Path) -> gym.Env:
     and :class:`~stsf_gym.agents.decision_interval.DecisionInterval` with the settings saved in
     it. ``env`` already under the model's own stack is returned as it is. ConfigError when a
     setting of ``env`` differs from the model's (see :func:`check_env`)."""
-    from stsf_gym.agents.sb3_agent import model_metadata
+    from stsf_gym.agents.model_files import model_metadata
 
     return stack_for(env, model_metadata(model), model)
 
@@ -105,7 +105,7 @@ class SB3Agent:
     actions deterministic. :meth:`make_env` builds the env it was trained for."""
 
     def __init__(self, path: str) -> None:
-        from stsf_gym.agents.sb3_agent import check_weights, model_digest, model_metadata
+        from stsf_gym.agents.model_files import check_weights, model_digest, model_metadata
 
         self.path = check_weights(path)  # a missing file or corrupt weights: refused here
         self.meta, self.digest = model_metadata(self.path), model_digest(self.path)
@@ -116,8 +116,8 @@ class SB3Agent:
         worlds (or the world it was trained on) on its own pose source, with the env settings
         saved in it (STOP entry, task, sensors); ``pose_source``, ``world`` and ``env``
         settings (nested mappings or ``section__key`` overrides) replace them."""
+        from stsf_gym.config_files import deep_merge, overrides_to_tree
         from stsf_gym.episode_env import make_episode_env
-        from stsf_gym.yaml_layers import deep_merge, overrides_to_tree
 
         world = world or (TEST_WORLDS if self.meta.get("suite") else self.meta["world"])
         settings = deep_merge(self.meta.get("env", {}), overrides_to_tree(env))
@@ -126,7 +126,7 @@ class SB3Agent:
 
     def wrap(self, env: gym.Env) -> gym.Env:
         """``env`` under the model's policy stack (:func:`stack_for`); shapes checked."""
-        from stsf_gym.agents.sb3_agent import load_model
+        from stsf_gym.agents.model_files import load_model
 
         stack = stack_for(env, self.meta, self.path)
         self.model = load_model(self.path)
@@ -156,7 +156,7 @@ class SB3Agent:
 
     def trained_on(self) -> dict:
         """Algorithm, pose source, world, timesteps and digest of the model."""
-        from stsf_gym.agents.sb3_agent import training_record
+        from stsf_gym.agents.model_files import training_record
 
         return training_record(self.path)
 

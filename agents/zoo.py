@@ -28,7 +28,7 @@ import gymnasium as gym
 import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.agents.rl.ready import rl_hyperparams
 from stsf_gym.agents.training.hyperparams import load_hyperparams, policy_kwargs_for_sb3
-from stsf_gym.yaml_layers import deep_merge
+from stsf_gym.config_files import deep_merge
 
 WRAPPER = "stsf_gym.agents.observation.PolicyObservation"
 INTERVAL = "stsf_gym.agents.decision_interval.DecisionInterval"

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.experiments.benchmark.intervals import paired_bootstrap
 from stsf_gym.experiments.episodes import EpisodeSpec, run_episodes
@@ -26,7 +27,6 @@ from stsf_gym.io import write_json
 from stsf_gym.metrics import ate_rmse
 from stsf_gym.results import stat
 from stsf_gym.results.provenance import provenance
-from stsf_gym.yaml_layers import deep_merge
 
 
 def main() -> None:

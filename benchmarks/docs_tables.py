@@ -2,7 +2,7 @@
 and the shipped agents.
 
 A generated table lies between ``<!-- generated: NAME (begin) -->`` and
-``<!-- generated: NAME (end) -->`` in a page of :data:`BLOCKS`; ``tests/test_docs_tables.py``
+``<!-- generated: NAME (end) -->`` in a page of :data:`BLOCKS`; ``tests/docs/test_docs_tables.py``
 checks each equals what :data:`TABLES` makes of the registry now.
 
 Usage::

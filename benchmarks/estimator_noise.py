@@ -57,7 +57,7 @@ RANGE_BINS = [(0, 2), (2, 3), (3, 4), (4, 6), (6, 9), (9, 15)]
 def _env(world: str, estimator: str, mode: str, options: dict):
     from stsf_gym.agents.follower import PathFollower
     from stsf_gym.episode_env import make_episode_env
-    from stsf_gym.experiments.figures import PATH_ONLY
+    from stsf_gym.experiments.fig10_11 import PATH_ONLY
 
     env = make_episode_env(world, estimator, {"camera__mode": mode}, options)
     return env, PathFollower.for_env(env, **PATH_ONLY)

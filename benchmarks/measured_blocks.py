@@ -18,7 +18,7 @@ behaviour, not by bytes (:mod:`stsf_gym.results.behaviour`):
 A block that names no results is **not tied**; it must be listed in
 ``benchmarks/measured_not_tied.yaml`` with the reason, so the list stays visible.
 
-Rules (``tests/test_measured_blocks.py`` runs them in ``make test``): markers pair up and names
+Rules (``tests/docs/test_measured_blocks.py`` runs them in ``make test``): markers pair up and names
 are unique; a tied block's files exist, carry provenance and are shown in its text; an untied
 block is listed with a reason, and the list names no other block; README.md's blocks are
 current (the README quotes no stale figure).
@@ -43,7 +43,7 @@ import yaml
 
 from stsf_gym.agents.pretrained import ALIASES, MODELS, PREFIX
 from stsf_gym.results.behaviour import VERSIONS, code_digest
-from stsf_gym.results.provenance import file_digest
+from stsf_gym.results.code_identity import file_digest
 
 ROOT = Path(__file__).resolve().parent.parent
 NOT_TIED = Path("benchmarks/measured_not_tied.yaml")  # relative to the repository

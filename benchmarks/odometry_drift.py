@@ -17,7 +17,7 @@ from tqdm import tqdm
 
 import stsf_gym  # noqa: F401
 from stsf_gym.agents.follower import PathFollower
-from stsf_gym.estimators.odometry import integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import integrate_wheel_travel
 from stsf_gym.io import markdown_table
 
 

@@ -1,7 +1,7 @@
 """Fewer physics substeps or solver iterations: what a step saves and what fidelity it loses.
 
 For each ``physics_hz / solver iterations`` pair, the episodes of the simulation's fidelity
-tests (``tests/test_robot.py``) with every metric read out instead of asserted: perfect
+tests (``tests/envs/test_robot.py``) with every metric read out instead of asserted: perfect
 encoders dead-reckoning a 30 s spin and a 30 s weave (heading drift, position drift per metre,
 the chassis's worst tilt from level while turning), a full-speed ramp from rest (distance over
 what the acceleration limit gives), and the time of one ``stepSimulation`` in a suite world
@@ -26,10 +26,11 @@ import numpy as np
 
 import stsf_gym  # noqa: F401 - registers the ids
 from stsf_gym.envs import simulator
-from stsf_gym.estimators.odometry import integrate_wheel_travel
+from stsf_gym.estimators.odometry_model import integrate_wheel_travel
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-from conftest import NOISE_FREE_ENCODERS
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "envs"))
+from helpers import NOISE_FREE_ENCODERS
 from test_robot import STRAIGHT, mount_error, reversing_turns
 
 LEVEL_LIMIT = 0.5e-3  # m and rad: the level-chassis test's bound

@@ -25,12 +25,12 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from tqdm import tqdm
 
+from stsf_gym.config_files import CONFIG_DIR
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.estimators import ESTIMATORS
 from stsf_gym.experiments.benchmark.run import benchmark_cells
 from stsf_gym.experiments.fault_runs import load_fault_set
 from stsf_gym.experiments.jobs.cells import run_cell
-from stsf_gym.yaml_layers import CONFIG_DIR
 
 FAULTS = CONFIG_DIR / "faults" / "soak.yaml"
 MAX_RSS_GROWTH_MB = 50.0  # an episode's arrays are a few MB; a leak per episode adds up

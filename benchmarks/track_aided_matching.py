@@ -20,7 +20,7 @@ from tqdm import tqdm
 
 from stsf_gym.episode_env import make_episode_env
 from stsf_gym.experiments.episodes import make_agent
-from stsf_gym.experiments.figures import PATH_ONLY
+from stsf_gym.experiments.fig10_11 import PATH_ONLY
 from stsf_gym.vision.detector import LandmarkDetector, to_grey
 from stsf_gym.vision.landmarks import board_corners
 from stsf_gym.vision.predicted import BoardPrediction, PredictedMatcher

@@ -19,6 +19,14 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+from stsf_gym.config_files import (
+    CONFIG_DIR,
+    deep_merge,
+    overrides_to_tree,
+    read_yaml,
+    shown,
+    world_files,
+)
 from stsf_gym.envs.fault_spec import FaultSpec
 from stsf_gym.envs.sensors.settings import (
     CalibrationErrorConfig,
@@ -50,14 +58,6 @@ from stsf_gym.validation import (
     build,
     check_keywords,
     require,
-)
-from stsf_gym.yaml_layers import (
-    CONFIG_DIR,
-    deep_merge,
-    overrides_to_tree,
-    read_yaml,
-    shown,
-    world_files,
 )
 
 __all__ = [  # re-exported: the config API lives here

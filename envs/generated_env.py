@@ -13,13 +13,13 @@ from typing import Any
 
 import gymnasium as gym
 
+from stsf_gym.config_files import merge_settings
 from stsf_gym.envs.config import EnvConfig, WorldConfig, check_env_keywords, load_config
 from stsf_gym.envs.corridor_env import CorridorEnv
 from stsf_gym.envs.random_streams import RandomStreams
 from stsf_gym.envs.worlds.generator import GenerationError, generate_world, world_tree
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
 from stsf_gym.validation import ConfigError, reset_options
-from stsf_gym.yaml_layers import merge_settings
 
 REDRAWS = 10  # drawn worlds the generator cannot lay out, skipped before the error is raised
 GENERATED = "generated"  # the world name of generated worlds; ``generated:<split>`` labels
@@ -71,7 +71,7 @@ def world_argument_error(world: object) -> ConfigError:
 def make_suite_env(env: dict, **overrides: Any) -> GeneratedCorridorEnv:
     """A suite's world env (``stsf_gym/Suite-<Name>-v0``): the suite's settings ``env`` (its
     ``generator`` and env sections) with ``overrides`` over them section by section
-    (:func:`~stsf_gym.yaml_layers.merge_settings`)."""
+    (:func:`~stsf_gym.config_files.merge_settings`)."""
     return GeneratedCorridorEnv(**merge_settings(env, overrides))
 
 

@@ -13,10 +13,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from stsf_gym.config_files import SUITE_DIR, read_yaml, shown
 from stsf_gym.envs.config import load_config
 from stsf_gym.envs.worlds.generator_config import GeneratorConfig, load_generator_config
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import SUITE_DIR, read_yaml, shown
 
 SUITE_KEYS = ("generator", "env")
 PROTOCOL = "declare"  # every suite's task: success judged at the declared stops

@@ -25,9 +25,9 @@ from typing import Annotated, ClassVar
 
 import numpy as np
 
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import observe, robot_pose_from_landmark
+from stsf_gym.estimators.odometry_estimator import OdometryEstimator
 from stsf_gym.geometry import wrap_angle
 from stsf_gym.validation import Range
 

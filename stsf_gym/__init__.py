@@ -24,7 +24,8 @@ import math
 
 from gymnasium.envs.registration import register, registry
 
-__version__ = "0.1.0"
+#: The package version, declared here only (``pyproject.toml`` reads it; CHANGELOG.md by version).
+__version__ = "0.2.0"
 
 #: Registered environment ids and the world each one loads from ``configs/worlds``.
 ENV_WORLDS: dict[str, str] = {
@@ -105,7 +106,7 @@ def _title(name: str) -> str:
 
 def _register_suites() -> None:
     """The ids of every suite in ``configs/suites/``: the world env and one per pose source."""
-    from stsf_gym.yaml_layers import SUITE_DIR, deep_merge, read_yaml
+    from stsf_gym.config_files import SUITE_DIR, deep_merge, read_yaml
 
     for path in sorted(SUITE_DIR.glob("*.yaml")):
         suite = read_yaml(path)  # checked when an env is made (stsf_gym.envs.suite)
@@ -127,7 +128,7 @@ def _register_rl(suite: str, env: dict) -> None:
     declaring its episodes' most decisions (the suite's time limit over the decision period;
     :func:`stsf_gym.agents.rl.ready.episode_decisions` computes the same from the env, and a
     test holds them equal)."""
-    from stsf_gym.yaml_layers import CONFIG_DIR, read_yaml
+    from stsf_gym.config_files import CONFIG_DIR, read_yaml
 
     defaults = read_yaml(CONFIG_DIR / "default.yaml")["sim"]
     seconds = (env.get("sim") or {}).get("max_episode_seconds", defaults["max_episode_seconds"])

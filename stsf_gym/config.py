@@ -9,10 +9,10 @@ __all__ = ["CONFIG_DIR", "EnvConfig", "load_config", "parse_overrides"]
 
 def parse_overrides(items: list[str]) -> dict:
     """``["camera.width=640", "world=straight_10m"]`` to overrides; values parsed as YAML
-    (:func:`~stsf_gym.yaml_layers.load_value`: ``1e-4`` is a number)."""
+    (:func:`~stsf_gym.config_files.load_value`: ``1e-4`` is a number)."""
     import yaml
 
-    from stsf_gym.yaml_layers import load_value
+    from stsf_gym.config_files import load_value
 
     overrides = {}
     for item in items:

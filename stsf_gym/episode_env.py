@@ -9,9 +9,9 @@ from typing import Any
 
 import gymnasium as gym
 
+from stsf_gym.config_files import merge_settings
 from stsf_gym.estimators import estimator_class, estimator_settings
 from stsf_gym.wrappers import TRUTH, CameraPointingWrapper, PoseEstimateWrapper, check_sensors
-from stsf_gym.yaml_layers import merge_settings
 
 #: Keyword arguments of an env that are not config values.
 NOT_CONFIG = ("render_mode", "split", "generator")

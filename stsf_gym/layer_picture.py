@@ -6,7 +6,7 @@ or, inside a group of rooms that import one another (the simulator's ``envs``, `
 ``rendering``), rooms of its own floor. An arrow is an import that no longer path of arrows
 already implies (the graph's transitive reduction): ``python -m stsf_gym.layers`` lists every
 import. The drawing is plain text built here, the same bytes on every machine, so
-``tests/test_layers.py`` can hold the committed picture to what the code draws now.
+``tests/package/test_layers.py`` can hold the committed picture to what the code draws now.
 """
 
 from __future__ import annotations

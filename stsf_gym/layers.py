@@ -6,13 +6,13 @@
 status 1 when there is one. The rules (:data:`ALLOWED`):
 
     stsf_gym.cli, stsf_gym.experiments -> stsf_gym.agents -> stsf_gym.wrappers
-        -> stsf_gym.state_history -> stsf_gym.estimators (and .references)
+        -> stsf_gym.estimators (and .references)
         -> stsf_gym.fusion / vision / geometry / metrics / results / tum;
     stsf_gym.experiments, stsf_gym.bench -> stsf_gym.recording -> stsf_gym.wrappers (no envs);
     stsf_gym.envs (and its folders .worlds, .rendering) -> stsf_gym.vision.landmarks / geometry;
     stsf_gym.envs.rendering never imports PyBullet
 
-plus the neutral leaves both sides share (``validation``, ``yaml_layers``, ``io``, ``video``,
+plus the neutral leaves both sides share (``validation``, ``config_files``, ``io``, ``video``,
 ``terminal_table``, ``camera_model``: the lens model the simulator renders with and the
 estimators undistort with). Also
 checked: no module imports another's private (``_name``) name, no import cycle between
@@ -38,8 +38,8 @@ ROOT = Path(__file__).resolve().parent.parent
 #: namespace; a wheel installs them all under ``stsf_gym/``. Written here once for the code
 #: (these checks, the docs' API pages, the provenance of results, the step bench's
 #: ``--baseline`` checkout); setuptools reads no Python, so ``pyproject.toml``'s
-#: ``[tool.setuptools] package-dir`` repeats it for the build, and ``tests/test_layers.py``
-#: fails when the two differ.
+#: ``[tool.setuptools] package-dir`` repeats it for the build, and
+#: ``tests/package/test_layers.py`` fails when the two differ.
 PACKAGE_DIRS = {
     "stsf_gym": "stsf_gym",
     "stsf_gym.envs": "envs",
@@ -52,7 +52,7 @@ EXTERNAL = ("pybullet", "pybullet_utils")  # third-party layers the rules name
 LEAVES = (
     "stsf_gym.geometry",
     "stsf_gym.validation",
-    "stsf_gym.yaml_layers",
+    "stsf_gym.config_files",
     "stsf_gym.io",
     "stsf_gym.camera_model",
     "stsf_gym.video",
@@ -68,7 +68,6 @@ ESTIMATION = (
     *CORE,
     "stsf_gym.estimators",
     "stsf_gym.estimators.references",
-    "stsf_gym.state_history",
 )
 EPISODE = (
     *ESTIMATION,
@@ -95,16 +94,16 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     # modules) and read back for replays, so a replay runs with no simulator
     "stsf_gym.recording": (*ESTIMATION, "stsf_gym.wrappers"),
     "stsf_gym.agents": EPISODE,
-    "stsf_gym.config": ("stsf_gym.envs", "stsf_gym.validation", "stsf_gym.yaml_layers"),
+    "stsf_gym.config": ("stsf_gym.envs", "stsf_gym.validation", "stsf_gym.config_files"),
     "stsf_gym.episode_env": (
         "stsf_gym.wrappers",
         "stsf_gym.estimators",
         "stsf_gym.envs",
         *ENV_FOLDERS,
-        "stsf_gym.yaml_layers",  # env settings merged section by section
+        "stsf_gym.config_files",  # env settings merged section by section
     ),
     "stsf_gym.wrappers": ESTIMATION,
-    "stsf_gym": ("stsf_gym.yaml_layers",),  # the __init__: registration (reads suite files)
+    "stsf_gym": ("stsf_gym.config_files",),  # the __init__: registration (reads suite files)
     "stsf_gym.envs": (*ENV_SHARED, *ENV_FOLDERS, *EXTERNAL),
     # worlds: layouts, checks, the generator (numpy) and the PyBullet builder of a world
     "stsf_gym.envs.worlds": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.rendering", *EXTERNAL),
@@ -112,8 +111,6 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.envs.rendering": (*ENV_SHARED, "stsf_gym.envs", "stsf_gym.envs.worlds"),
     "stsf_gym.configs": (),  # package data only
     "stsf_gym.estimators": CORE,
-    # late measurements: any estimator rewound and replayed (used by the wrapper)
-    "stsf_gym.state_history": (*CORE, "stsf_gym.estimators"),
     # the references (smoother, MCL, the floor): estimators too, on GTSAM and numpy
     "stsf_gym.estimators.references": ESTIMATION,
     "stsf_gym.fusion": ("stsf_gym.geometry",),
@@ -122,7 +119,7 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
     "stsf_gym.tum": ("stsf_gym.io",),
     "stsf_gym.vision": ("stsf_gym.vision.landmarks", "stsf_gym.geometry"),
     "stsf_gym.vision.landmarks": (),
-    "stsf_gym.yaml_layers": ("stsf_gym.validation",),
+    "stsf_gym.config_files": ("stsf_gym.validation",),
     "stsf_gym.geometry": ("stsf_gym.validation",),  # ranges of the odometry calibration
     "stsf_gym.validation": (),
     "stsf_gym.io": (),

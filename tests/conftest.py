@@ -1,19 +1,12 @@
-"""Shared fixtures: small, fast envs (the camera off unless a test needs it), and the command
-line run in the test's process."""
+"""The fixtures the tests share: small, fast envs (the camera off unless a test needs it), the
+command line run in the test's process and one tiny trained model. Everything else the tests
+share is in ``helpers.py``."""
 
 from __future__ import annotations
 
 import gymnasium as gym
-import numpy as np
 import pytest
-
-import stsf_gym
-
-NOISE_FREE_ENCODERS = {
-    "encoders__radius_error_std": 0.0,
-    "encoders__wheelbase_error_std": 0.0,
-    "encoders__slip_std": 0.0,
-}
+from helpers import train_tiny_learner
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -42,18 +35,6 @@ def make_env():
         env.close()
 
 
-def drive(env, actions, seed: int = 0, options: dict | None = None):
-    """Reset with ``seed`` and apply ``actions``; return the list of (obs, info) after each."""
-    obs, info = env.reset(seed=seed, options=options)
-    history = [(obs, info)]
-    for action in actions:
-        obs, _, terminated, truncated, info = env.step(np.asarray(action, np.float32))
-        history.append((obs, info))
-        if terminated or truncated:
-            break
-    return history
-
-
 @pytest.fixture
 def run_cli(monkeypatch, capsys):
     """``stsf_gym.cli.main(argv)`` -> (exit code, stderr), C stdout left alone."""
@@ -68,68 +49,6 @@ def run_cli(monkeypatch, capsys):
     return run
 
 
-def _base_and_source(env_id: str) -> tuple[str, str | None]:
-    """``stsf_gym/Suite-Sparse-EKF-v0`` -> ("Suite-Sparse", "EKF"); a base id's source is None."""
-    name = env_id.split("/", 1)[1].removesuffix("-v0")
-    base, _, last = name.rpartition("-")
-    if base and last in stsf_gym.ESTIMATOR_IDS:
-        return base, last
-    return name, None
-
-
-def id_matrix(env_ids) -> list:
-    """``env_ids`` as pytest params: a covering few in the default tier (each base world once
-    and each pose source once, paired off in turn, and one bare base id), every other one
-    marked ``every_id``."""
-    parts = {env_id: _base_and_source(env_id) for env_id in env_ids}
-    bases = sorted({base for base, _ in parts.values()})
-    sources = sorted({source for _, source in parts.values() if source})
-    turns = max(len(bases), len(sources))
-    covering = {(bases[i % len(bases)], sources[i % len(sources)]) for i in range(turns)}
-    covering.add((bases[0], None))
-    return [
-        pytest.param(env_id, id=env_id, marks=() if part in covering else pytest.mark.every_id)
-        for env_id, part in sorted(parts.items())
-    ]
-
-
-def registered_ids() -> list[str]:
-    """Every id the package registers."""
-    return sorted(i for i in gym.registry if i.startswith("stsf_gym/"))
-
-
-#: The corridor suite's learner, tiny: one expert leg, no DAgger round, 1 val route, then three
-#: PPO updates on the reward from the clone (the first trains the critic alone).
-TINY_LEARNER = {
-    "demonstrations.expert_episodes": 1,
-    "demonstrations.rounds": 0,
-    "demonstrations.cloning.epochs": 2,
-    "n_eval_episodes": 1,
-    "eval_freq": 64,
-    "env.sim.max_episode_seconds": 6.0,
-    "train_env.sim.max_episode_seconds": 6.0,
-    "train_env.task.leg_min": 1.0,
-    "train_env.task.leg_max": 1.5,
-    "n_steps": 32,
-    "batch_size": 32,
-    "n_epochs": 2,
-    "finetune.timesteps": 96,
-    "finetune.value_warmup_steps": 32,
-    "finetune.clone_kl_coef": 0.5,
-    "finetune.learning_rate": 1.0e-4,
-}
-
-
-def train_tiny_learner(out, **extra) -> dict:
-    """``dagger+ppo`` on the corridor suite's true pose with :data:`TINY_LEARNER` into ``out``."""
-    from stsf_gym.agents.training.train import train
-
-    return train(
-        "dagger+ppo", "truth", out, n_envs=1, overrides=TINY_LEARNER, progress_bar=False,
-        suite="corridor", **extra,
-    )  # fmt: skip
-
-
 @pytest.fixture(scope="session")
 def tiny_learner(tmp_path_factory):
     """One tiny trained model, made once per pytest run and shared by the agent tests: the
@@ -137,45 +56,3 @@ def tiny_learner(tmp_path_factory):
     its summary."""
     out = tmp_path_factory.mktemp("tiny-learner")
     return out, train_tiny_learner(out)
-
-
-def run_rl_zoo3(env_id: str, folder, *arguments: str):
-    """``python -m rl_zoo3.train`` as its users run it: PPO on ``env_id`` with the package's
-    zoo file, 128 steps in updates of 64, logs under ``folder``; the finished process."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", env_id]
-    command += ["--gym-packages", "stsf_gym", "--conf-file", "stsf_gym.agents.zoo", "-n", "128"]
-    command += ["--seed", "0", "-f", str(folder), *arguments]
-    command += ["-params", "n_envs:1", "n_steps:64", "batch_size:32"]
-    root = Path(__file__).resolve().parents[1]
-    return subprocess.run(
-        command,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=folder,
-        env={**os.environ, "PYTHONPATH": str(root)},
-    )
-
-
-def interrupt_in_the_third_rollout(monkeypatch, run) -> None:
-    """``run()`` (a tiny training of :data:`TINY_LEARNER`'s rollouts of 32) stopped by a
-    KeyboardInterrupt once past 70 timesteps, in its third rollout, as Ctrl-C stops it."""
-    from stsf_gym.agents.training.training_log import EpisodeLog
-
-    original = EpisodeLog._on_step
-
-    def interrupt(self):
-        original(self)
-        if self.num_timesteps > 70:
-            raise KeyboardInterrupt
-        return True
-
-    monkeypatch.setattr(EpisodeLog, "_on_step", interrupt)
-    with pytest.raises(KeyboardInterrupt):
-        run()
-    monkeypatch.setattr(EpisodeLog, "_on_step", original)

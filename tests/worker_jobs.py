@@ -1,5 +1,5 @@
 """Jobs that tests run in worker processes, kept apart from the tests so that a worker imports
-only this module and what its job imports (``tests/test_provenance.py``)."""
+only this module and what its job imports (``tests/results/test_provenance.py``)."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Agents shipped trained, with their settings and provenance (as rl-baselines3-zoo ships
 its agents): named ``pretrained:<suite>/<algo>-<pose source>`` wherever an agent is named.
 
-``<algo>`` says what ran (:func:`~stsf_gym.agents.sb3_agent.trained_algo`): ``dagger``
+``<algo>`` says what ran (:func:`~stsf_gym.agents.model_files.trained_algo`): ``dagger``
 (behaviour cloning and DAgger rounds labelled by the follower, no reward), ``dagger+ppo`` (then
 PPO on the env's reward) or ``ppo`` (reward only). Names shipped before an agent was renamed
 stay valid as **aliases** (``trained-models/aliases.json``, old name -> new): the agents shipped
@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from stsf_gym.agents.sb3_agent import trained_algo
+from stsf_gym.agents.model_files import trained_algo
 from stsf_gym.io import write_json
-from stsf_gym.results.provenance import note_data_files
+from stsf_gym.results.code_identity import note_data_files
 from stsf_gym.validation import ConfigError
 
 PREFIX = "pretrained:"
@@ -167,9 +167,9 @@ def shipped_name(model: str | Path) -> str | None:
 def suite_test_env(agent, suite: str, pose_source: str, env: dict | None = None):
     """``agent``'s policy stack over ``suite``'s test worlds on ``pose_source``, with the env
     settings the agent needs (its STOP entry) and ``env`` over the suite's."""
+    from stsf_gym.config_files import deep_merge
     from stsf_gym.envs.suite import load_suite
     from stsf_gym.episode_env import make_episode_env
-    from stsf_gym.yaml_layers import deep_merge
 
     settings = deep_merge(load_suite(suite).episode_env, agent.env_overrides())
     settings = deep_merge(settings, env or {})

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import torch
 
-from stsf_gym.agents.sb3_agent import trained_algo
+from stsf_gym.agents.model_files import trained_algo
 from stsf_gym.agents.training_folder import MODEL, seed_runs
 from stsf_gym.io import check_folder, write_json
 from stsf_gym.validation import ConfigError
@@ -39,7 +39,7 @@ def checked_runs(training: Path, suite: str) -> list[dict]:
     """The ``train.json`` record of each seed of ``training``, checked against its model and
     ``suite`` (:data:`AGREED_KEYS`, :data:`SHARED_KEYS`); ConfigError naming the first
     disagreement."""
-    from stsf_gym.agents.sb3_agent import check_weights, model_metadata
+    from stsf_gym.agents.model_files import check_weights, model_metadata
 
     runs = seed_runs(training)
     if not runs:

@@ -39,11 +39,11 @@ from stsf_gym.agents.rl.declaration import declaration as design_of
 from stsf_gym.agents.training.hyperparams import Hyperparams, load_hyperparams
 from stsf_gym.agents.training.settings import suite_env
 from stsf_gym.agents.training.training_envs import env_id_for
+from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.generated_env import generated_label
 from stsf_gym.episode_env import make_episode_env
 from stsf_gym.estimators import estimator_class
 from stsf_gym.wrappers import TRUTH
-from stsf_gym.yaml_layers import deep_merge
 
 SPLITS = ("train", "val", "test")
 

@@ -1,7 +1,7 @@
 """Checkpoints of a training run, each written atomically, and the resume from them.
 
 A checkpoint made by other code or another resolved configuration (its
-:func:`~stsf_gym.results.provenance.fingerprint`, ``made_by``, differs) is not resumed: the
+:func:`~stsf_gym.results.fingerprint.fingerprint`, ``made_by``, differs) is not resumed: the
 run says so, moves the old checkpoints to ``stale-checkpoints/`` and starts afresh.
 """
 
@@ -17,7 +17,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 
-from stsf_gym.agents.sb3_agent import META_KEY, model_metadata
+from stsf_gym.agents.model_files import META_KEY, model_metadata
 from stsf_gym.agents.training.hyperparams import learner_of
 from stsf_gym.agents.training.training_log import (
     EPISODES_CSV,

@@ -26,6 +26,7 @@ from stsf_gym.agents.decision_interval import DEFAULT_DECISION_STEPS
 from stsf_gym.agents.demonstrations.dagger import DemonstrationConfig, demonstration_config
 from stsf_gym.agents.observation import ObservationConfig, observation_config
 from stsf_gym.agents.rl.residual import ResidualConfig
+from stsf_gym.config_files import deep_merge, shown
 from stsf_gym.envs.config import CONFIG_DIR, build, overrides_to_tree, read_yaml
 from stsf_gym.validation import (
     ConfigError,
@@ -37,7 +38,6 @@ from stsf_gym.validation import (
     check_number,
     require,
 )
-from stsf_gym.yaml_layers import deep_merge, shown
 
 #: Supported algorithms: name -> "module:class" of the stable-baselines3 learner.
 ALGORITHMS: dict[str, str] = {"ppo": "stable_baselines3:PPO", "sac": "stable_baselines3:SAC"}

@@ -58,7 +58,7 @@ def run_kind(algo: str, estimator: str, world: str, suite: str | None) -> dict:
 def saved_kind(out: Path) -> tuple[dict, Path] | None:
     """The kind of run whose trained work lies in ``out`` and the file that says so: its
     ``train.json``, else its model's or a checkpoint's metadata; None for a folder without."""
-    from stsf_gym.agents.sb3_agent import model_metadata
+    from stsf_gym.agents.model_files import model_metadata
 
     record = out / "train.json"
     if record.is_file():

@@ -32,13 +32,14 @@ from stsf_gym.agents.training.hyperparams import (
     update_size,
 )
 from stsf_gym.agents.training.training_envs import env_id_for, evaluation_world
+from stsf_gym.config_files import deep_merge, overrides_to_tree
 from stsf_gym.envs.generated_env import generated_label
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import resolved_config
-from stsf_gym.results.provenance import fingerprint, provenance
+from stsf_gym.results.fingerprint import fingerprint
+from stsf_gym.results.provenance import provenance
 from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import check_pose_source
-from stsf_gym.yaml_layers import deep_merge, overrides_to_tree
 
 
 @dataclass(frozen=True)
@@ -55,7 +56,7 @@ class RunSettings:
     reward_steps: int  # the learning-from-reward stage's budget (0: no such stage)
     env: dict  # the evaluation env's settings
     train_env: dict  # the training envs' (env with train_env over it)
-    meta: dict  # what every saved model carries (agents/sb3_agent.py)
+    meta: dict  # what every saved model carries (agents/model_files.py)
     declaration: Declaration | None = None  # plain RL on a suite: how its legs declare
 
     @property

@@ -29,8 +29,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from stsf_gym.agents.demonstrations.dagger import run_demonstrations, stage_episodes
+from stsf_gym.agents.model_files import META_KEY
 from stsf_gym.agents.rl.residual import start_as_follower
-from stsf_gym.agents.sb3_agent import META_KEY
 from stsf_gym.agents.training.checkpoints import (
     finished_summary,
     latest_checkpoint,
@@ -57,7 +57,8 @@ from stsf_gym.agents.training.training_envs import (
 )
 from stsf_gym.agents.training.training_log import last_evaluation, plot_learning_curve
 from stsf_gym.io import write_json
-from stsf_gym.results.provenance import code_version, reference_ms
+from stsf_gym.results.code_identity import code_version
+from stsf_gym.results.machine_speed import reference_ms
 
 __all__ = [
     "EVAL_SEED_OFFSET", "env_id_for", "latest_checkpoint", "make_training_env", "save_atomic",

@@ -21,7 +21,7 @@ from stsf_gym.agents.policy_stack import policy_stack
 from stsf_gym.agents.training.worker_envs import FailFastSubprocVecEnv
 from stsf_gym.envs.generated_env import generated_label, parse_world
 from stsf_gym.episode_env import make_episode_env
-from stsf_gym.results.provenance import loaded_modules, note_worker_modules
+from stsf_gym.results.code_identity import loaded_modules, note_worker_modules
 
 EVAL_SEED_OFFSET = 10_000  # the evaluation env's seed is the training seed plus this
 

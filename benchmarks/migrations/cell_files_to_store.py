@@ -22,13 +22,13 @@ from pathlib import Path
 from stsf_gym.experiments.jobs.cells import cell_config
 from stsf_gym.experiments.jobs.store import open_store, write_row
 from stsf_gym.results.behaviour import versions_digest
+from stsf_gym.results.fingerprint import config_digest
 from stsf_gym.results.freshness import CurrentCode
-from stsf_gym.results.provenance import config_digest
 
 PROBE = """
 import json, sys
 from stsf_gym.experiments.jobs.cells import evaluate_cell
-from stsf_gym.results.provenance import loaded_modules
+from stsf_gym.results.code_identity import loaded_modules
 for cell in json.load(sys.stdin):
     evaluate_cell(cell)
 print(json.dumps(loaded_modules()))

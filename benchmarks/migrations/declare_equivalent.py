@@ -17,8 +17,8 @@ from pathlib import Path
 
 from stsf_gym.experiments.jobs.cells import cell_config, run_cell
 from stsf_gym.experiments.jobs.store import read_rows, write_row
+from stsf_gym.results.fingerprint import config_digest
 from stsf_gym.results.freshness import CurrentCode
-from stsf_gym.results.provenance import config_digest
 
 #: Result keys that are measurements of time, different on every run.
 TIMING = {"ms_per_step", "stage_ms_per_step", "wall_time_s", "train_wall_time_s"}

@@ -29,7 +29,7 @@ import stsf_gym
 from stsf_gym.agents.rl.ready import rl_hyperparams
 from stsf_gym.agents.training.hyperparams import policy_kwargs_for_sb3
 from stsf_gym.io import write_json
-from stsf_gym.results.provenance import reference_ms
+from stsf_gym.results.machine_speed import reference_ms
 
 
 def user_script(suite: str, estimator: str, decisions: int) -> float:

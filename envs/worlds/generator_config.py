@@ -12,9 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
+from stsf_gym.config_files import CONFIG_DIR, deep_merge, read_yaml, shown
 from stsf_gym.validation import ConfigError, Count, NonNegative, Positive, Range, build, require
 from stsf_gym.vision.landmarks import LandmarkPattern
-from stsf_gym.yaml_layers import CONFIG_DIR, deep_merge, read_yaml, shown
 
 DEFAULT_GENERATOR = CONFIG_DIR / "generator" / "default.yaml"
 SPLITS = ("train", "val", "test")  # val: model selection while training, never benchmarked

@@ -44,7 +44,8 @@ from stsf_gym.bench.step import step_section
 from stsf_gym.bench.targets import targets
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.recording import missing_modules
-from stsf_gym.results.provenance import provenance, reference_ms
+from stsf_gym.results.machine_speed import reference_ms
+from stsf_gym.results.provenance import provenance
 
 
 def machine() -> dict:

@@ -25,7 +25,7 @@ from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 from pathlib import Path
 
-from stsf_gym.results.provenance import run_reporting_modules, worker_result
+from stsf_gym.results.code_identity import run_reporting_modules, worker_result
 
 #: (format, frames) recorded per sensor mode; the fast mode has no frames to store.
 RECORDINGS = {

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from stsf_gym.results.provenance import run_reporting_modules, worker_result
+from stsf_gym.results.code_identity import run_reporting_modules, worker_result
 
 #: case -> (env overrides, pose source); "truth" drives on info["true_pose"].
 CASES: dict[str, tuple[dict, str]] = {

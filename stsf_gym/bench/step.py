@@ -181,7 +181,7 @@ def step_section(
     made back to back (``ratio_rounds``: mean, std, count, values). The two sides alternate case
     by case, the first of a pair switching every round, so that a change of load (a virtual
     machine's neighbours) hits both alike."""
-    from stsf_gym.results.provenance import reference_ms
+    from stsf_gym.results.machine_speed import reference_ms
 
     sides = {"this": [sys.executable]}
     rows = {case: {"case": case} for case in CASES}
@@ -317,7 +317,7 @@ def _run_script(command: list[str], arguments: list[str], this_code: bool) -> li
     output = json.loads(done.stdout)
     if not this_code:
         return output
-    from stsf_gym.results.provenance import note_worker_modules
+    from stsf_gym.results.code_identity import note_worker_modules
 
     note_worker_modules(output["modules"])
     return output["rows"]
@@ -342,7 +342,7 @@ def main() -> None:
     else:
         result = [measure(case, args.steps, seed=args.seed) for case in args.case or CASES]
     if args.modules:  # this code's own helper: a baseline's package may lack it
-        from stsf_gym.results.provenance import loaded_modules
+        from stsf_gym.results.code_identity import loaded_modules
 
         result = {"rows": result, "modules": loaded_modules()}
     print(json.dumps(result, indent=1))

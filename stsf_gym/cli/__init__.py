@@ -15,7 +15,7 @@ from stsf_gym.cli.options import preflight, refuse_unknown
 from stsf_gym.cli.reports import NothingFinished
 from stsf_gym.envs.quiet import VERBOSE_ENV
 from stsf_gym.experiments.jobs.cache import JobsFailed
-from stsf_gym.results.provenance import set_command
+from stsf_gym.results.command import set_command
 from stsf_gym.validation import ConfigError, FieldError
 
 #: Each command: its module in this package (its options and the handler that calls the API)

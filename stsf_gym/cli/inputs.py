@@ -9,12 +9,12 @@ from pathlib import Path
 
 from stsf_gym.cli.options import DEFAULT_WORLD
 from stsf_gym.config import parse_overrides
+from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.config import load_config, overrides_to_tree, read_yaml
 from stsf_gym.io import check_folder
 from stsf_gym.recording import require_recording
 from stsf_gym.validation import ConfigError
 from stsf_gym.wrappers import check_pose_source
-from stsf_gym.yaml_layers import deep_merge
 
 
 def names(text: str, flag: str, empty_ok: bool = False) -> list[str]:

@@ -7,9 +7,9 @@ import argparse
 import difflib
 from pathlib import Path
 
+from stsf_gym.config_files import read_yaml
 from stsf_gym.io import check_file, check_folder, remove_partial_writes
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import read_yaml
 
 DEFAULT_WORLD = "irl_corridor"  # --world when none is given
 DEFAULT_POSE_SOURCE = "truth"  # train --estimator when none is given

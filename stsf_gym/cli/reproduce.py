@@ -7,7 +7,7 @@ import argparse
 from stsf_gym.cli import inputs, options
 from stsf_gym.cli.reports import print_markdown
 from stsf_gym.config import parse_overrides
-from stsf_gym.experiments.figures import fig10, fig11
+from stsf_gym.experiments.fig10_11 import fig10, fig11
 from stsf_gym.experiments.table1.run import run_table1
 
 

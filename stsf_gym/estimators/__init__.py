@@ -32,7 +32,7 @@ from stsf_gym.validation import ConfigError
 #: measurement merged with the odometry prediction; ``smoother`` and ``mcl`` are the field's
 #: references (:mod:`stsf_gym.estimators.references`).
 ESTIMATORS: dict[str, str] = {
-    "odometry": "stsf_gym.estimators.dead_reckoning:OdometryEstimator",
+    "odometry": "stsf_gym.estimators.odometry_estimator:OdometryEstimator",
     "conventional": "stsf_gym.estimators.conventional:ConventionalEstimator",
     "conventional-filter": "stsf_gym.estimators.landmark_fusion:ConventionalFilterEstimator",
     "stsf": "stsf_gym.estimators.landmark_fusion:STSFEstimator",

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration
-from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.odometry_model import OdometryNoise
 from stsf_gym.fusion.chi_square import chi_square_quantile
 from stsf_gym.geometry import OdometryCalibration
 from stsf_gym.vision.landmarks import LandmarkPattern

@@ -68,7 +68,7 @@ that treats systematic errors as white averages them away and becomes overconfid
   below the error the calibration leaves.
 
 The Joseph form and the gate keep single updates from breaking ``P``; the average NEES against
-the true pose (``tests/test_ekf.py``) checks the whole.
+the true pose (``tests/estimators/test_ekf.py``) checks the whole.
 """
 
 from __future__ import annotations
@@ -79,13 +79,13 @@ from typing import ClassVar
 import numpy as np
 
 from stsf_gym.estimators.base import MapLandmark, SensorModel, chi_square_gate
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
     LandmarkObservation,
     observe,
     robot_pose_from_landmark,
 )
+from stsf_gym.estimators.odometry_estimator import OdometryEstimator
 from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import EKFSettings
 from stsf_gym.geometry import wrap_angle

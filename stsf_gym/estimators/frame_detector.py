@@ -209,7 +209,7 @@ def _homography_fits(plane: np.ndarray, image: np.ndarray) -> bool:
     without fitting it: OpenCV takes the points as float32 and gives up when the summed
     absolute deviation from the mean, of x or of y in either set, is below ``DBL_EPSILON``
     (its normalisation would divide by it). The sums are sequential in double, as OpenCV's
-    loops; ``tests/test_fast_aided.py`` checks the answer against OpenCV's."""
+    loops; ``tests/estimators/test_fast_aided.py`` checks the answer against OpenCV's."""
     return _spread_in_every_axis(np.hstack([plane, image]).astype(np.float32).astype(np.float64))
 
 

@@ -46,7 +46,6 @@ import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
 from stsf_gym.estimators.board_prediction import board_outline, predict_board
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import (
     LandmarkObservation,
@@ -54,7 +53,8 @@ from stsf_gym.estimators.landmark_observation import (
     robot_pose_from_landmark,
     robot_pose_jacobian,
 )
-from stsf_gym.estimators.odometry import odometry_step
+from stsf_gym.estimators.odometry_estimator import OdometryEstimator
+from stsf_gym.estimators.odometry_model import odometry_step
 from stsf_gym.estimators.pair_range import matched_rays, pair_range, pair_ranges
 from stsf_gym.estimators.relocalise import Relocaliser
 from stsf_gym.estimators.settings import ConventionalSettings, STSFSettings

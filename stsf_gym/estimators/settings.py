@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, TypeVar
 
+from stsf_gym.config_files import CONFIG_DIR, deep_merge, extended_files, shown
 from stsf_gym.validation import (
     ConfigError,
     Count,
@@ -23,7 +24,6 @@ from stsf_gym.validation import (
     build,
     require,
 )
-from stsf_gym.yaml_layers import CONFIG_DIR, deep_merge, extended_files, shown
 
 ESTIMATOR_DIR = CONFIG_DIR / "estimators"
 

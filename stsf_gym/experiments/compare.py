@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.agents.registry import make_agent
+from stsf_gym.config_files import deep_merge
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.benchmark.intervals import seed_iqm
 from stsf_gym.experiments.benchmark.trained import agent_name, training_groups
@@ -34,7 +35,6 @@ from stsf_gym.experiments.statistics import rms, summarise
 from stsf_gym.io import markdown_table, save_figure
 from stsf_gym.results import SCHEMA_VERSION, rendered
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import deep_merge
 
 SUMMARY_COLUMNS = (
     "agent",

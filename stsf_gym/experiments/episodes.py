@@ -18,6 +18,7 @@ import gymnasium as gym
 import numpy as np
 
 from stsf_gym.agents.registry import make_agent
+from stsf_gym.config_files import deep_merge
 from stsf_gym.episode_env import make_episode_env, resolved_config
 from stsf_gym.estimators import estimator_settings
 from stsf_gym.estimators.references.floor import FloorRecorder, batch_floor
@@ -27,7 +28,6 @@ from stsf_gym.experiments.jobs.spec import JobKind
 from stsf_gym.metrics import distance_to_path, nees, pose_error
 from stsf_gym.tum import write_tum
 from stsf_gym.wrappers import TruePose, sensor_model
-from stsf_gym.yaml_layers import deep_merge
 
 
 @dataclass(frozen=True)

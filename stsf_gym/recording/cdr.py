@@ -4,7 +4,7 @@
 costs a recorded episode several per cent of its wall time, so the per-step ones are packed
 here with ``struct`` into exactly the bytes ``rosbags`` writes (little-endian CDR with its
 4-byte encapsulation header; every field aligned to its size from the end of that header;
-``tests/test_recording.py`` compares the two byte for byte).
+``tests/recording/test_recording.py`` compares the two byte for byte).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Any pose source rerun on a recorded log, with no simulator: what the live wrapper did.
 
 :class:`~stsf_gym.wrappers.PoseEstimateWrapper` resets the estimator at the start pose and
-drives it with each step's observation (:class:`~stsf_gym.state_history.EstimatorDriver`:
+drives it with each step's observation (:class:`~stsf_gym.wrappers.state_history.EstimatorDriver`:
 with a camera latency, late frames are fused at their exposure); :func:`replay` runs the same
 driver, with the recorded latency, on the observations of a
 :class:`~stsf_gym.recording.log_reader.RecordedLog` and the control period. On a log with

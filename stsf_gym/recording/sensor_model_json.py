@@ -29,7 +29,7 @@ import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration, PanTiltMount
 from stsf_gym.estimators import MapLandmark, SensorModel
-from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.odometry_model import OdometryNoise
 from stsf_gym.geometry import OdometryCalibration
 from stsf_gym.validation import (
     ConfigError,

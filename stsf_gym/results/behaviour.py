@@ -3,10 +3,10 @@
 The code is cut into subsystems, each with a version (like Gymnasium's ``-vN``). A change that
 may move any number a subsystem makes (a trajectory, an estimate, an action, a reward, a score)
 bumps its version in :data:`VERSIONS`, in the same commit; a rewrite that keeps every number
-(a compiled loop, a renamed function, a docstring) leaves it. ``tests/test_step_equality.py`` is
-the proof for the simulated world, the estimators and the follower: its golden episodes are
-replayed to the last bit, and they record the versions they were made with, so new goldens can
-only be written under new versions.
+(a compiled loop, a renamed function, a docstring) leaves it.
+``tests/behaviour/test_step_equality.py`` is the proof for the simulated world, the estimators
+and the follower: its golden episodes are replayed to the last bit, and they record the versions
+they were made with, so new goldens can only be written under new versions.
 
 A results file records the versions of the subsystems its run loaded (:func:`behaviour`); a
 figure quoting it goes stale when one of them moves (``benchmarks/measured_blocks.py``), and a
@@ -42,13 +42,12 @@ PREFIXES: dict[str, str] = {
     "stsf_gym/geometry.py": "world",
     "stsf_gym/camera_model.py": "world",
     "stsf_gym/config.py": "world",
-    "stsf_gym/yaml_layers.py": "world",
+    "stsf_gym/config_files.py": "world",
     "stsf_gym/recording/": "world",
     "stsf_gym/fusion/": "estimation",
     "stsf_gym/vision/": "estimation",
     "stsf_gym/estimators/": "estimation",
     "stsf_gym/wrappers/": "estimation",
-    "stsf_gym/state_history.py": "estimation",
     "stsf_gym/episode_env.py": "estimation",
     "configs/estimators/": "estimation",
     "agents/": "learner",

@@ -11,8 +11,8 @@ module its job did not need: a rerun then does more than it must, never less.
 
 The one override is :data:`EQUIVALENT`: earlier digests of a module declared to compute what
 today's does, for a rewrite proved bit-equal by the golden episodes
-(``tests/test_step_equality.py``, so only modules of the subsystems they pin:
-``tests/test_freshness.py`` checks it).
+(``tests/behaviour/test_step_equality.py``, so only modules of the subsystems they pin:
+``tests/results/test_freshness.py`` checks it).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 
 from stsf_gym.results.behaviour import code_digest
-from stsf_gym.results.provenance import package_file
+from stsf_gym.results.code_identity import package_file
 
 #: ``{relative path: earlier code digests}`` declared to compute what today's module does.
 EQUIVALENT: dict[str, frozenset[str]] = {}

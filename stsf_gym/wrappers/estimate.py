@@ -53,7 +53,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     The estimator's ``dt`` is the time between the encoders' timestamps. When the camera has
     a latency (``camera.latency``), a late frame is fused at its exposure time: the estimator
     is rewound and the odometry since replayed
-    (:class:`~stsf_gym.state_history.EstimatorDriver`, which a log's replay runs too; so
+    (:class:`~stsf_gym.wrappers.state_history.EstimatorDriver`, which a log's replay runs too; so
     ``wrapper.estimator`` may be a new object after a step).
 
     With ``estimator="truth"`` the pose is the true one from ``info`` (:class:`TruePose`):

@@ -17,8 +17,8 @@ from stsf_gym.estimators import (
     SensorModel,
     estimator_class,
 )
-from stsf_gym.state_history import EstimatorDriver, history_horizon
 from stsf_gym.validation import ConfigError
+from stsf_gym.wrappers.state_history import EstimatorDriver, history_horizon
 
 #: The privileged pose source: the true pose from ``info``, for reference runs only.
 TRUTH = "truth"

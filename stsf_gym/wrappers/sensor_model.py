@@ -9,7 +9,7 @@ import numpy as np
 
 from stsf_gym.estimators import MapLandmark, SensorModel, estimator_settings
 from stsf_gym.estimators.base import SonarRingModel
-from stsf_gym.estimators.odometry import OdometryNoise
+from stsf_gym.estimators.odometry_model import OdometryNoise
 from stsf_gym.estimators.settings import OdometrySettings
 
 

@@ -2,14 +2,15 @@
 landmark poses, with the considered parameters the EKF carries (:mod:`..pose_errors`).
 
 **Considered parameters** ``k = [c; m; theta, s]`` (7): the relative errors of the left and
-right wheel radius and the wheelbase (``c``, :class:`~stsf_gym.estimators.odometry.OdometryNoise`),
-the camera mount's position error ``m`` and the believed camera calibration's heading
+right wheel radius and the wheelbase (``c``,
+:class:`~stsf_gym.estimators.odometry_model.OdometryNoise`), the camera mount's position error
+``m`` and the believed camera calibration's heading
 ``theta`` and focal scale ``s``. One draw per episode, the same in every leg and every frame:
 the smoothers estimate ``k`` as a variable with the prior ``N(0, Sigma_k)`` instead of treating
 its effect as white noise, which would average a systematic error away.
 
 **Odometry leg** from frame ``i`` to frame ``j``: the steps' mid-point increments
-(:func:`~stsf_gym.estimators.odometry.odometry_step` from the origin) composed in frame ``i``,
+(:func:`~stsf_gym.estimators.odometry_model.odometry_step` from the origin) composed in frame ``i``,
 ``Delta = delta_1 (+) ... (+) delta_n``, with the first-order covariance of the slip ``Q`` and the
 Jacobian ``J_c`` by ``c``, both carried through the composition (a preintegration)::
 
@@ -38,7 +39,7 @@ from stsf_gym.estimators.landmark_observation import (
     LandmarkObservation,
     landmark_world_pose,
 )
-from stsf_gym.estimators.odometry import odometry_step
+from stsf_gym.estimators.odometry_model import odometry_step
 from stsf_gym.geometry import compose, compose_jacobians, inverse, wrap_angle
 
 CONSIDERED = 7  # wheel radii and wheelbase (3), mount (2), camera heading and focal scale (2)

@@ -16,7 +16,7 @@ incrementally, relinearising a variable whose change exceeds ``relinearize_thres
 
 **Output.** At a camera frame the estimate is the smoothed newest pose with its marginal
 covariance (iSAM2's, rotated from the pose's own frame to world axes): ``pose_cov``. Between
-frames the odometry prediction moves it (as :class:`~..dead_reckoning.OdometryEstimator`).
+frames the odometry prediction moves it (as :class:`~..odometry_estimator.OdometryEstimator`).
 
 **Gating** as the EKF's: a board whose innovation ``nu = z - h(x) - M k`` has
 ``nu^T S^-1 nu`` above the chi-square quantile of ``gate_probability`` (3 dof) with
@@ -37,9 +37,9 @@ import gtsam
 import numpy as np
 
 from stsf_gym.estimators.base import SensorModel, chi_square_gate
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
 from stsf_gym.estimators.landmark_observation import observe
+from stsf_gym.estimators.odometry_estimator import OdometryEstimator
 from stsf_gym.estimators.references import factors
 from stsf_gym.estimators.references.measurements import (
     CONSIDERED,

@@ -46,7 +46,8 @@ from stsf_gym.experiments.jobs.cells import CELL_JOBS
 from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, check_rows, stat
-from stsf_gym.results.provenance import by_digest, provenance
+from stsf_gym.results.fingerprint import by_digest
+from stsf_gym.results.provenance import provenance
 from stsf_gym.validation import ConfigError
 
 WORLD = "generated:test"

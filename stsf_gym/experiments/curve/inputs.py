@@ -5,11 +5,11 @@ value, the same from Python as from ``stsf-gym accuracy-curve``."""
 from __future__ import annotations
 
 from stsf_gym.agents.registry import check_agents
+from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.generated_env import check_distinct_worlds, generated_label
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.estimators import make_estimator
 from stsf_gym.validation import ConfigError, Range, check_number
-from stsf_gym.yaml_layers import deep_merge
 
 DIAL = "degraded-truth"  # the pose source the dial's levels scale
 DEFAULT_WORLD = "irl_corridor"  # the curve's world without a suite

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.config import load_config
 from stsf_gym.envs.generated_env import parse_world
 from stsf_gym.episode_env import NOT_CONFIG, estimator_options
@@ -27,8 +28,8 @@ from stsf_gym.experiments.jobs.cells import CELL_JOBS
 from stsf_gym.experiments.jobs.engine import run_jobs
 from stsf_gym.io import markdown_table, write_atomic, write_json
 from stsf_gym.results import SCHEMA_VERSION, rendered, stats
-from stsf_gym.results.provenance import by_digest, provenance
-from stsf_gym.yaml_layers import deep_merge
+from stsf_gym.results.fingerprint import by_digest
+from stsf_gym.results.provenance import provenance
 
 DEFAULT_LEVELS = (0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 11.0, 16.0)
 DEFAULT_ESTIMATORS = ("odometry", "conventional", "stsf", "ekf")

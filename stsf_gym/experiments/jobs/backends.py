@@ -25,7 +25,7 @@ from typing import Any
 
 from stsf_gym.experiments.jobs.orphan_watchdog import start_watchdog
 from stsf_gym.experiments.jobs.spec import Crash, Finished, Runner
-from stsf_gym.results.provenance import loaded_modules, run_reporting_modules, worker_result
+from stsf_gym.results.code_identity import loaded_modules, run_reporting_modules, worker_result
 from stsf_gym.validation import ConfigError
 
 BACKENDS = ("local", "ray")
@@ -213,7 +213,7 @@ def process_runner(workers: int) -> Runner:
 
 
 def finished(reply: tuple[object, list[str]]) -> Finished:
-    """A worker's :func:`~stsf_gym.results.provenance.run_reporting_modules` reply as a
+    """A worker's :func:`~stsf_gym.results.code_identity.run_reporting_modules` reply as a
     :class:`Finished`, its modules noted as the run's."""
     return Finished(worker_result(reply), reply[1])
 

@@ -25,8 +25,8 @@ from stsf_gym.experiments.jobs.estimate import Stopwatch, plan_line, slots_for
 from stsf_gym.experiments.jobs.spec import Crash, Runner
 from stsf_gym.experiments.jobs.store import Row, open_store, read_rows, write_row
 from stsf_gym.io import to_builtin
+from stsf_gym.results.fingerprint import config_digest
 from stsf_gym.results.freshness import CurrentCode
-from stsf_gym.results.provenance import config_digest
 
 ATTEMPTS = 2  # runs of a job before it is given up
 

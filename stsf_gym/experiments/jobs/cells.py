@@ -20,10 +20,10 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from stsf_gym.config_files import deep_merge
 from stsf_gym.experiments.jobs.checks import cell_problem
 from stsf_gym.experiments.jobs.spec import JobKind, failure
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import deep_merge
 
 #: ``train`` keys that are arguments of ``stsf_gym.agents.training.train.train`` (with their
 #: defaults in a sweep: one env per cell); every other ``train`` key is a hyper-parameter

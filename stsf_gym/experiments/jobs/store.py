@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from stsf_gym.io import to_builtin
-from stsf_gym.results.provenance import config_digest
+from stsf_gym.results.fingerprint import config_digest
 
 SCHEMA = 1
 TABLES = (

@@ -22,7 +22,8 @@ from stsf_gym.experiments.sweep.paired import paired_differences
 from stsf_gym.experiments.sweep.spec import Sweep
 from stsf_gym.io import markdown_table, save_figure, write_atomic, write_json
 from stsf_gym.results import METRICS, SCHEMA_VERSION, render, stats
-from stsf_gym.results.provenance import by_digest, provenance
+from stsf_gym.results.fingerprint import by_digest
+from stsf_gym.results.provenance import provenance
 
 FINAL, RMS = "final_error_m", "ate_rmse_m"
 FIGURE = "errors.png"

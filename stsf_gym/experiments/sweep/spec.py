@@ -29,13 +29,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from stsf_gym.agents.registry import make_agent
+from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.config import CONFIG_DIR, load_config, overrides_to_tree, read_yaml
 from stsf_gym.envs.generated_env import generated_label, parse_world
 from stsf_gym.envs.worlds.generator_config import load_generator_config
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.jobs.cells import cell_kind
 from stsf_gym.validation import ConfigError
-from stsf_gym.yaml_layers import deep_merge
 
 FILE_KEYS = ("base", "grid", "one_at_a_time")
 BASE_DEFAULTS = {

@@ -25,8 +25,8 @@ import numpy as np
 import stsf_gym  # noqa: F401 - registers the env ids
 from stsf_gym.estimators import make_estimator
 from stsf_gym.estimators.camera_pointing import LandmarkPointer
-from stsf_gym.estimators.dead_reckoning import OdometryEstimator
 from stsf_gym.estimators.frame_detector import FrameDetector
+from stsf_gym.estimators.odometry_estimator import OdometryEstimator
 from stsf_gym.experiments.table1.measure import Place, average_features
 from stsf_gym.geometry import to_se3, wrap_angle
 from stsf_gym.wrappers import sensor_model

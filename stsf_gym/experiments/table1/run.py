@@ -20,6 +20,7 @@ from typing import Annotated
 
 import numpy as np
 
+from stsf_gym.config_files import deep_merge, shown
 from stsf_gym.envs.config import CONFIG_DIR, build, load_config, overrides_to_tree, read_yaml
 from stsf_gym.episode_env import estimator_options
 from stsf_gym.experiments.jobs.engine import run_jobs
@@ -35,7 +36,6 @@ from stsf_gym.geometry import wrap_angle
 from stsf_gym.io import markdown_table
 from stsf_gym.results import SCHEMA_VERSION, finite_or_none, stat
 from stsf_gym.validation import ConfigError, Count, Positive, Range, require
-from stsf_gym.yaml_layers import deep_merge, shown
 
 #: Table I of the paper: world distance, conventional estimate and error, STSF estimate and error.
 PAPER_TABLE1 = [
