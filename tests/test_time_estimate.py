@@ -77,7 +77,7 @@ def _train_job(out, timesteps: int = 2048, seed: int = 0) -> dict:
 
 
 def test_train_says_its_runs_and_decisions_before_it_starts(tmp_path):
-    from stsf_gym.cli.train_plan import plan
+    from stsf_gym.experiments.jobs.train_estimate import plan
 
     text, lefts = plan([_train_job(tmp_path / "x"), _train_job(tmp_path / "y", seed=1)], 1)
     assert text.startswith("train: 2 run(s) of ppo: 2048 decisions learning from reward each")
@@ -96,16 +96,16 @@ def test_a_speed_and_the_units_left_give_the_estimate():
 
 
 def test_train_estimates_the_decisions_left_after_a_checkpoint(tmp_path, monkeypatch):
-    from stsf_gym.cli import train_plan
+    from stsf_gym.experiments.jobs import train_estimate
 
     job = _train_job(tmp_path / "run", timesteps=204_800)
-    monkeypatch.setattr(train_plan, "resumable_steps", lambda out, made_by: 88_064)
-    left = train_plan.run_left(job)
+    monkeypatch.setattr(train_estimate, "resumable_steps", lambda out, made_by: 88_064)
+    left = train_estimate.run_left(job)
     assert (left.done, left.decisions) == (88_064, 204_800 - 88_064)
-    estimate.record_speed(train_plan.speed_desc(left.run, "decision"), "other", 100, 1.0)
-    text = train_plan.time_line([job], [left], 1)
+    estimate.record_speed(train_estimate.speed_desc(left.run, "decision"), "other", 100, 1.0)
+    text = train_estimate.time_line([job], [left], 1)
     assert "116,736 decisions (88,064 already done, resumed)" in text
     assert "about 19 min (100.0 decisions/s, measured here over 100 on other settings)" in text
-    train_plan.record_run(job, left, {"timesteps": 204_800, "resumed_from": 88_064,
-                                      "session_wall_time_s": 2_000.0})  # fmt: skip
-    assert "measured here over 116,736 on this work" in train_plan.time_line([job], [left], 1)
+    ran = {"timesteps": 204_800, "resumed_from": 88_064, "session_wall_time_s": 2_000.0}
+    train_estimate.record_run(job, left, ran)
+    assert "measured here over 116,736 on this work" in train_estimate.time_line([job], [left], 1)

@@ -13,10 +13,10 @@ from stsf_gym.agents.training.hyperparams import METHODS
 from stsf_gym.agents.training.preflight import check_runs, check_seeds
 from stsf_gym.agents.training.train import train
 from stsf_gym.cli import inputs, options
-from stsf_gym.cli.train_plan import plan, record_run
 from stsf_gym.config import parse_overrides
 from stsf_gym.envs.suite import suite_names
 from stsf_gym.experiments.campaign import campaign_jobs, run_campaign
+from stsf_gym.experiments.jobs.train_estimate import plan, record_run
 from stsf_gym.validation import ConfigError
 
 

@@ -69,7 +69,7 @@ def time_line(jobs: list[dict], lefts: list[RunLeft], workers: int) -> str:
     episodes = sum(x.episodes for _, x in todo)
     work += [f"{episodes} demonstration episodes"] if episodes else []
     head = f"train: {len(todo)} run(s) to run on {slots} process(es): {' and '.join(work)}"
-    seconds, said = 0.0, {}
+    seconds, said = 0.0, dict[str, None]()  # said: where each speed was measured, once
     for job, left in todo:
         for units, unit in ((left.decisions, "decision"), (left.episodes, "episode")):
             if not units:
