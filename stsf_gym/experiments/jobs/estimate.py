@@ -26,9 +26,9 @@ from pathlib import Path
 from stsf_gym.io import write_json
 
 RATES_ENV = "STSF_GYM_RATES"  # the rates file's path (default: <user cache>/stsf-gym/rates.json)
-#: Seconds per job per process measured on the project's 2-core machine (main of 2026-12-01,
-#: loaded by a training run: 24 demo episodes in 212 s on 2 processes).
-REFERENCE_RATES = {"demo: episodes": 17.7}
+#: Seconds per job per process measured on the project's 2-core machine (2026-12-02, loaded
+#: by training runs, load average 7-8: 24 demo episodes in 191 s on 2 processes).
+REFERENCE_RATES = {"demo: episodes": 15.9}
 
 
 def rates_file() -> Path:
