@@ -53,7 +53,10 @@ def start_at(bar: tqdm, done: int) -> None:
     """Start ``bar`` (not updated yet) now with ``done`` units counted already (tqdm's
     ``initial``): its rate and ETA count only the units run from here, not those of an earlier
     session nor the seconds before (``tqdm.reset`` would draw a negative rate first)."""
-    bar.initial = bar.n = bar.last_print_n = done
+    bar.initial = bar.n = done
+    if bar.disable:  # a bar that draws nothing keeps no clock
+        return
+    bar.last_print_n = done
     bar.start_t = bar.last_print_t = bar._time()  # tqdm's clock
     bar.refresh()
 
