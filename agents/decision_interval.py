@@ -26,7 +26,8 @@ class DecisionInterval(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     The held action's ``stop`` entry (the action layout's, ``task.stop_action``) acts on the
     first step only: a declared stop is one declaration, not one per held step. The episode's
-    end cuts the hold short. ``info["control_steps"]`` tells how many steps were taken.
+    end cuts the hold short. ``info["control_steps"]`` tells how many steps were taken (0 at
+    the reset, so the key is there from the episode's start).
     """
 
     def __init__(self, env: gym.Env, steps: int = DEFAULT_DECISION_STEPS) -> None:
@@ -37,6 +38,11 @@ class DecisionInterval(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.steps = steps
         layout = env.get_wrapper_attr("action_layout")
         self._stop = layout.index("stop") if "stop" in layout else None
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Reset the env; ``info["control_steps"]`` 0."""
+        obs, info = self.env.reset(seed=seed, options=options)
+        return obs, {**info, "control_steps": 0}
 
     def step(self, action):
         """Apply ``action`` for up to :attr:`steps` control steps."""

@@ -81,8 +81,10 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
     - over a :class:`~stsf_gym.agents.rl.residual.ResidualFollower` (its ``follower_action``
       in the observation): the follower's action ``[v, w, stop]`` for this state.
 
-    ``info["is_success"]`` is set at the end of an episode (every goal reached, under the
-    task's protocol), which stable-baselines3's evaluation callback counts.
+    ``info["is_success"]`` tells at the end of an episode whether every goal was reached
+    (under the task's protocol), which stable-baselines3's evaluation callback and ``Monitor``
+    count; it is False before, from the reset on, so a recorder sees one type through the
+    episode (:mod:`~stsf_gym.envs.step_info`).
     """
 
     def __init__(
@@ -114,11 +116,16 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         size += 3 if self._proposal else 0
         self.observation_space = spaces.Box(-FEATURE_LIMIT, FEATURE_LIMIT, (size,), np.float32)
 
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Reset the env: the policy's flat input, and ``info["is_success"]`` False."""
+        obs, info = self.env.reset(seed=seed, options=options)
+        return self.observation(obs), {**info, "is_success": False}
+
     def step(self, action):
-        """Step the env: the policy's flat input, and ``info["is_success"]`` at the end."""
+        """Step the env: the policy's flat input, and ``info["is_success"]``, True only at the
+        end of an episode that reached every goal."""
         obs, reward, terminated, truncated, info = self.env.step(action)
-        if terminated or truncated:
-            info["is_success"] = bool(info["success"])
+        info["is_success"] = bool((terminated or truncated) and info["success"])
         return self.observation(obs), reward, terminated, truncated, info
 
     def observation(self, obs: dict) -> np.ndarray:

@@ -124,16 +124,17 @@ def check_agents(names: list[str]) -> None:
 def make_agents(name: str, options: dict | None = None) -> list[Agent]:
     """One agent per model ``name`` stands for (:func:`~stsf_gym.agents.resolve.resolve_agent`:
     each training seed of a shipped agent or a training folder), or the one agent by name."""
-    # imported when a name needs them: the resolver reads shipped agents' models (SB3, torch),
-    # which a command driving the follower, or a replay, never loads
-    from stsf_gym.agents.resolve import resolve_agent
-    from stsf_gym.agents.trained_agent import SB3Agent
-
     options = options or {}
     if not isinstance(name, str) or not name.strip():
         raise ConfigError(f"an agent name may not be empty, got {name!r}")  # '' is the cwd
     if name in AGENTS:  # before the resolver: a folder of that name is not read as a run
         return [AGENTS[name](**options)]
+    # imported when a name needs them: the resolver reads shipped agents' models (SB3, torch),
+    # which a command driving the follower (each of its worker processes), or a replay, never
+    # loads
+    from stsf_gym.agents.resolve import resolve_agent
+    from stsf_gym.agents.trained_agent import SB3Agent
+
     singles = resolve_agent(name)
     if singles[0].endswith(".zip"):
         if options:

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.stats import chi2
 
 from stsf_gym.geometry import compose, inverse, wrap_angle
 
@@ -104,6 +103,8 @@ def chi2_bounds(dof: int, runs: float = 1, probability: float = BOUNDS_PROBABILI
     (``runs`` may be an effective, fractional count of independent values)."""
     if dof < 1 or runs < 1:
         raise ValueError(f"dof and runs must be at least 1, got {dof} and {runs}")
+    from scipy.stats import chi2  # here: SciPy's stats take seconds to load in each worker
+
     tail = (1.0 - probability) / 2.0
     lo, hi = chi2.ppf([tail, 1.0 - tail], runs * dof) / runs
     return float(lo), float(hi)

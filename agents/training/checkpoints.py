@@ -41,6 +41,15 @@ def latest_checkpoint(out: Path) -> tuple[Path, int] | None:
     return max(found, key=lambda item: item[1]) if found else None
 
 
+def resumable_steps(out: Path, made_by: str) -> int:
+    """The decisions a rerun into ``out`` resumes from: its newest checkpoint's, when the same
+    code and settings (``made_by``) made it (:func:`resume` sets others aside), else 0."""
+    found = latest_checkpoint(out)
+    if found is None or model_metadata(found[0]).get("made_by") != made_by:
+        return 0
+    return found[1]
+
+
 def save_atomic(save, path: Path) -> Path:
     """Write what ``save(file)`` writes to ``path`` atomically: an interrupted save leaves
     the previous file (or none), never a cut-short one that a resume would load."""

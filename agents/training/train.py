@@ -34,6 +34,7 @@ from stsf_gym.agents.rl.residual import start_as_follower
 from stsf_gym.agents.training.checkpoints import (
     finished_summary,
     latest_checkpoint,
+    resumable_steps,
     resume,
     save_atomic,
     save_checkpoint,
@@ -185,7 +186,8 @@ def train(
     check_training_env(run.world, run.estimator, run.train_env, run.seed)  # before any output
     keep_replaced_run(out, run.meta["made_by"])  # one finished by other code or settings: kept
     episodes = stage_episodes(run.hp.demonstrations) if run.demonstrating else 0
-    bars = stage_bars(episodes, run.reward_steps, run.algo, progress_bar)  # drawn at once
+    resumed = resumable_steps(out, run.meta["made_by"])
+    bars = stage_bars(episodes, run.reward_steps, run.algo, progress_bar, resumed)  # drawn at once
     try:
         return run_stages(run, out, bars)
     finally:

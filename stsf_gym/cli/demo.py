@@ -5,6 +5,7 @@ plot and one video made from the episodes driven."""
 from __future__ import annotations
 
 import argparse
+import os
 
 from rich.console import Console
 
@@ -24,7 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"{DEMO_SUITE} test worlds, one episode per pose source on each ({DEMO_WORLDS})",
     )
     parser.add_argument("--seconds", type=float, help="simulated time limit per episode")
-    options.backend(parser)
+    cores = os.cpu_count() or 1
+    options.backend(parser, f"processes or local Ray CPUs ({cores}: the cores here)")
+    parser.set_defaults(workers=cores)
     parser.add_argument(
         "--no-video", action="store_true", help="skip the video (made from the episodes driven)"
     )

@@ -5,25 +5,19 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 from tqdm import tqdm
 
-from stsf_gym.agents.demonstrations.dagger import stage_episodes
 from stsf_gym.agents.training.hyperparams import METHODS
-from stsf_gym.agents.training.preflight import check_out, check_runs, check_seeds, run_kind
-from stsf_gym.agents.training.settings import resolve_run
+from stsf_gym.agents.training.preflight import check_runs, check_seeds
 from stsf_gym.agents.training.train import train
-from stsf_gym.agents.training.training_envs import check_training_env
 from stsf_gym.cli import inputs, options
 from stsf_gym.config import parse_overrides
 from stsf_gym.envs.suite import suite_names
 from stsf_gym.experiments.campaign import campaign_jobs, run_campaign
-from stsf_gym.experiments.jobs.estimate import plan_line, record_rate, work_key
+from stsf_gym.experiments.jobs.train_estimate import plan, record_run
 from stsf_gym.validation import ConfigError
-
-TRAIN_DESC = "train"  # its measured rates: seconds per run of the same settings
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -100,10 +94,10 @@ def run(args: argparse.Namespace) -> dict:
         return _campaign(args, jobs)
     if args.backend != "local" or args.address is not None:
         raise ConfigError("--backend and --address are for a campaign (--estimators)")
-    print(plan(jobs, 1), file=sys.stderr)
+    said, lefts = plan(jobs, 1)
+    print(said, file=sys.stderr)
     runs = []
-    for job in jobs:
-        started = time.monotonic()
+    for job, left in zip(jobs, lefts, strict=True):
         try:
             summary = train(**job, progress_bar=not args.json)
         except KeyboardInterrupt:
@@ -114,34 +108,10 @@ def run(args: argparse.Namespace) -> dict:
             )
             raise SystemExit(130) from None
         runs.append(summary)
-        record_rate(TRAIN_DESC, work_key([job]), time.monotonic() - started, 1)
+        record_run(job, left, summary)
         if not args.json:
             print(run_line(job["estimator"], job["seed"], summary, job["out"]))
     return runs[0] if len(runs) == 1 else {"runs": runs}
-
-
-def plan(jobs: list[dict], workers: int) -> str:
-    """What training will do, said before it starts (after the checks each run makes before
-    any output, so bad input is still refused first): the runs, each one's demonstration
-    episodes and reward decisions, and the time from a run of the same settings measured here
-    (:mod:`~stsf_gym.experiments.jobs.estimate`)."""
-    first = jobs[0]
-    run = resolve_run(
-        first["algo"], first["estimator"], first["timesteps"], first["seed"], first["world"],
-        first["config"], first["overrides"], first["n_envs"], first["suite"],
-    )  # fmt: skip
-    for job in jobs:
-        check_out(
-            Path(job["out"]), run_kind(run.algo, job["estimator"], job["world"], job["suite"])
-        )
-    check_training_env(run.world, run.estimator, run.train_env, run.seed)
-    episodes = stage_episodes(run.hp.demonstrations) if run.demonstrating else 0
-    stages = [f"{episodes} demonstration episodes"] if episodes else []
-    stages += [f"{run.reward_steps} decisions learning from reward"] if run.reward_steps else []
-    each = f"{run.algo}: {' then '.join(stages) or 'nothing to train'} each"
-    return f"train: {len(jobs)} run(s) of {each}\n" + plan_line(
-        TRAIN_DESC, "run", len(jobs), jobs, max(1, min(workers, len(jobs)))
-    )
 
 
 def _seed_folder(out: Path, seed: int, only: bool) -> Path:
@@ -154,12 +124,14 @@ def _campaign(args: argparse.Namespace, jobs: list[dict]) -> dict:
     backend asked for (:mod:`stsf_gym.experiments.campaign`)."""
     if args.workers < 1:
         raise ConfigError(f"--workers must be at least 1, got {args.workers}")
-    print(plan(jobs, args.workers if args.backend == "ray" else 1), file=sys.stderr)
+    said, lefts = plan(jobs, args.workers if args.backend == "ray" else 1)
+    print(said, file=sys.stderr)
     bar = tqdm(total=len(jobs), desc="campaign: training runs", unit="run")
+    left_of = {str(job["out"]): left for job, left in zip(jobs, lefts, strict=True)}
 
     def done(job: dict, summary: dict) -> None:
         bar.update()
-        record_rate(TRAIN_DESC, work_key([job]), summary["wall_time_s"], 1)
+        record_run(job, left_of[str(job["out"])], summary)
         if not args.json:
             bar.write(run_line(job["estimator"], job["seed"], summary, job["out"]))
 

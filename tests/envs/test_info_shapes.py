@@ -47,6 +47,25 @@ def test_every_info_key_keeps_its_shape_and_type_through_an_episode(make_env):
     assert not any(t in (list, tuple) for t, _, _ in first.values())
 
 
+@pytest.mark.parametrize("env_id", ["stsf_gym/RL-Sparse-Truth-v0", "stsf_gym/RL-Sparse-STSF-v0"])
+def test_the_rl_ready_ids_infos_keep_theirs_and_monitor_reads_is_success(make_env, env_id):
+    from stable_baselines3.common.monitor import Monitor
+
+    leg = make_env(env_id, sim__max_episode_seconds=5.0)  # a leg of 10 decisions
+    env = Monitor(leg, info_keywords=("is_success",))
+    _, info = env.reset(seed=0)
+    infos = [info]
+    while not infos[-1].get("episode"):
+        infos.append(env.step(np.array(DRIVE, np.float32))[-1])
+    first = layout(infos[0])
+    assert "is_success" in first and "control_steps" in first
+    for step, info in enumerate(infos[1:], 1):
+        mine = {k: v for k, v in info.items() if k != "episode"}  # Monitor's, at the end
+        assert layout(mine) == first, f"step {step}"
+    assert [i["is_success"] for i in infos] == [False] * len(infos)
+    assert infos[-1]["episode"]["is_success"] is False and len(infos) == 11
+
+
 @pytest.mark.slow
 def test_minari_records_a_suite_episode_with_its_infos(tmp_path, monkeypatch):
     """Needs ``minari[create]`` (jax, jaxlib: about 380 MB installed, not in the dev extra)."""

@@ -1,9 +1,12 @@
 """The demo answers the project's question: on its worlds the pose sources separate."""
 
+from dataclasses import asdict
+
 import pytest
 
 from stsf_gym.envs.generated_env import episode_config
 from stsf_gym.envs.suite import load_suite
+from stsf_gym.experiments import demo
 from stsf_gym.experiments.benchmark.intervals import newcombe_paired
 from stsf_gym.experiments.benchmark.small_samples import MARK, MIN_PAIRED_WORLDS
 from stsf_gym.experiments.demo import (
@@ -15,7 +18,7 @@ from stsf_gym.experiments.demo import (
     headline,
     paragraph,
 )
-from stsf_gym.experiments.episodes import run_episodes
+from stsf_gym.experiments.episodes import EpisodeSpec, run_episodes, run_job
 
 
 def test_the_demo_runs_the_declared_arrival_task_on_the_same_worlds_for_each_source():
@@ -26,6 +29,23 @@ def test_the_demo_runs_the_declared_arrival_task_on_the_same_worlds_for_each_sou
     for source in DEMO_SOURCES:
         assert [s.seed for s in specs if s.estimator == source] == list(range(DEMO_WORLDS))
     assert {"odometry", "stsf"} <= set(DEMO_SOURCES)
+
+
+def test_the_demos_episodes_skip_the_floor_which_it_does_not_show(tmp_path, monkeypatch):
+    short = {"sim": {"max_episode_seconds": 2.0}}
+    job = asdict(EpisodeSpec("straight_10m", "stsf", 0, env=short))
+    assert run_job(job).floor_estimates is not None  # the camera on: a floor by default
+    assert run_job({**job, "floor": False}).floor_estimates is None
+    asked = {}
+
+    def stop(*args, **kwargs):
+        asked.update(kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(demo, "run_episodes", stop)
+    with pytest.raises(KeyboardInterrupt):
+        demo.run_demo(tmp_path, worlds=1)
+    assert asked["floor"] is False
 
 
 def _row(source: str, successes: list[bool], odometry: list[bool]) -> dict:

@@ -8,6 +8,10 @@ user's cache (:func:`rates_file`); the next run reads it back and prints its est
 still to do times that cost, over its processes. Jobs already done in the output folder are
 counted as done. Work never run here falls back on the description's last rate, then on
 :data:`REFERENCE_RATES` (measured on the project's 2-core machine), or says it has no rate.
+
+Work of very unequal jobs (a training run: a few hundred decisions or a few million) keeps a
+speed instead, units per second summed over every run of the work (:func:`record_speed`), and
+estimates the units still to run over it (:func:`speed_estimate`); it never guesses.
 """
 
 from __future__ import annotations
@@ -22,9 +26,9 @@ from pathlib import Path
 from stsf_gym.io import write_json
 
 RATES_ENV = "STSF_GYM_RATES"  # the rates file's path (default: <user cache>/stsf-gym/rates.json)
-#: Seconds per job per process measured on the project's 2-core machine (main of 2026-12-01,
-#: loaded by a training run: 24 demo episodes in 212 s on 2 processes).
-REFERENCE_RATES = {"demo: episodes": 17.7}
+#: Seconds per job per process measured on the project's 2-core machine (2026-12-02, loaded
+#: by training runs, load average 7-8: 24 demo episodes in 191 s on 2 processes).
+REFERENCE_RATES = {"demo: episodes": 15.9}
 
 
 def rates_file() -> Path:
@@ -114,11 +118,55 @@ class Stopwatch:
 def record_rate(desc: str, key: str, seconds: float, jobs: int) -> None:
     """Keep ``seconds`` per job per process, measured over ``jobs``, for ``desc``'s work
     ``key`` (:func:`work_key`) and as its ``last``."""
-    rates = _rates()
     rate = {"seconds": round(seconds, 2), "jobs": jobs}
+    _keep(desc, {key: rate, "last": rate})
+
+
+def record_speed(desc: str, key: str, units: float, seconds: float) -> None:
+    """Add ``units`` run in ``seconds`` (one process) to ``desc``'s work ``key`` and to its
+    ``any`` (every work of ``desc``): the speed is their sums' ratio, so a short run weighs
+    little beside a long one."""
+    if units <= 0 or seconds <= 0:
+        return
+    earlier = _rates().get(desc)
+    kept: dict = earlier if isinstance(earlier, dict) else {}
+    summed = {}
+    for name in (key, "any"):
+        old = kept.get(name)
+        old = old if isinstance(old, dict) else {}
+        summed[name] = {
+            "units": _number(old.get("units")) + units,
+            "seconds": round(_number(old.get("seconds")) + seconds, 2),
+        }
+    _keep(desc, summed)
+
+
+def speed_estimate(desc: str, key: str, units: int, unit: str) -> tuple[float, str] | None:
+    """The seconds ``units`` of ``desc``'s work ``key`` take on one process, with where the
+    speed was measured (this work, else other work of ``desc``); None: never measured here."""
+    kept = _rates().get(desc)
+    kept = kept if isinstance(kept, dict) else {}
+    for name, where in ((key, "this work"), ("any", "other settings")):
+        found = kept.get(name)
+        if isinstance(found, dict) and _number(found.get("units")) > 0:
+            done, seconds = _number(found.get("units")), _number(found.get("seconds"))
+            if seconds > 0:
+                speed = done / seconds
+                said = f"{speed:,.1f} {unit}s/s, measured here over {done:,.0f} on {where}"
+                return units / speed, said
+    return None
+
+
+def _number(value: object) -> float:
+    return float(value) if isinstance(value, int | float) else 0.0
+
+
+def _keep(desc: str, entries: dict) -> None:
+    """Write ``entries`` into ``desc``'s record in the rates file (what else it holds kept)."""
+    rates = _rates()
     earlier = rates.get(desc)
     kept: dict = earlier if isinstance(earlier, dict) else {}
-    rates[desc] = {**kept, key: rate, "last": rate}
+    rates[desc] = {**kept, **entries}
     try:
         rates_file().parent.mkdir(parents=True, exist_ok=True)
         write_json(rates_file(), rates)

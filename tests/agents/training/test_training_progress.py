@@ -4,7 +4,12 @@ own records (val success and return against env steps and wall time)."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+import pytest
+
 from stsf_gym.agents.training import train as train_module
+from stsf_gym.agents.training.progress import RewardProgress, stage_bar
 from stsf_gym.agents.training.train import train
 from stsf_gym.agents.training.training_log import curve_points
 
@@ -56,3 +61,21 @@ def test_the_reward_stage_shows_a_bar_and_logs_its_evaluations(tmp_path, capfd):
     points = curve_points(out)
     assert [p["stage"] for p in points] == ["reward", "reward"]
     assert points[1]["wall_time_s"] > points[0]["wall_time_s"] > 0
+
+
+def test_a_resumed_reward_stage_rates_only_the_decisions_run_in_this_process():
+    clock = [1_000.0]
+    bar = stage_bar("learning from reward", 1_638_400, "decision", True, initial=88_064)
+    bar._time = lambda: clock[0]
+    model = SimpleNamespace(num_timesteps=88_064, get_env=lambda: None, logger=None)
+    progress = RewardProgress(bar)
+    progress.init_callback(model)
+    progress.on_training_start({}, {})
+    assert (bar.initial, bar.n, bar.format_dict["elapsed"]) == (88_064, 88_064, 0)
+    clock[0] += 10.0
+    model.num_timesteps += 1_000  # 100 decisions/s here, not 89,064 in 10 s
+    progress.on_step()
+    meter = bar.format_dict
+    assert meter["n"] == 89_064 and meter["rate"] == pytest.approx(100.0)
+    assert "100.00decision/s" in bar.format_meter(**meter)
+    bar.close()

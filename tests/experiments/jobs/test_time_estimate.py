@@ -70,12 +70,42 @@ def test_run_cached_says_its_plan_on_stderr_before_the_first_job(tmp_path, capsy
     assert "table1: all 3 seed(s) already done" in said[1]
 
 
-def test_train_says_its_runs_and_decisions_before_it_starts():
-    from stsf_gym.cli.train import plan
-
-    job = {"algo": "ppo", "estimator": "truth", "timesteps": 2048, "seed": 0}
+def _train_job(out, timesteps: int = 2048, seed: int = 0) -> dict:
+    job = {"algo": "ppo", "estimator": "truth", "timesteps": timesteps, "seed": seed}
     job |= {"world": "irl_corridor", "config": None, "overrides": {}, "n_envs": 1}
-    job |= {"suite": None, "out": "x"}
-    text = plan([job, {**job, "seed": 1, "out": "y"}], 1)
+    return job | {"suite": None, "out": str(out)}
+
+
+def test_train_says_its_runs_and_decisions_before_it_starts(tmp_path):
+    from stsf_gym.experiments.jobs.train_estimate import plan
+
+    text, lefts = plan([_train_job(tmp_path / "x"), _train_job(tmp_path / "y", seed=1)], 1)
     assert text.startswith("train: 2 run(s) of ppo: 2048 decisions learning from reward each")
-    assert "train: 2 run(s) to run on 1 process(es)" in text
+    assert "train: 2 run(s) to run on 1 process(es): 4,096 decisions" in text
+    assert "no speed measured here yet" in text and [x.decisions for x in lefts] == [2048] * 2
+
+
+def test_a_speed_and_the_units_left_give_the_estimate():
+    estimate.record_speed("train x", "k", 1_000, 20.0)  # 50 decisions/s: a short run...
+    estimate.record_speed("train x", "k", 9_000, 80.0)  # ...and a long one, summed
+    seconds, said = estimate.speed_estimate("train x", "k", 1_550_336, "decision")
+    assert seconds == pytest.approx(1_550_336 / 100)
+    assert said == "100.0 decisions/s, measured here over 10,000 on this work"
+    assert "on other settings" in estimate.speed_estimate("train x", "k2", 10, "decision")[1]
+    assert estimate.speed_estimate("train y", "k", 10, "decision") is None
+
+
+def test_train_estimates_the_decisions_left_after_a_checkpoint(tmp_path, monkeypatch):
+    from stsf_gym.experiments.jobs import train_estimate
+
+    job = _train_job(tmp_path / "run", timesteps=204_800)
+    monkeypatch.setattr(train_estimate, "resumable_steps", lambda out, made_by: 88_064)
+    left = train_estimate.run_left(job)
+    assert (left.done, left.decisions) == (88_064, 204_800 - 88_064)
+    estimate.record_speed(train_estimate.speed_desc(left.run, "decision"), "other", 100, 1.0)
+    text = train_estimate.time_line([job], [left], 1)
+    assert "116,736 decisions (88,064 already done, resumed)" in text
+    assert "about 19 min (100.0 decisions/s, measured here over 100 on other settings)" in text
+    ran = {"timesteps": 204_800, "resumed_from": 88_064, "session_wall_time_s": 2_000.0}
+    train_estimate.record_run(job, left, ran)
+    assert "measured here over 116,736 on this work" in train_estimate.time_line([job], [left], 1)
