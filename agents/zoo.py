@@ -88,6 +88,13 @@ def rl_section(env_id: str) -> dict:
     }
 
 
+def ppo_kwargs(env_id: str) -> dict:
+    """``PPO(env=..., **ppo_kwargs(env_id))``: an RL-ready id's learner as SB3 takes it (the
+    policy, its keyword arguments and PPO's), the rl-zoo3 section without the budget."""
+    section = rl_section(env_id)
+    return {k: v for k, v in section.items() if k not in ("n_envs", "n_timesteps")}
+
+
 def rl_ids() -> list[str]:
     """Every RL-ready id."""
     return [env_id for env_id, spec in gym.registry.items() if spec.entry_point == RL_ENV]
