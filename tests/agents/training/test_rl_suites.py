@@ -121,6 +121,7 @@ def short_suite(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_train_on_a_suite_with_seeds_then_benchmark_the_folder(short_suite, tmp_path):
     from stsf_gym.agents.training.train import train
     from stsf_gym.experiments.benchmark.run import benchmark
