@@ -137,10 +137,12 @@ class GradedFalseStop(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._stops = 0
 
     def reset(self, **kwargs):
+        """Reset the env and the count of stops seen."""
         self._stops = 0
         return self.env.reset(**kwargs)
 
     def step(self, action):
+        """Step the env; a new false stop's flat cost is given back less its graded cost."""
         observation, reward, terminated, truncated, info = self.env.step(action)
         stops = int(info["stops"])
         last = info["last_stop"]
