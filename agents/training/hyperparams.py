@@ -258,12 +258,15 @@ def load_hyperparams(
 
 def residual_section(layer: dict) -> dict:
     """A layer as the residual learner reads it: its ``residual.observation`` and
-    ``residual.finetune`` over its own, no demonstrations (the learner starts as the
+    ``residual.finetune`` over its own, its ``residual.train_env`` (where given) in place of
+    its own (``{}``: the task as evaluated), no demonstrations (the learner starts as the
     follower), and ``residual`` keeping only the bounds (:class:`ResidualConfig`)."""
     residual = dict(layer.get("residual") or {})
     layer = {**layer, "demonstrations": {"expert_episodes": 0}}
     for key in ("observation", "finetune"):
         layer[key] = deep_merge(layer.get(key) or {}, residual.pop(key, None) or {})
+    if "train_env" in residual:
+        layer["train_env"] = residual.pop("train_env") or {}
     return {**layer, "residual": residual}
 
 

@@ -1,6 +1,7 @@
 """The residual learner: before any update it drives exactly as the follower does, step for
 step; its gate holds the follower's declaration back and the follower declares again; its stage
-records ``residual+ppo`` and resumes after a kill to the weights an uninterrupted run ends with."""
+records ``residual+ppo`` and resumes after a kill to the weights an uninterrupted run ends with;
+it trains on full routes where the clone trains on legs."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from stable_baselines3 import PPO
 from stsf_gym.agents.follower_agent import FollowerAgent
 from stsf_gym.agents.policy_stack import policy_stack
 from stsf_gym.agents.rl.residual import ResidualConfig, ResidualFollower, start_as_follower
+from stsf_gym.agents.training.settings import resolve_run
 from stsf_gym.envs.suite import load_suite
 from stsf_gym.episode_env import make_episode_env
 
@@ -64,6 +66,16 @@ def test_the_untrained_residual_agent_drives_the_followers_episode_step_for_step
         np.array_equal(a, b) for a, b in zip(followed.actions, corrected.actions, strict=True)
     )
     assert solo["stops"] == residual["stops"] and solo["success"] == residual["success"]
+
+
+def test_the_residual_learner_trains_on_full_routes_where_the_clone_trains_on_legs():
+    def training_task(algo: str) -> dict:
+        run = resolve_run(algo, "stsf", None, 0, "corridor", None, None, None, "sparse")
+        return run.train_env["task"]
+
+    assert training_task("dagger+ppo")["leg_max"] > 0  # legs: a start on the route, a near goal
+    routes = training_task("residual+ppo")
+    assert routes.get("leg_max", 0.0) == 0.0 and routes["protocol"] == "declare"
 
 
 def test_the_gate_holds_a_declaration_and_the_follower_declares_again():
