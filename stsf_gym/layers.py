@@ -16,10 +16,11 @@ plus the neutral leaves both sides share (``validation``, ``config_files``, ``io
 ``terminal_table``, ``camera_model``: the lens model the simulator renders with and the
 estimators undistort with). Also
 checked: no module imports another's private (``_name``) name, no import cycle between
-modules, no package folder with more than :data:`FOLDER_LIMIT` modules side by side (a
-folder per idea), and no module longer than :data:`MODULE_LIMIT` lines unless
-:data:`LONG_MODULES` says why. ``python -m stsf_gym.layers --tree`` prints the layout instead:
-each package, the repository folder it lives in, and its modules; ``python -m stsf_gym.layers
+modules, every package folder names its one idea (the first paragraph of its ``__init__``'s
+docstring: a folder per idea, however many modules the idea takes), and no module longer than
+:data:`MODULE_LIMIT` lines unless :data:`LONG_MODULES` says why. ``python -m stsf_gym.layers
+--tree`` prints the layout instead: each package, the repository folder it lives in, its idea
+and its modules; ``python -m stsf_gym.layers
 --picture`` draws the layers as rooms on floors (SVG, :mod:`stsf_gym.layer_picture`), the
 picture of ``docs/reference/layers.svg``.
 """
@@ -132,8 +133,6 @@ ALLOWED: dict[str, tuple[str, ...] | str] = {
 }
 
 
-#: Modules (``__init__`` included) one package folder may hold side by side.
-FOLDER_LIMIT = 16
 #: Lines one module may hold; a longer one is listed in :data:`LONG_MODULES` with the reason.
 MODULE_LIMIT = 400
 LONG_MODULES = {
@@ -251,13 +250,21 @@ def violations(root: Path = ROOT) -> list[str]:
             )
         elif lines <= MODULE_LIMIT and module in LONG_MODULES:
             found.append(f"{module} is no longer long: remove it from LONG_MODULES")
-    for package, modules in packages(root).items():
-        if len(modules) > FOLDER_LIMIT:
+    files = module_files(root)
+    for package in packages(root):
+        if package in files and not folder_idea(files[package]):
             found.append(
-                f"{package} holds {len(modules)} modules side by side (at most {FOLDER_LIMIT}): "
-                "group them in folders by idea"
+                f"{package}: its __init__ has no docstring naming the folder's idea (its first "
+                "paragraph): a folder holds one idea"
             )
     return list(dict.fromkeys(found))
+
+
+def folder_idea(init: Path) -> str:
+    """The idea of the package whose ``__init__`` is ``init``: its docstring's first paragraph,
+    on one line."""
+    doc = ast.get_docstring(ast.parse(init.read_text(), str(init))) or ""
+    return " ".join(doc.strip().partition("\n\n")[0].split())
 
 
 def packages(root: Path = ROOT) -> dict[str, list[str]]:
@@ -273,11 +280,12 @@ def packages(root: Path = ROOT) -> dict[str, list[str]]:
 
 
 def print_tree(root: Path = ROOT) -> None:
-    """The layout: each package, its folder in the repository, and its modules."""
+    """The layout: each package, its folder in the repository, its idea and its modules."""
     files = module_files(root)
     for package, modules in packages(root).items():
         folder = files[package].parent.relative_to(root) if package in files else "?"
         print(f"{package}  ({folder}/, {len(modules)} modules)")
+        print(f"    {folder_idea(files[package]) if package in files else ''}")
         print(f"    {' '.join(modules)}")
 
 

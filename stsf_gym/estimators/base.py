@@ -12,14 +12,20 @@ from abc import ABC, abstractmethod
 from collections import defaultdict
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from stsf_gym.camera_model import CameraCalibration
 from stsf_gym.estimators.odometry_model import OdometryNoise
+from stsf_gym.estimators.settings import OdometrySettings
 from stsf_gym.fusion.chi_square import chi_square_quantile
 from stsf_gym.geometry import OdometryCalibration
+from stsf_gym.validation import ConfigError
 from stsf_gym.vision.landmarks import LandmarkPattern
+
+if TYPE_CHECKING:
+    from stsf_gym.estimators.frame_detector import FrameDetector
 
 
 @dataclass(frozen=True)
@@ -86,18 +92,54 @@ class PoseEstimator(ABC):
     ``mean`` is ``[x, y, yaw]`` in the world frame, ``cov`` its 3x3 covariance.
     :attr:`timings` sums the wall time of each stage; :attr:`counters` counts events
     (frames, landmark matches, rejected measurements).
+
+    The abilities some pose sources have are declared here with the plain estimator's answer,
+    so the wrappers and a log's replay call them on any source: :attr:`privileged` (handed the
+    true pose, :meth:`see`), :meth:`seed` (its own random draws), :meth:`spread_prior` and
+    :attr:`confirmed` (global localization), :meth:`believed_odometry` (the noise its sensor
+    model takes) and :attr:`detector` (the camera frames' detections, for recordings).
     """
 
     name: str = ""
     #: The sensors the estimator reads: a pose source whose sensor is switched off in the env
     #: is refused (:func:`stsf_gym.wrappers.check_sensors`), never run as something else.
     sensors: tuple[str, ...] = ("encoders",)
+    #: A privileged source: handed ``info["true_pose"]`` at every step (:meth:`see`), for
+    #: reference runs only; never delayed by a camera latency's history.
+    privileged: ClassVar[bool] = False
 
     def __init__(self) -> None:
         self.timings: dict[str, float] = defaultdict(float)
         self.counters: dict[str, int] = defaultdict(int)
         self.model: SensorModel | None = None
         self.mean, self.cov = np.zeros(3), np.eye(3)
+        #: Whether a board agreed with the estimate since it last forgot its start
+        #: (:meth:`spread_prior`); a camera pointed from an unconfirmed estimate sweeps on.
+        self.confirmed = True
+        #: The detector of the camera frames, for an estimator that reads them (recordings
+        #: log its detections).
+        self.detector: FrameDetector | None = None
+
+    def seed(self, seed: int | None) -> None:
+        """Seed the estimator's own random draws for the episode ``reset(seed=...)`` starts
+        (``None``: keep the stream); a source that draws none ignores it."""
+        return None
+
+    def see(self, true_pose: np.ndarray) -> None:
+        """Take the step's true pose: only a :attr:`privileged` source is handed it."""
+        raise TypeError(f"{type(self).__name__} is not privileged: it is never shown the truth")
+
+    def spread_prior(self) -> None:
+        """Forget the start (an unknown start): only an estimator that localizes globally can."""
+        raise ConfigError(
+            f"reset option unknown_start needs an estimator that localizes globally "
+            f"(mcl), not {self.name or type(self).__name__!r}"
+        )
+
+    def believed_odometry(self) -> OdometrySettings | None:
+        """The odometry noise the estimator believes, for its sensor model
+        (:func:`stsf_gym.wrappers.sensor_model`); None: the odometry estimator's defaults."""
+        return None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         """Start an episode on the robot ``model`` at ``initial_pose`` ``[x, y, yaw]`` with

@@ -78,7 +78,8 @@ class DegradedTruth(PoseEstimator):
 
     name = NAME
     settings_type: ClassVar[type] = DegradedTruthSettings
-    sensors = ()  # privileged: handed the true pose
+    sensors = ()
+    privileged = True  # handed the true pose
 
     def __init__(self, settings: DegradedTruthSettings) -> None:
         super().__init__()

@@ -124,7 +124,6 @@ class EKFEstimator(OdometryEstimator):
         self.relocaliser = Relocaliser(
             s.relocalise_after, s.relocalise_inflation, chi_square_gate(s.gate_probability, dof=3)
         )
-        self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)

@@ -107,7 +107,6 @@ class LandmarkFusionEstimator(OdometryEstimator):
         self.relocaliser = Relocaliser(s.relocalise_after, s.relocalise_inflation, self.gate)
         self.matching, self.aided_search_px = s.matching, s.aided_search_px
         self.aided_limits = (s.aided_min_correlation, s.aided_min_board_px)
-        self.detector: FrameDetector | None = None
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)

@@ -27,6 +27,11 @@ class OdometryEstimator(PoseEstimator):
         self.settings = settings
         self.mount_std = settings.mount_std
 
+    def believed_odometry(self) -> OdometrySettings | None:
+        """Its settings, the odometry noise it propagates (a subclass's own settings type
+        that is no :class:`OdometrySettings`: the defaults')."""
+        return self.settings if isinstance(self.settings, OdometrySettings) else None
+
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         super().reset(model, initial_pose, initial_cov)
         # block diagonal: wheel calibration, mount, camera calibration (numpy: the env

@@ -47,7 +47,7 @@ def check_replayable(log: RecordedLog, name: str, estimator: PoseEstimator) -> N
     """Refuse (:class:`ConfigError`) to run pose source ``name`` on ``log`` unless the log
     holds every topic it needs: its sensors' (:data:`topics.SENSOR_TOPICS`), and the true
     poses for a privileged source."""
-    if hasattr(estimator, "see") and log.truth is None:
+    if estimator.privileged and log.truth is None:
         raise ConfigError(f"{log.path}: {name} needs the true poses, and the log has none")
     for sensor in estimator.sensors:
         for group in topics.SENSOR_TOPICS.get(sensor, ()):
@@ -64,12 +64,11 @@ def replay(log: RecordedLog, name: str, observations: list[dict] | None = None, 
     estimator = pose_source(name, **options)
     check_replayable(log, name, estimator)
     latency = log.camera_latency
-    driver = estimator_driver(name, estimator, latency.delay_s, latency.jitter_s, log.control_dt)
+    driver = estimator_driver(estimator, latency.delay_s, latency.jitter_s, log.control_dt)
     truth = log.truth if log.truth is not None else [None] * len(log.stamps)
     started = time.perf_counter()
     steps = iter(observations if observations is not None else log.observations())
-    if hasattr(estimator, "seed"):
-        estimator.seed(log.episode.get("seed"))
+    estimator.seed(log.episode.get("seed"))
     estimator.reset(log.model, log.initial_pose, log.initial_cov)
     driver.start(next(steps), truth[0])  # the start: the estimator is reset, not updated
     means, covs = [estimator.mean.copy()], [estimator.cov.copy()]

@@ -171,7 +171,7 @@ class RecordEpisode(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if estimator is not None:
             estimates[estimator.name] = (estimator.mean.copy(), estimator.cov.copy())
             counters = dict(estimator.counters)
-            detector = getattr(estimator, "detector", None)
+            detector = estimator.detector
             if detector is not None and obs["image_new"] and action is not None:
                 detections = FrameDetections(detector.found, detector.aided, detector.predictions)
         return StepRecord(

@@ -10,7 +10,6 @@ import numpy as np
 from gymnasium import spaces
 
 from stsf_gym.estimators import PoseEstimator, make_estimator
-from stsf_gym.estimators.settings import OdometrySettings
 from stsf_gym.geometry import bounded
 from stsf_gym.validation import ConfigError, reset_options
 from stsf_gym.wrappers.pose_sources import (
@@ -97,9 +96,7 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         source = TruePose() if estimator == TRUTH else make_estimator(estimator, **options)
         corridor = env.unwrapped
         latency = corridor.config.camera.latency
-        self.driver = estimator_driver(
-            estimator, source, latency.delay_s, latency.jitter_s, corridor.dt
-        )
+        self.driver = estimator_driver(source, latency.delay_s, latency.jitter_s, corridor.dt)
         self.pose_source = estimator  # the name errors give it
         check_sensors(estimator, source.sensors, corridor.config.camera.enabled)
         self.start_cov = np.diag(np.square(np.asarray(start_std, dtype=float)))
@@ -131,25 +128,14 @@ class PoseEstimateWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         obs, info = self.env.reset(seed=seed, options=options or None)
         start = self.env.unwrapped.start_pose  # where the env put the robot (start_pose option,
         self.start = np.asarray(start, dtype=float)  # drawn or the world's); a floor starts there
-        settings = getattr(self.estimator, "settings", None)
-        model = sensor_model(self.env, settings if isinstance(settings, OdometrySettings) else None)
-        if hasattr(self.estimator, "seed"):  # a privileged source with its own random draws
-            self.estimator.seed(seed)
+        model = sensor_model(self.env, self.estimator.believed_odometry())
+        self.estimator.seed(seed)  # a source with its own random draws (mcl, degraded-truth)
         self.estimator.reset(model, start, self.start_cov)
         if unknown_start:
-            self._forget_start()
+            self.estimator.spread_prior()  # refused unless it localizes globally
         self._time = float(obs["encoders_time"][0])
         self.driver.start(obs, info["true_pose"])
         return self._with_pose(obs, self.estimator.mean, self.estimator.cov), info
-
-    def _forget_start(self) -> None:
-        spread = getattr(self.estimator, "spread_prior", None)
-        if spread is None:
-            raise ConfigError(
-                f"reset option unknown_start needs an estimator that localizes globally "
-                f"(mcl), not {self.estimator.name or type(self.estimator).__name__!r}"
-            )
-        spread()
 
     def step(self, action):
         """Step the env, update the estimate from the observation."""

@@ -87,7 +87,7 @@ class CameraPointingWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if self.searching_since is not None:
             cov = estimator.cov
             narrow = math.sqrt(max(cov[0, 0], cov[1, 1])) < FOUND_STD
-            if narrow and getattr(estimator, "confirmed", True):
+            if narrow and estimator.confirmed:
                 self.searching_since = None
             else:
                 self.searching_since += self.env.unwrapped.dt

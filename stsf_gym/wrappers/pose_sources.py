@@ -47,12 +47,11 @@ def check_sensors(name: str, sensors: tuple[str, ...], camera_enabled: bool) -> 
 
 
 def estimator_driver(
-    name: str, estimator: PoseEstimator, delay_s: float, jitter_s: float, control_dt: float
+    estimator: PoseEstimator, delay_s: float, jitter_s: float, control_dt: float
 ) -> EstimatorDriver:
-    """The driver of pose source ``name``: through a history of late frames when the camera
-    has a latency (``delay_s``, ``jitter_s``), unless the source is privileged."""
-    privileged = name in (TRUTH, *PRIVILEGED)
-    horizon = None if privileged else history_horizon(delay_s, jitter_s, control_dt)
+    """The driver of ``estimator``: through a history of late frames when the camera has a
+    latency (``delay_s``, ``jitter_s``), unless the source is privileged."""
+    horizon = None if estimator.privileged else history_horizon(delay_s, jitter_s, control_dt)
     return EstimatorDriver(estimator, horizon)
 
 
@@ -66,6 +65,7 @@ class TruePose(PoseEstimator):
 
     name = TRUTH
     sensors = ()
+    privileged = True
 
     def reset(self, model: SensorModel, initial_pose, initial_cov) -> None:
         """Start at the true pose with the fixed :data:`TRUTH_STD` covariance."""

@@ -126,17 +126,22 @@ class EstimatorDriver:
         """Begin the episode at the (already reset) estimator with the start's observation."""
         if self.history is not None:
             self.history.reset(self.estimator, obs)
-        if hasattr(self.estimator, "see"):  # privileged: handed the true pose
-            self.estimator.see(true_pose)
+        self._show_truth(true_pose)
 
     def update(
         self, obs: dict, dt: float, true_pose: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray]:
         """Fold one step's ``obs`` (``dt`` seconds after the last) into the estimate; returns
         its mean and covariance."""
-        if hasattr(self.estimator, "see"):
-            self.estimator.see(true_pose)
+        self._show_truth(true_pose)
         if self.history is None:
             return self.estimator.update(obs, dt)
         self.estimator, mean, cov = self.history.update(self.estimator, obs, dt)
         return mean, cov
+
+    def _show_truth(self, true_pose: np.ndarray | None) -> None:
+        """Hand a privileged source the step's true pose (other sources are never shown it)."""
+        if self.estimator.privileged:
+            if true_pose is None:
+                raise ValueError(f"{self.estimator.name}: a privileged source needs the true pose")
+            self.estimator.see(true_pose)

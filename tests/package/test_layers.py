@@ -159,3 +159,13 @@ def test_a_long_module_is_refused_unless_listed_with_its_reason(tmp_path):
     found = layers.violations(_tree(tmp_path, {"envs/corridor_env.py": long, "envs/big.py": long}))
     assert any(v.startswith("stsf_gym.envs.big holds 401 lines") for v in found)
     assert not any("corridor_env" in v for v in found)  # listed in LONG_MODULES, with why
+
+
+def test_a_folder_names_its_idea_however_many_modules_it_holds(tmp_path):
+    crowded = {f"envs/sensors/part_{k}.py": "x = 1\n" for k in range(24)}
+    files = {"envs/sensors/__init__.py": '"""The robot\'s sensors."""\n', **crowded}
+    files["envs/worlds/__init__.py"] = "x = 1\n"
+    found = layers.violations(_tree(tmp_path, files))
+    assert not any("stsf_gym.envs.sensors" in v for v in found)  # 25 modules, one idea
+    assert any(v.startswith("stsf_gym.envs.worlds: its __init__ has no docstring") for v in found)
+    assert layers.folder_idea(tmp_path / "envs/sensors/__init__.py") == "The robot's sensors."

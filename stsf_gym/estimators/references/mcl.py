@@ -117,7 +117,10 @@ class MonteCarloLocalization(PoseEstimator):
         self.field: LikelihoodField | None = None
         self._field_key: tuple | None = None
         self.gate = chi_square_gate(settings.gate_probability, dof=3)
-        self.confirmed = True
+
+    def believed_odometry(self) -> MCLSettings:
+        """Its settings: the particles' motion noise is the odometry's it believes."""
+        return self.settings
 
     def seed(self, seed: int | None) -> None:
         """Seed the particles' draws (the wrapper passes ``reset(seed=...)``'s)."""
