@@ -33,3 +33,11 @@ def test_a_typo_of_the_agents_flag(capsys):
     with pytest.raises(SystemExit):
         cli.main(["evaluate", "--agnets", "follower"])
     assert "unknown option --agnets (did you mean --agents?)" in capsys.readouterr().err
+
+
+def test_a_mistyped_command_names_the_command_meant(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["evalute", "--agents", "follower"])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2
+    assert "stsf-gym: error: unknown command 'evalute' (did you mean evaluate?)" in err
