@@ -1,8 +1,7 @@
 """Config files and the values a user types, each refused in one line before any file is
 written: numbers with an exponent (``1e-4``) read as numbers, a ``--set`` key or a level given
-twice, config files
-that are folders, keys written twice, YAML anchors and aliases, and files over the size
-bound."""
+twice, config files that are folders, keys written twice, YAML anchors and aliases, and files
+over the size bound."""
 
 from __future__ import annotations
 
