@@ -41,3 +41,18 @@ def test_a_mistyped_command_names_the_command_meant(capsys):
     err = capsys.readouterr().err
     assert exit_.value.code == 2
     assert "stsf-gym: error: unknown command 'evalute' (did you mean evaluate?)" in err
+
+
+@pytest.mark.parametrize(("typed", "number"), [("1e6", 1_000_000), ("2048.0", 2048), ("40", 40)])
+def test_a_count_typed_with_an_exponent_is_a_number(typed, number):
+    args = cli.build_parser("train").parse_args(["train", "--timesteps", typed])
+    assert args.timesteps == number
+
+
+@pytest.mark.parametrize("typed", ["1.5", "ten", "inf", "nan"])
+def test_a_count_that_is_no_whole_number_is_refused(typed, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["benchmark", "--suite", "sparse", "--worlds", typed])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2
+    assert f"error: argument --worlds: must be a whole number, got '{typed}'" in err
