@@ -36,7 +36,7 @@ import gymnasium as gym
 import numpy as np
 
 from stsf_gym.agents.follower_agent import FOLLOWER, FollowerAgent
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, did_you_mean
 
 CAUTIOUS_FOLLOWER = "cautious-follower"
 ACTIVE_FOLLOWER = "active-follower"
@@ -169,7 +169,8 @@ def _named_agent(name: str, options: dict) -> Agent:
         _check_call(factory, name, options)
         return check_agent(factory(**options), name)
     raise ConfigError(
-        f"unknown agent {name!r}; known: {', '.join(AGENTS)}, a shipped agent "
+        f"unknown agent {name!r}{did_you_mean(name, AGENTS)}; known: {', '.join(AGENTS)}, "
+        "a shipped agent "
         "(pretrained:SUITE/ALGO-SOURCE, `stsf-gym agents`), a training folder, a saved model "
         "(.zip) or package.module:Class"
     )

@@ -39,6 +39,13 @@ class UnexpectedKeyword(ConfigError, TypeError):
     Built as a ConfigError is (``gym.make`` raises it again with its own message added)."""
 
 
+def did_you_mean(name: str, known) -> str:
+    """`` (did you mean 'x'?)`` for the name of ``known`` closest to a mistyped ``name``, or
+    nothing when none is close."""
+    close = difflib.get_close_matches(str(name), [str(k) for k in known], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
 def check_keywords(owner: str, keywords: Mapping[str, Any], known: list[str]) -> None:
     """Raise :class:`UnexpectedKeyword` for the first of ``keywords`` (flat ``camera__width``
     or dotted keys count by their first part) that is not in ``known``."""

@@ -56,3 +56,21 @@ def test_a_count_that_is_no_whole_number_is_refused(typed, capsys):
     err = capsys.readouterr().err
     assert exit_.value.code == 2
     assert f"error: argument --worlds: must be a whole number, got '{typed}'" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["--estimators", "stfs"], "unknown estimator 'stfs' (did you mean 'stsf'?)"),
+        (["--agents", "cautious_follower"], "(did you mean 'cautious-follower'?)"),
+        (["--world", "irl_coridor"], "unknown world 'irl_coridor' (did you mean 'irl_corridor'?)"),
+        (
+            ["--agents", "pretrained:sparse/dagger-stfs"],
+            "(did you mean 'pretrained:sparse/dagger-stsf'?)",
+        ),
+    ],
+)
+def test_a_mistyped_name_is_refused_with_the_name_meant(run_cli, tmp_path, argv, said):
+    code, err = run_cli("evaluate", *argv, "--out", str(tmp_path / "o"))
+    assert code == 2 and said in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
