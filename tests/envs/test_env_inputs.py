@@ -177,7 +177,7 @@ def test_an_action_of_a_batch_shape_is_refused_with_the_expected_shape(make_env,
 def test_an_action_of_the_wrong_kind_is_refused_under_the_decision_interval(make_env):
     env = make_env("stsf_gym/RL-Corridor-Odometry-v0", **FAST)
     env.reset(seed=0)
-    with pytest.raises(ValueError, match="action must be numeric .*got dtype bool"):
+    with pytest.raises(ValueError, match=r"action must be numeric .*got dtype bool"):
         env.step(np.ones(env.action_space.shape, bool))  # not cast to full speed
 
 
