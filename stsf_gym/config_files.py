@@ -175,7 +175,7 @@ def extended_files(
         if not candidate.is_file():
             known = sorted(p.stem for p in folder.glob("*.yaml"))
             raise ConfigError(
-                f"unknown {kind} {str(name)!r}{did_you_mean(name, known)}; known {kind}s: "
+                f"unknown {kind} {str(name)!r}{did_you_mean(str(name), known)}; known {kind}s: "
                 f"{', '.join(known)}"
             )
     if candidate.resolve() in seen:

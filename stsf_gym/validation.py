@@ -15,7 +15,7 @@ import math
 import re
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
@@ -39,7 +39,7 @@ class UnexpectedKeyword(ConfigError, TypeError):
     Built as a ConfigError is (``gym.make`` raises it again with its own message added)."""
 
 
-def did_you_mean(name: str, known) -> str:
+def did_you_mean(name: str, known: Iterable) -> str:
     """`` (did you mean 'x'?)`` for the name of ``known`` closest to a mistyped ``name``, or
     nothing when none is close."""
     close = difflib.get_close_matches(str(name), [str(k) for k in known], n=1)
