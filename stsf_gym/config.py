@@ -15,7 +15,7 @@ def parse_overrides(items: list[str]) -> dict:
 
     from stsf_gym.config_files import load_value
 
-    overrides = {}
+    overrides: dict = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
