@@ -12,6 +12,8 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
+from stsf_gym.envs.action_layout import numeric_action
+
 #: Control steps (0.1 s each) per decision: 0.5 s. At the paper's 0.122 m/s the robot drives
 #: 6 cm between decisions, a quarter of the 0.25 m goal radius, so a policy can place its STOP
 #: inside the radius; at the follower's 0.6 rad/s a decision turns at most 17 deg, under the
@@ -46,7 +48,11 @@ class DecisionInterval(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def step(self, action):
         """Apply ``action`` for up to :attr:`steps` control steps."""
-        action = np.asarray(action, dtype=np.float32).copy()
+        action = numeric_action(action).astype(np.float32)  # a copy; a bool or str refused
+        if action.shape != self.action_space.shape:  # the held entries are indexed below
+            raise ValueError(
+                f"action must have shape {self.action_space.shape}, got {action.shape}"
+            )
         total, taken = 0.0, 0
         while True:
             obs, reward, terminated, truncated, info = self.env.step(action)

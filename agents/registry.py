@@ -28,6 +28,7 @@ Three lines drive a shipped agent on the worlds it was made for::
 from __future__ import annotations
 
 import importlib
+import inspect
 from collections.abc import Callable
 from typing import Protocol
 
@@ -35,7 +36,7 @@ import gymnasium as gym
 import numpy as np
 
 from stsf_gym.agents.follower_agent import FOLLOWER, FollowerAgent
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, did_you_mean
 
 CAUTIOUS_FOLLOWER = "cautious-follower"
 ACTIVE_FOLLOWER = "active-follower"
@@ -165,9 +166,28 @@ def _named_agent(name: str, options: dict) -> Agent:
             raise ConfigError(f"agent {name!r} not found: {err}") from None
         if not callable(factory):
             raise ConfigError(f"agent {name!r} is a {type(factory).__name__}, not an agent class")
+        _check_call(factory, name, options)
         return check_agent(factory(**options), name)
     raise ConfigError(
-        f"unknown agent {name!r}; known: {', '.join(AGENTS)}, a shipped agent "
+        f"unknown agent {name!r}{did_you_mean(name, AGENTS)}; known: {', '.join(AGENTS)}, "
+        "a shipped agent "
         "(pretrained:SUITE/ALGO-SOURCE, `stsf-gym agents`), a training folder, a saved model "
         "(.zip) or package.module:Class"
     )
+
+
+def _check_call(factory: Callable, name: str, options: dict) -> None:
+    """A :class:`ConfigError` when ``factory`` cannot be called with ``options`` (``json:loads``
+    needs an argument; a protocol, such as :class:`Agent`, makes no object), before it is
+    called: a ``TypeError`` from inside a factory that could be called stays the bug it is."""
+    if getattr(factory, "_is_protocol", False):
+        raise ConfigError(f"agent {name!r} is a protocol (an interface), not an agent class")
+    try:
+        signature = inspect.signature(factory)
+    except (TypeError, ValueError):  # a builtin without a signature: called as it is
+        return
+    try:
+        signature.bind(**options)
+    except TypeError as err:
+        given = f"the options {sorted(options)}" if options else "no options"
+        raise ConfigError(f"agent {name!r} cannot be made with {given}: {err}") from None

@@ -76,8 +76,8 @@ class ActionLayout:
     def fill(self, action: np.ndarray, source: ActionLayout, **values: float) -> np.ndarray:
         """An action of this layout from ``action`` (laid out as ``source``) and ``values`` for
         the entries ``source`` lacks."""
-        flat = numeric_action(action).astype(np.float32).ravel()
-        if flat.shape != (len(source.names),):
+        flat = numeric_action(action).astype(np.float32)
+        if flat.shape != (len(source.names),):  # (1, n) of a batch is refused, not flattened
             raise ValueError(f"action must have shape ({len(source.names)},), got {flat.shape}")
         given = dict(zip(source.names, flat, strict=True))
         missing = [n for n in self.names if n not in given and n not in values]

@@ -22,7 +22,7 @@ from typing import Any
 
 import yaml
 
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, did_you_mean
 
 #: The package's configs (package data: ``configs/`` of the repository, ``stsf_gym/configs`` of an
 #: installed wheel). The package is installed as files, so this is a real folder.
@@ -174,7 +174,10 @@ def extended_files(
         candidate = folder / f"{name}.yaml"
         if not candidate.is_file():
             known = sorted(p.stem for p in folder.glob("*.yaml"))
-            raise ConfigError(f"unknown {kind} {str(name)!r}; known {kind}s: {', '.join(known)}")
+            raise ConfigError(
+                f"unknown {kind} {str(name)!r}{did_you_mean(str(name), known)}; known {kind}s: "
+                f"{', '.join(known)}"
+            )
     if candidate.resolve() in seen:
         chain = " -> ".join(shown(p) for p in (*seen, candidate))
         raise ConfigError(f"{kind} files extend each other in a cycle: {chain}")

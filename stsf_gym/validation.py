@@ -15,7 +15,7 @@ import math
 import re
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
@@ -37,6 +37,13 @@ class UnexpectedKeyword(ConfigError, TypeError):
     ``unexpected keyword argument 'NAME'``, as Python and Gymnasium envs raise (clients such as
     TorchRL's ``GymEnv`` retry without a keyword on exactly that), and a :class:`ConfigError`.
     Built as a ConfigError is (``gym.make`` raises it again with its own message added)."""
+
+
+def did_you_mean(name: str, known: Iterable) -> str:
+    """`` (did you mean 'x'?)`` for the name of ``known`` closest to a mistyped ``name``, or
+    nothing when none is close."""
+    close = difflib.get_close_matches(str(name), [str(k) for k in known], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def check_keywords(owner: str, keywords: Mapping[str, Any], known: list[str]) -> None:

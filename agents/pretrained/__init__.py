@@ -31,7 +31,7 @@ import numpy as np
 from stsf_gym.agents.model_files import trained_algo
 from stsf_gym.io import write_json
 from stsf_gym.results.code_identity import note_data_files
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, did_you_mean
 
 PREFIX = "pretrained:"
 MODELS = Path(__file__).parent / "trained-models"  # not a package name: data, not code
@@ -92,7 +92,8 @@ def folder(name: str) -> Path:
     path = MODELS / key
     if not valid_name(PREFIX + key) or not (path / "agent.json").is_file():
         raise ConfigError(
-            f"no shipped agent {name!r}; shipped: {', '.join(names()) or 'none'} "
+            f"no shipped agent {name!r}{did_you_mean(name, [*names(), *aliases()])}; shipped: "
+            f"{', '.join(names()) or 'none'} "
             "(`stsf-gym agents` lists them)"
         )
     return path

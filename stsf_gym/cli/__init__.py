@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import errno
 import importlib
 import json
@@ -86,7 +87,12 @@ def main(argv: list[str] | None = None) -> int:
     words = sys.argv[1:] if argv is None else list(argv)
     if "--verbose" in words:  # before the parser: building it loads PyBullet, banners and all
         os.environ[VERBOSE_ENV] = "1"  # worker processes inherit it
-    parser = build_parser(_command(words))
+    command = _command(words)
+    parser = build_parser(command)
+    if command is not None and command not in COMMANDS:  # named with the command meant
+        close = difflib.get_close_matches(command, COMMANDS, n=1, cutoff=0.6)
+        hint = f" (did you mean {close[0]}?)" if close else ""
+        parser.error(f"unknown command {command!r}{hint}; see stsf-gym --help")
     command_parser = getattr(parser, "command_parser", None)
     if command_parser is not None:  # an unknown option first: named with the one meant
         refuse_unknown(command_parser, words)

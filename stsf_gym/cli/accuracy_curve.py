@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=suite_names(),
         help="a benchmark suite's test worlds and declared-stop task instead of --world",
     )
-    parser.add_argument("--seeds", type=int, default=3, help="episodes per point (3)")
+    parser.add_argument("--seeds", type=options.whole, default=3, help="episodes per point (3)")
     parser.add_argument(
         "--levels",
         default="0.5,1,2,4,6,8,11,16",

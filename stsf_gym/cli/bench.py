@@ -20,7 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--vector-steps",
-        type=int,
+        type=options.whole,
         default=1000,
         help="vector-env steps per worker count (AsyncVectorEnv, SubprocVecEnv; rendered, fast)",
     )
@@ -28,11 +28,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--step-only", action="store_true", help="only the step section (env steps/s)"
     )
     parser.add_argument(
-        "--steps", type=int, default=1500, help="timed env steps per step case (1500)"
+        "--steps", type=options.whole, default=1500, help="timed env steps per step case (1500)"
     )
     parser.add_argument(
         "--rounds",
-        type=int,
+        type=options.whole,
         default=5,
         help="fresh processes per step case and side, the best kept (5)",
     )

@@ -34,7 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "the scripts on those of the run's learnt agents (without learnt agents: odometry, "
         "conventional, conventional-filter, stsf and ekf)",
     )
-    parser.add_argument("--worlds", type=int, default=100, help="test worlds (100)")
+    parser.add_argument("--worlds", type=options.whole, default=100, help="test worlds (100)")
     options.backend(parser)
     options.record(parser)
 

@@ -20,7 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     options.common(parser, "out/demo")
     parser.add_argument(
         "--worlds",
-        type=int,
+        type=options.whole,
         default=DEMO_WORLDS,
         help=f"{DEMO_SUITE} test worlds, one episode per pose source on each ({DEMO_WORLDS})",
     )

@@ -30,7 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "own as package.module:Class (e.g. examples.complementary:ComplementaryFilter)",
     )
     options.world(parser)
-    parser.add_argument("--seeds", type=int, default=5, help="episodes per estimator (5)")
+    parser.add_argument("--seeds", type=options.whole, default=5, help="episodes per estimator (5)")
     options.backend(parser)
     parser.add_argument(
         "--faults",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import math
 from pathlib import Path
 
 from stsf_gym.config_files import read_yaml
@@ -16,6 +17,22 @@ DEFAULT_POSE_SOURCE = "truth"  # train --estimator when none is given
 ALL_ESTIMATORS = "odometry,conventional,stsf,ekf"  # --estimators when none is given
 
 
+def whole(text: str) -> int:
+    """A count or seed as a user types it (``100``, ``1e6``, ``2048.0``: YAML and Python read
+    ``1e6`` as a number, so ``--timesteps 1e6`` is one); a fraction or a word is refused."""
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        number = float(text)
+    except ValueError:
+        number = math.nan
+    if not math.isfinite(number) or number != int(number):
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}")
+    return int(number)
+
+
 def common(
     parser: argparse.ArgumentParser,
     out: str,
@@ -24,7 +41,7 @@ def common(
 ) -> None:
     """``--seed``, ``--out`` (default ``out``), ``--config``, ``--set``, ``--json``,
     ``--verbose``."""
-    parser.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
+    parser.add_argument("--seed", type=whole, default=0, help="base random seed (default 0)")
     parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} ({out})")
     parser.add_argument("--config", help=config_help)
     parser.add_argument(
@@ -87,7 +104,7 @@ def backend(
         help="where cells run: local processes or Ray tasks (local)",
     )
     parser.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
-    parser.add_argument("--workers", type=int, default=2, help=workers_help)
+    parser.add_argument("--workers", type=whole, default=2, help=workers_help)
 
 
 def world(parser: argparse.ArgumentParser) -> None:
@@ -102,7 +119,7 @@ def world(parser: argparse.ArgumentParser) -> None:
 
 def workers(parser: argparse.ArgumentParser) -> None:
     """``--workers``: parallel processes."""
-    parser.add_argument("--workers", type=int, default=2, help="parallel processes (2)")
+    parser.add_argument("--workers", type=whole, default=2, help="parallel processes (2)")
 
 
 #: Options that mean nothing without another (refused rather than ignored): option, needed

@@ -15,7 +15,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``reproduce``."""
     parser.add_argument("experiment", choices=["table1", "fig10", "fig11"])
     options.common(parser, "out")
-    parser.add_argument("--seeds", type=int, help="seeds (table1: config, 20; figs: 10)")
+    parser.add_argument("--seeds", type=options.whole, help="seeds (table1: config, 20; figs: 10)")
     options.workers(parser)
 
 

@@ -42,14 +42,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--timesteps",
-        type=int,
+        type=options.whole,
         help="the reward stage's budget in the policy's steps, summed over the envs: decisions "
         "(0.5 s each) with --suite, control steps (0.1 s) otherwise (default: the "
         "hyper-parameter file's)",
     )
-    parser.add_argument("--n-envs", type=int, help="parallel envs (hyper-parameter file)")
+    parser.add_argument("--n-envs", type=options.whole, help="parallel envs (hyper-parameter file)")
     parser.add_argument(
-        "--seeds", type=int, default=1, help="training seeds SEED.. (1); each in OUT/seed-<s>/"
+        "--seeds",
+        type=options.whole,
+        default=1,
+        help="training seeds SEED.. (1); each in OUT/seed-<s>/",
     )
     options.world(parser)
     options.backend(parser, "a campaign's runs at once on a local Ray (2; locally one at a time)")

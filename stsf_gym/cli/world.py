@@ -13,7 +13,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``world``."""
     options.common(parser, "world.yaml")
     parser.add_argument(
-        "--grid", type=int, help="draw this many worlds from --seed on as one PNG (--out)"
+        "--grid", type=options.whole, help="draw this many worlds from --seed on as one PNG (--out)"
     )
     parser.set_defaults(out_is_file=True)
 

@@ -25,7 +25,7 @@ import sys
 
 from stsf_gym.estimators.base import MapLandmark, PoseEstimator, SensorModel
 from stsf_gym.estimators.settings import ESTIMATOR_DIR, build_settings, load_settings
-from stsf_gym.validation import ConfigError
+from stsf_gym.validation import ConfigError, did_you_mean
 
 #: Estimators by name: "module:class", imported when first made. ``conventional`` is the
 #: paper's (the pose from the current two frames only), ``conventional-filter`` the same pair
@@ -82,7 +82,8 @@ def estimator_class(name: str) -> type[PoseEstimator]:
     known = {**ESTIMATORS, **PRIVILEGED}
     if name not in known and ":" not in name:
         raise ConfigError(
-            f"unknown estimator {name!r}; known: {', '.join(sorted(known))}, "
+            f"unknown estimator {name!r}{did_you_mean(name, known)}; known: "
+            f"{', '.join(sorted(known))}, "
             "or a package.module:Class of your own"
         )
     module_name, _, class_name = known.get(name, name).partition(":")

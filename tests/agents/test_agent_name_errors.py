@@ -20,6 +20,11 @@ from stsf_gym.validation import ConfigError
         ),
         ("builtins:print", "made a NoneType, which is not an agent: it lacks wrap"),
         ("os:path", "agent 'os:path' is a module, not an agent class"),
+        ("json:loads", "agent 'json:loads' cannot be made with no options: missing a required"),
+        (
+            "stsf_gym.agents.registry:Agent",
+            "agent 'stsf_gym.agents.registry:Agent' is a protocol (an interface), not an agent",
+        ),
         ("", "an agent name may not be empty, got ''"),
         (" ", "an agent name may not be empty, got ' '"),
     ],
@@ -29,6 +34,14 @@ def test_a_name_that_makes_no_agent_is_refused_naming_what_is_missing(name, said
 
     with pytest.raises(ConfigError, match=re.escape(said)):
         make_agent(name)
+
+
+def test_options_a_class_does_not_take_are_named_before_it_is_called():
+    from stsf_gym.agents.registry import make_agent
+
+    name = "stsf_gym.agents.trained_agent:SB3Agent"  # SB3Agent(path): no model is loaded
+    with pytest.raises(ConfigError, match=r"options \['gian', 'path'\]: got an unexpected keyword"):
+        make_agent(name, {"path": "model.zip", "gian": 1.0})
 
 
 def test_an_object_that_is_not_an_agent_is_refused_on_the_command_line(run_cli, tmp_path):

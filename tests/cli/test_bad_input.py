@@ -30,6 +30,11 @@ from stsf_gym.validation import ConfigError
             "'stsf' is named twice",
         ),
         (["evaluate", "--agent", "follower,follower"], "'follower' is named twice"),
+        (  # a number typed with an exponent is read, then judged against the episode
+            ["accuracy-curve", "--dial", "latency_s=1e6"],
+            "--dial latency_s=1e+06: no measurement that old arrives in an episode of 420 s",
+        ),
+        (["accuracy-curve", "--dial", "rate_hz=1e-3"], "one measurement every 1000 s is none"),
         (["train", "--suite", "sparse", "--world", "straight_10m"], "drop --world/--split"),
         (["train", "--suite", "sparse", "--world", "irl_corridor"], "drop --world/--split"),
         (["train", "--world", "generated", "--split", "dev"], "split must be one of"),

@@ -1,7 +1,7 @@
 """Config files and the values a user types, each refused in one line before any file is
-written: numbers with an exponent (``1e-4``) read as numbers, a level given twice, config files
-that are folders, keys written twice, YAML anchors and aliases, and files over the size
-bound."""
+written: numbers with an exponent (``1e-4``) read as numbers, a ``--set`` key or a level given
+twice, config files that are folders, keys written twice, YAML anchors and aliases, and files
+over the size bound."""
 
 from __future__ import annotations
 
@@ -30,6 +30,15 @@ def test_a_finetune_learning_rate_typed_with_an_exponent_is_taken():
     overrides = parse_overrides(["finetune.learning_rate=1e-4"])
     settings = load_hyperparams("dagger+ppo", None, overrides=overrides, suite=True)
     assert settings.finetune.learning_rate == 1e-4
+
+
+def test_a_key_set_twice_is_named_before_any_work(run_cli, tmp_path):
+    with pytest.raises(ConfigError, match=r"override 'sim.control_dt' is given twice \(0.1, then"):
+        parse_overrides(["sim.control_dt=0.1", "camera.width=64", "sim.control_dt=0.2"])
+    out = tmp_path / "o"
+    code, err = run_cli("evaluate", "--set", "sim.seed=1", "--set", "sim.seed=2", "--out", str(out))
+    assert code == 2 and err.strip().endswith("only one could hold: give it once")
+    assert not out.exists()
 
 
 def test_a_level_given_twice_is_named(run_cli, tmp_path):

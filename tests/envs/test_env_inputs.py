@@ -155,11 +155,30 @@ def test_a_start_pose_off_the_corridor_or_with_an_absurd_yaw_is_refused(make_env
     assert info["true_pose"][:2] == pytest.approx([7.0, 0.0], abs=0.01)
 
 
-def test_an_action_of_a_batch_shape_is_refused_with_the_expected_shape(make_env):
-    env = make_env("stsf_gym/Corridor-v0", **FAST)
+@pytest.mark.parametrize(
+    "env_id",
+    [
+        "stsf_gym/Corridor-v0",
+        "stsf_gym/Corridor-Odometry-v0",  # the pointing wrapper fills in the pan entry
+        "stsf_gym/Suite-Corridor-Odometry-v0",
+        "stsf_gym/RL-Corridor-Odometry-v0",  # the decision interval holds the action
+    ],
+)
+def test_an_action_of_a_batch_shape_is_refused_with_the_expected_shape(make_env, env_id):
+    env = make_env(env_id, **FAST)
     env.reset(seed=0)
-    with pytest.raises(ValueError, match=re.escape("action must have shape (2,), got (1, 2)")):
-        env.step(np.zeros((1, 2), np.float32))
+    before = env.unwrapped.robot.floor_pose().copy()
+    n = env.action_space.shape[0]
+    with pytest.raises(ValueError, match=re.escape(f"action must have shape ({n},), got (1, {n})")):
+        env.step(np.zeros((1, n), np.float32))
+    assert np.array_equal(env.unwrapped.robot.floor_pose(), before)  # refused before a step
+
+
+def test_an_action_of_the_wrong_kind_is_refused_under_the_decision_interval(make_env):
+    env = make_env("stsf_gym/RL-Corridor-Odometry-v0", **FAST)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"action must be numeric .*got dtype bool"):
+        env.step(np.ones(env.action_space.shape, bool))  # not cast to full speed
 
 
 # --- actions ------------------------------------------------------------------------------

@@ -32,6 +32,23 @@ def check_request(agents: list[str], levels: list[float], dial: dict) -> None:
     check_agents(agents)
 
 
+def check_dial_timing(dial: dict, episode_seconds: float) -> None:
+    """A dial whose measurements could never reach an episode of ``episode_seconds`` is
+    refused: a latency as long as the episode (every measurement would report the start pose)
+    or a measurement period as long (one measurement at the start, none after)."""
+    latency, rate = dial.get("latency_s", 0.0), dial.get("rate_hz")
+    if latency >= episode_seconds:
+        raise ConfigError(
+            f"--dial latency_s={latency:g}: no measurement that old arrives in an episode of "
+            f"{episode_seconds:g} s (sim.max_episode_seconds); give a latency below it"
+        )
+    if rate is not None and 1.0 / rate >= episode_seconds:
+        raise ConfigError(
+            f"--dial rate_hz={rate:g}: one measurement every {1.0 / rate:g} s is none after the "
+            f"start of an episode of {episode_seconds:g} s (sim.max_episode_seconds)"
+        )
+
+
 def curve_world(
     world: str | None, env: dict, suite: str | None, seed: int, seeds: int
 ) -> tuple[str, dict]:

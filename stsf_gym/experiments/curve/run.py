@@ -22,7 +22,7 @@ from stsf_gym.config_files import deep_merge
 from stsf_gym.envs.config import load_config
 from stsf_gym.envs.generated_env import parse_world
 from stsf_gym.episode_env import NOT_CONFIG, estimator_options
-from stsf_gym.experiments.curve.inputs import DIAL, check_request, curve_world
+from stsf_gym.experiments.curve.inputs import DIAL, check_dial_timing, check_request, curve_world
 from stsf_gym.experiments.curve.plot import plot_curve
 from stsf_gym.experiments.jobs.cells import CELL_JOBS
 from stsf_gym.experiments.jobs.engine import run_jobs
@@ -115,7 +115,9 @@ def accuracy_curve(
     generated = parse_world(world) is not None
     config = {k: v for k, v in env.items() if k not in NOT_CONFIG}
     # a bad world or env key fails before anything runs
-    task = load_config(config, world=None if generated else world).task
+    loaded = load_config(config, world=None if generated else world)
+    task = loaded.task
+    check_dial_timing({**estimator_options(DIAL), **dial}, loaded.sim.max_episode_seconds)
     cells = curve_cells(
         agents, world, list(range(seed, seed + seeds)), sorted(levels), estimators, env, dial
     )

@@ -3,7 +3,9 @@
 One row per job, written in its own transaction as the job finishes, so a kill (SIGKILL
 included) leaves a store that opens with every job that had finished; a store that does not
 open as SQLite (another file under its name) is set aside as ``<name>.unreadable`` and the run
-starts a new one. The schema (``docs/results_schema.md``):
+starts a new one. A full disk (SQLite's ``SQLITE_FULL``) is the ``OSError`` ``ENOSPC`` naming the
+store, as any other file's write says it: the transaction is rolled back, every row written
+before stays, and the store is never set aside for it. The schema (``docs/results_schema.md``):
 
 - ``results(key, job, config, code, result, written_ns)``: the job's key, the job and its
   result as JSON, the digest of its resolved configuration, the digest of the code it ran
@@ -15,7 +17,9 @@ starts a new one. The schema (``docs/results_schema.md``):
 
 from __future__ import annotations
 
+import errno
 import json
+import os
 import sqlite3
 import sys
 import time
@@ -51,10 +55,16 @@ class Row:
 
 @contextmanager
 def _open(path: Path) -> Iterator[sqlite3.Connection]:
+    """A connection to the store at ``path``; SQLite's full disk raised as ``ENOSPC``."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    with closing(sqlite3.connect(path)) as db:
-        db.execute("PRAGMA synchronous = FULL")
-        yield db
+    try:
+        with closing(sqlite3.connect(path)) as db:
+            db.execute("PRAGMA synchronous = FULL")
+            yield db
+    except sqlite3.OperationalError as err:
+        if getattr(err, "sqlite_errorcode", None) != sqlite3.SQLITE_FULL:
+            raise
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path)) from err
 
 
 def _set_aside(path: Path, err: sqlite3.DatabaseError) -> None:
