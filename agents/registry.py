@@ -10,10 +10,11 @@ evaluation steps that stack, so an agent is evaluated exactly as it was trained.
   until its estimate is sure enough (:mod:`stsf_gym.agents.cautious_follower`);
   ``active-follower``: the cautious follower that turns or drives to see a map board where it
   would wait (:mod:`stsf_gym.agents.active_follower`);
-- ``pretrained:<suite>/<algo>-<pose source>``: a shipped agent; a training folder; a ``.zip``
-  model saved by ``stsf-gym train`` (:class:`~stsf_gym.agents.trained_agent.SB3Agent`). A name
-  of several training seeds gives its first seed's agent from :func:`make_agent`, every seed's
-  from :func:`make_agents`;
+- ``pretrained:<suite>/<algo>-<pose source>``: a shipped agent; a shipped agent's folder
+  (``DIR/<suite>/<algo>-<pose source>``, shipped with ``--ship-to DIR``); a training folder;
+  a ``.zip`` model saved by ``stsf-gym train``
+  (:class:`~stsf_gym.agents.trained_agent.SB3Agent`). A name of several training seeds gives
+  its first seed's agent from :func:`make_agent`, every seed's from :func:`make_agents`;
 - ``package.module:Class``: an agent of your own, a class with this interface, built with the
   options as keyword arguments;
 - any name given to :func:`register_agent`.

@@ -4,6 +4,9 @@ A name the CLI takes stands for one or more single agents, one per trained model
 
 - ``pretrained:<suite>/<algo>-<pose source>`` (or an alias of one, :mod:`stsf_gym.agents.
   pretrained`): the model of each of its training seeds;
+- a shipped agent's folder in a folder of shipped agents (``DIR/<suite>/<algo>-<pose source>``,
+  as ``stsf-gym agents --ship ... --ship-to DIR`` writes it): the model of each of its seeds,
+  each checked against ``DIR/manifest.json`` (:mod:`~stsf_gym.agents.pretrained.shipped_folder`);
 - a training folder (the ``OUT`` of ``stsf-gym train``): its ``seed-*/model.zip``, or the
   ``model.zip`` of a one-seed run, taken whole (:mod:`~stsf_gym.agents.training_folder`: an
   unfinished or misnamed seed is refused by name);
@@ -26,6 +29,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from stsf_gym.agents import pretrained
+from stsf_gym.agents.pretrained.shipped_folder import checked_models, is_agent_folder
 from stsf_gym.agents.training_folder import CLONE, SEED_FOLDERS, folder_models, seed_runs
 from stsf_gym.validation import ConfigError
 
@@ -40,6 +44,8 @@ def resolve_agent(name: str) -> list[str]:
         return [model_path(model) for model in pretrained.models(name)]
     if name.startswith(CLONE_PREFIX):
         return [model_path(clone) for clone in folder_clones(name.removeprefix(CLONE_PREFIX))]
+    if path.is_dir() and is_agent_folder(path):
+        return [model_path(model) for model in checked_models(path)]
     if path.is_dir():
         return [model_path(model) for model in folder_models(path)]
     if path.suffix == ".zip":

@@ -13,22 +13,28 @@ machine, validation rounds) and ``agent.json`` (the summary ``stsf-gym agents`` 
 what the agent saw when it was shipped: the policy's inputs over the first
 :data:`SEEN_STEPS` decisions of a fixed test world, by seed). ``trained-models/manifest.json``
 holds the SHA-256 digest of every shipped file; a model is read only when its bytes match it
-(:func:`models`). A change of the code that moves
+(:mod:`~stsf_gym.agents.pretrained.shipped_folder`). The package is only read at run time:
+:func:`ship` writes to a folder the user names (``--ship-to DIR``), whose agents are named by
+their folder (``DIR/<suite>/<algo>-<pose source>``). A change of the code that moves
 what an agent sees (its sensors, its observation, its action layout) makes it **stale**
 (:func:`stale`): it must be trained again.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
-import re
 import shutil
 from pathlib import Path
 
 import numpy as np
 
 from stsf_gym.agents.model_files import trained_algo
+from stsf_gym.agents.pretrained.shipped_folder import (
+    MANIFEST,
+    checked_models,
+    updated_manifest,
+    valid_parts,
+)
 from stsf_gym.io import write_json
 from stsf_gym.results.code_identity import note_data_files
 from stsf_gym.validation import ConfigError, did_you_mean
@@ -36,7 +42,6 @@ from stsf_gym.validation import ConfigError, did_you_mean
 PREFIX = "pretrained:"
 MODELS = Path(__file__).parent / "trained-models"  # not a package name: data, not code
 ALIASES = MODELS / "aliases.json"  # "<suite>/<old name>" -> "<suite>/<algo>-<pose source>"
-MANIFEST = "manifest.json"  # in MODELS: {"files": {"<suite>/<agent>/<file>": sha256 hex}}
 SEEN_STEPS = 40  # decisions of the fixed episode whose inputs are kept (20 s at 0.5 s)
 SEEN_WORLD_SEED = 0  # the test world of that episode
 SEEN_TOLERANCE = 1e-5  # inputs within this of the shipped ones are the same
@@ -53,17 +58,12 @@ def seen_source(pose_source: str) -> str:
     return "truth" if pose_source in CPU_DEPENDENT else pose_source
 
 
-#: One part of a shipped agent's name (its suite, its ``<algo>-<pose source>``): a plain file
-#: name, so that no name reaches outside :data:`MODELS` (``..``, ``/``) or into a folder being
-#: shipped (a leading dot).
-NAME_PART = re.compile(r"[A-Za-z0-9][A-Za-z0-9_+-]*")
-
-
 def valid_name(name: str) -> bool:
     """Whether ``name`` has the form ``pretrained:<suite>/<algo>-<pose source>``, each part a
-    plain :data:`NAME_PART` (says nothing of whether it is shipped)."""
+    plain name (:func:`~stsf_gym.agents.pretrained.shipped_folder.valid_parts`: none reaches
+    outside :data:`MODELS`); says nothing of whether it is shipped."""
     parts = name.removeprefix(PREFIX).split("/")
-    return name.startswith(PREFIX) and len(parts) == 2 and all(map(NAME_PART.fullmatch, parts))
+    return name.startswith(PREFIX) and len(parts) == 2 and valid_parts(*parts)
 
 
 def names() -> list[str]:
@@ -103,39 +103,9 @@ def models(name: str) -> list[Path]:
     """The model file of each training seed of shipped agent ``name``, each checked against
     the manifest (ConfigError for bytes it does not list) and counted as code the run loaded,
     so results quoted from it go stale when it is shipped again."""
-    files = [folder(name) / f"seed-{seed}.zip" for seed in summary(name)["seeds"]]
-    listed = manifest(MODELS)
-    for file in files:
-        key = file.relative_to(MODELS).as_posix()
-        if listed.get(key) != sha256(file):
-            raise ConfigError(
-                f"{file}: its bytes are not those {MODELS / MANIFEST} lists for {key}; "
-                "ship the agent again (`stsf-gym agents --ship`)"
-            )
+    files = checked_models(folder(name))
     note_data_files(files)
     return files
-
-
-def sha256(path: Path) -> str:
-    """SHA-256 (hex) of the file ``path``."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def manifest(models: Path) -> dict[str, str]:
-    """``{"<suite>/<agent>/<file>": sha256}`` of the shipped agents under ``models``, as its
-    manifest lists them (nothing without one)."""
-    path = models / MANIFEST
-    return json.loads(path.read_text())["files"] if path.is_file() else {}
-
-
-def manifest_of(models: Path) -> dict:
-    """The manifest the shipped agents under ``models`` have now: each file's digest."""
-    files = sorted(
-        p
-        for p in models.glob("*/*/*")
-        if p.is_file() and valid_name(PREFIX + f"{p.parent.parent.name}/{p.parent.name}")
-    )
-    return {"files": {p.relative_to(models).as_posix(): sha256(p) for p in files}}
 
 
 def summary(name: str) -> dict:
@@ -230,30 +200,37 @@ def seen_when_shipped(model: Path, suite: str, pose_source: str) -> np.ndarray:
     return seen_inputs(model, suite, seen_source(pose_source))
 
 
-def ship(training: Path, suite: str, replace: bool = False) -> str:
+def ship(training: Path, suite: str, to: Path, replace: bool = False) -> Path:
     """Ship the runs of ``training`` (``stsf-gym train --seeds N`` output: ``seed-S/``
-    folders with ``model.zip`` and ``train.json``) as an agent of ``suite``, all checked first
-    and swapped in at once (:mod:`~stsf_gym.agents.pretrained.shipping`); an agent shipped
-    under the same name is replaced only with ``replace``. Returns its name."""
+    folders with ``model.zip`` and ``train.json``) as an agent of ``suite`` into the
+    shipped-agents folder ``to`` (never the installed package), all checked first and swapped
+    in at once (:mod:`~stsf_gym.agents.pretrained.shipping`), and ``to``'s manifest updated
+    with its digests; an agent shipped there under the same name is replaced only with
+    ``replace``. Returns the agent's folder, ``to/<suite>/<algo>-<pose source>``: the name
+    every command takes it by. Its ``agent.json`` names it ``<suite>/<algo>-<pose source>``
+    (``pretrained:<suite>/...`` when ``to`` is :data:`MODELS`)."""
     from stsf_gym.agents.pretrained.shipping import (
         build_agent,
         check_destination,
+        check_ship_to,
         checked_runs,
         folder_beside,
         swap_in,
     )
 
-    training = Path(training)
+    training, to = Path(training), Path(to)
+    check_ship_to(to)
     records = checked_runs(training, suite)
-    target = MODELS / suite / f"{trained_algo(records[0])}-{records[0]['estimator']}"
+    target = to / suite / f"{trained_algo(records[0])}-{records[0]['estimator']}"
     check_destination(target, replace)
     target.parent.mkdir(parents=True, exist_ok=True)
     built = folder_beside(target, "new")
-    name = PREFIX + f"{suite}/{target.name}"
+    key = f"{suite}/{target.name}"  # no path of this machine in what is shipped
+    name = PREFIX + key if to.resolve() == MODELS.resolve() else key
     try:
         build_agent(name, training, suite, records, built, seen_when_shipped)
         swap_in(built, target)
     finally:
         shutil.rmtree(built, ignore_errors=True)  # gone once swapped in
-    write_json(MODELS / MANIFEST, manifest_of(MODELS))
-    return name
+    write_json(to / MANIFEST, updated_manifest(to, target))
+    return target

@@ -1,9 +1,11 @@
 """``stsf-gym agents --ship``: a training folder shipped whole, checked, and swapped in at once.
 
-Every check runs before anything in the package changes: each ``seed-S/`` finished
-(:func:`~stsf_gym.agents.training_folder.seed_runs`), each model readable to its weights, and
-each model's own metadata (algorithm, pose source, suite, seed, the fingerprint of its settings)
-agreeing with its ``train.json``, with the other seeds and with ``--suite``. The agent is then
+It ships into the folder the user names (``--ship-to DIR``), never into the installed package
+(:func:`check_ship_to`). Every check runs before anything in that folder changes: each
+``seed-S/`` finished (:func:`~stsf_gym.agents.training_folder.seed_runs`), each model readable
+to its weights, and each model's own metadata (algorithm, pose source, suite, seed, the
+fingerprint of its settings) agreeing with its ``train.json``, with the other seeds and with
+``--suite``. The agent is then
 built in a temporary folder beside its destination and renamed into place; an agent already
 shipped under that name is replaced only when asked (``replace``), and then as a whole (the old
 folder renamed aside, the new one renamed in, the old one removed): a failure at any point
@@ -12,6 +14,7 @@ leaves the shipped agent as it was, never half replaced, and no seed of the old 
 
 from __future__ import annotations
 
+import importlib.util
 import io
 import json
 import os
@@ -25,6 +28,7 @@ import torch
 from stsf_gym.agents.model_files import trained_algo
 from stsf_gym.agents.training_folder import MODEL, seed_runs
 from stsf_gym.io import check_folder, write_json
+from stsf_gym.results.code_identity import CODE_PACKAGES, git_state
 from stsf_gym.validation import ConfigError
 
 #: What a model's ``stsf_meta`` and its run's ``train.json`` must both say, and alike.
@@ -85,6 +89,36 @@ def _train_record(path: Path) -> dict:
     if not isinstance(record, dict):
         raise ConfigError(f"{path} holds no train.json record (a mapping)")
     return record
+
+
+def package_folders() -> list[Path]:
+    """The folders the package's code is read from (``stsf_gym``, ``stsf_gym.agents``, ...)."""
+    folders = []
+    for name in CODE_PACKAGES:
+        spec = importlib.util.find_spec(name)
+        found = (spec.submodule_search_locations or []) if spec else []
+        folders += [Path(p).resolve() for p in found]
+    return folders
+
+
+def from_checkout() -> bool:
+    """Whether the package runs from a git checkout (an editable install): its folders are
+    then source, the repository's to commit."""
+    return git_state()["commit"] is not None
+
+
+def check_ship_to(to: Path) -> None:
+    """Fail before any work when ``to`` lies in a folder of the installed package: shipping
+    writes to a folder the user names, never into the package. A git checkout's own folders
+    are source and may be named (the project ships its agents to
+    ``agents/pretrained/trained-models`` of its checkout)."""
+    here = Path(to).resolve()
+    inside = [folder for folder in package_folders() if here.is_relative_to(folder)]
+    if inside and not from_checkout():
+        raise ConfigError(
+            f"--ship-to {to}: inside the installed package ({inside[0]}), which is only read; "
+            "ship to a folder of your own, e.g. --ship-to shipped-agents"
+        )
 
 
 def check_destination(target: Path, replace: bool) -> None:

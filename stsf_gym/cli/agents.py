@@ -1,5 +1,5 @@
 """``stsf-gym agents``: the agents shipped trained (``pretrained:...``), listed, or a training
-folder shipped as one."""
+folder shipped as one into a folder the user names (``--ship-to DIR``, never the package)."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 
 from stsf_gym.agents import pretrained
+from stsf_gym.agents.pretrained.shipped_folder import summary_of
 from stsf_gym.envs.suite import suite_names
 from stsf_gym.io import markdown_table
 from stsf_gym.validation import ConfigError
@@ -17,6 +18,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the list as JSON on stdout")
     parser.add_argument(
         "--ship", type=Path, help="a `train --seeds N` folder to ship as a pretrained agent"
+    )
+    parser.add_argument(
+        "--ship-to",
+        type=Path,
+        metavar="DIR",
+        help="with --ship: the shipped-agents folder to ship into (made if missing; its "
+        "manifest.json lists each file's sha256); the agent is then named DIR/SUITE/ALGO-SOURCE",
     )
     parser.add_argument(
         "--suite",
@@ -36,12 +44,19 @@ def run(args: argparse.Namespace) -> dict | list:
     if args.ship is not None:
         if args.suite is None:
             raise ConfigError("--ship needs --suite: the suite the runs were trained on")
-        name = pretrained.ship(args.ship, args.suite, args.replace)
+        if args.ship_to is None:
+            raise ConfigError(
+                "--ship needs --ship-to DIR: the folder to ship into (the installed package is "
+                "only read), e.g. --ship-to shipped-agents"
+            )
+        folder = pretrained.ship(args.ship, args.suite, args.ship_to, args.replace)
+        summary = summary_of(folder)
         if not args.json:
-            print(f"Shipped {name}")
-        return pretrained.summary(name)
-    if args.replace:
-        raise ConfigError("--replace replaces a shipped agent by --ship: add --ship and --suite")
+            print(f"Shipped {summary['name']} to {folder}")
+        return summary
+    if args.replace or args.ship_to is not None:
+        flag = "--replace replaces" if args.replace else "--ship-to is where --ship puts"
+        raise ConfigError(f"{flag} a shipped agent by --ship: add --ship and --suite")
     rows = [r for r in pretrained.listing() if args.suite in (None, r["suite"])]
     if not args.json:
         table = [

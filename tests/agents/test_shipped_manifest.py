@@ -9,12 +9,13 @@ import shutil
 import pytest
 
 from stsf_gym.agents import pretrained
+from stsf_gym.agents.pretrained.shipped_folder import MANIFEST, manifest, manifest_of
 from stsf_gym.validation import ConfigError
 
 
 def test_the_manifest_lists_every_shipped_file_as_it_is():
-    listed = pretrained.manifest(pretrained.MODELS)
-    assert listed == pretrained.manifest_of(pretrained.MODELS)["files"]
+    listed = manifest(pretrained.MODELS)
+    assert listed == manifest_of(pretrained.MODELS)["files"]
     assert "corridor/dagger-stsf/seed-0.zip" in listed and len(listed) > 20
 
 
@@ -23,7 +24,7 @@ def test_a_model_the_manifest_does_not_list_is_refused(tmp_path, monkeypatch):
     shutil.copytree(
         pretrained.MODELS / "corridor" / "dagger-stsf", models / "corridor" / "dagger-stsf"
     )
-    shutil.copy(pretrained.MODELS / pretrained.MANIFEST, models / pretrained.MANIFEST)
+    shutil.copy(pretrained.MODELS / MANIFEST, models / MANIFEST)
     monkeypatch.setattr(pretrained, "MODELS", models)
     assert pretrained.models("pretrained:corridor/dagger-stsf")
     model = models / "corridor" / "dagger-stsf" / "seed-0.zip"

@@ -1,6 +1,7 @@
-"""Shipping and naming trained agents: a ship is checked whole before the package changes, then
-swapped in at once; a training folder is scored or shipped whole or not at all; a shipped name
-never reaches outside the shipped folder; corrupt weights fail the pre-flight check.
+"""Shipping and naming trained agents: a ship is checked whole before the folder it ships to
+(``--ship-to``) changes, then swapped in at once; a training folder is scored or shipped whole
+or not at all; a shipped name never reaches outside the shipped folder; corrupt weights fail
+the pre-flight check.
 
 The training folders here are made of a shipped agent's own files (its models and their
 ``train.json``), so every check meets real models and real metadata."""
@@ -32,11 +33,10 @@ def training_folder(root: Path, seeds=(0, 1), source: Path = SOURCE) -> Path:
 
 
 @pytest.fixture
-def models(tmp_path, monkeypatch) -> Path:
-    """An empty shipped-agents folder in place of the package's."""
-    folder = tmp_path / "trained-models"
+def models(tmp_path) -> Path:
+    """An empty folder of the user's to ship into (``--ship-to``)."""
+    folder = tmp_path / "shipped-agents"
     folder.mkdir()
-    monkeypatch.setattr(pretrained, "MODELS", folder)
     return folder
 
 
@@ -47,7 +47,13 @@ def shipped_files(models: Path) -> dict[str, bytes]:
 
 def test_a_ship_writes_the_agent_whole_and_its_listing(models, tmp_path, run_cli):
     code, err = run_cli(
-        "agents", "--ship", str(training_folder(tmp_path / "t")), "--suite", "corridor"
+        "agents",
+        "--ship-to",
+        str(models),
+        "--ship",
+        str(training_folder(tmp_path / "t")),
+        "--suite",
+        "corridor",
     )
     assert code == 0, err
     record = json.loads((models / "corridor" / "dagger-truth" / "agent.json").read_text())
@@ -57,20 +63,44 @@ def test_a_ship_writes_the_agent_whole_and_its_listing(models, tmp_path, run_cli
 
 def test_a_ship_over_a_shipped_name_is_refused_without_replace(models, tmp_path, run_cli):
     assert (
-        run_cli("agents", "--ship", str(training_folder(tmp_path / "a")), "--suite", "corridor")[0]
+        run_cli(
+            "agents",
+            "--ship-to",
+            str(models),
+            "--ship",
+            str(training_folder(tmp_path / "a")),
+            "--suite",
+            "corridor",
+        )[0]
         == 0
     )
     before = shipped_files(models)
     code, err = run_cli(
-        "agents", "--ship", str(training_folder(tmp_path / "b", (2,))), "--suite", "corridor"
+        "agents",
+        "--ship-to",
+        str(models),
+        "--ship",
+        str(training_folder(tmp_path / "b", (2,))),
+        "--suite",
+        "corridor",
     )
     assert code == 2 and "already shipped as corridor/dagger-truth" in err and "--replace" in err
     assert shipped_files(models) == before
 
 
 def test_a_replacing_ship_leaves_no_orphan_seeds(models, tmp_path, run_cli):
-    run_cli("agents", "--ship", str(training_folder(tmp_path / "a", (0, 1))), "--suite", "corridor")
+    run_cli(
+        "agents",
+        "--ship-to",
+        str(models),
+        "--ship",
+        str(training_folder(tmp_path / "a", (0, 1))),
+        "--suite",
+        "corridor",
+    )
     argv = [
+        "--ship-to",
+        str(models),
         "--ship",
         str(training_folder(tmp_path / "b", (2,))),
         "--suite",
@@ -88,7 +118,15 @@ def test_a_ship_failing_part_way_leaves_the_shipped_agent_as_it_was(
     models, tmp_path, run_cli, monkeypatch
 ):
     """The second seed's seen inputs fail (as an unreadable model would): nothing changes."""
-    run_cli("agents", "--ship", str(training_folder(tmp_path / "a", (0, 1))), "--suite", "corridor")
+    run_cli(
+        "agents",
+        "--ship-to",
+        str(models),
+        "--ship",
+        str(training_folder(tmp_path / "a", (0, 1))),
+        "--suite",
+        "corridor",
+    )
     before = shipped_files(models)
     real, calls = pretrained.seen_inputs, []
 
@@ -100,6 +138,8 @@ def test_a_ship_failing_part_way_leaves_the_shipped_agent_as_it_was(
 
     monkeypatch.setattr(pretrained, "seen_inputs", failing)
     argv = [
+        "--ship-to",
+        str(models),
         "--ship",
         str(training_folder(tmp_path / "b", (1, 2))),
         "--suite",
@@ -125,14 +165,22 @@ def test_an_edited_train_json_is_refused(models, tmp_path, run_cli, edit, messag
     folder = training_folder(tmp_path / "t")
     record = folder / "seed-1" / "train.json"
     record.write_text(json.dumps({**json.loads(record.read_text()), **edit}))
-    code, err = run_cli("agents", "--ship", str(folder), "--suite", "corridor")
+    code, err = run_cli(
+        "agents", "--ship-to", str(models), "--ship", str(folder), "--suite", "corridor"
+    )
     assert code == 2 and message in err and "seed-1" in err
     assert shipped_files(models) == {}
 
 
 def test_a_ship_under_another_suite_is_refused(models, tmp_path, run_cli):
     code, err = run_cli(
-        "agents", "--ship", str(training_folder(tmp_path / "t")), "--suite", "sparse"
+        "agents",
+        "--ship-to",
+        str(models),
+        "--ship",
+        str(training_folder(tmp_path / "t")),
+        "--suite",
+        "sparse",
     )
     assert code == 2 and "trained on suite 'corridor', not --suite 'sparse'" in err
     assert shipped_files(models) == {}
@@ -141,7 +189,9 @@ def test_a_ship_under_another_suite_is_refused(models, tmp_path, run_cli):
 def test_seeds_of_two_pose_sources_do_not_ship_as_one_agent(models, tmp_path, run_cli):
     folder = training_folder(tmp_path / "t", (0,), STSF)
     training_folder(folder, (1,))  # the true pose's seed 1 beside STSF's seed 0
-    code, err = run_cli("agents", "--ship", str(folder), "--suite", "corridor")
+    code, err = run_cli(
+        "agents", "--ship-to", str(models), "--ship", str(folder), "--suite", "corridor"
+    )
     assert code == 2 and "seed 1 has estimator 'truth', seed 0 'stsf'" in err
     assert shipped_files(models) == {}
 
@@ -149,7 +199,9 @@ def test_seeds_of_two_pose_sources_do_not_ship_as_one_agent(models, tmp_path, ru
 def test_an_unreadable_model_is_refused_before_anything_is_shipped(models, tmp_path, run_cli):
     folder = training_folder(tmp_path / "t")
     corrupt_weights(folder / "seed-1" / "model.zip")
-    code, err = run_cli("agents", "--ship", str(folder), "--suite", "corridor")
+    code, err = run_cli(
+        "agents", "--ship-to", str(models), "--ship", str(folder), "--suite", "corridor"
+    )
     assert code == 2 and "policy.pth) cannot be read" in err and "weights_only" not in err
     assert shipped_files(models) == {}
 
@@ -162,7 +214,13 @@ def test_a_read_only_destination_fails_in_one_line(models, tmp_path, run_cli, mo
 
     monkeypatch.setattr(shipping, "check_folder", refused)
     code, err = run_cli(
-        "agents", "--ship", str(training_folder(tmp_path / "t")), "--suite", "corridor"
+        "agents",
+        "--ship-to",
+        str(models),
+        "--ship",
+        str(training_folder(tmp_path / "t")),
+        "--suite",
+        "corridor",
     )
     assert code == 2 and "the shipping destination" in err and "Traceback" not in err
     assert shipped_files(models) == {}
@@ -213,7 +271,7 @@ def test_a_misnamed_seed_folder_is_named(models, tmp_path, run_cli):
     folder = training_folder(tmp_path / "t", (0,))
     (folder / "seed-abc").mkdir()
     for argv in (
-        ["agents", "--ship", str(folder), "--suite", "corridor"],
+        ["agents", "--ship-to", str(models), "--ship", str(folder), "--suite", "corridor"],
         ["benchmark", "--suite", "corridor", "--agents", str(folder), "--out", str(tmp_path / "o")],
     ):
         code, err = run_cli(*argv)
@@ -261,6 +319,8 @@ def test_a_shipped_agents_folder_is_readable_as_any_other(models, tmp_path, run_
         assert (
             run_cli(
                 "agents",
+                "--ship-to",
+                str(models),
                 "--ship",
                 str(training_folder(tmp_path / "t", (0,))),
                 "--suite",
@@ -288,7 +348,9 @@ def test_a_fine_tuned_agent_ships_without_optimizer_moments_and_with_its_own_val
     run.mkdir(parents=True)
     shutil.copyfile(folder / "model.zip", run / "model.zip")
     shutil.copyfile(folder / "train.json", run / "train.json")
-    code, err = run_cli("agents", "--ship", str(run.parent), "--suite", "corridor")
+    code, err = run_cli(
+        "agents", "--ship-to", str(models), "--ship", str(run.parent), "--suite", "corridor"
+    )
     assert code == 0, err
     (shipped,) = (models / "corridor").glob("dagger+ppo-*/seed-*.zip")
     assert shipped.stat().st_size < 0.6 * (run / "model.zip").stat().st_size

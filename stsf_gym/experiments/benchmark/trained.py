@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from stsf_gym.agents import pretrained
+from stsf_gym.agents.pretrained.shipped_folder import is_agent_folder
 from stsf_gym.agents.registry import FOLLOWER, trained_on
 from stsf_gym.agents.resolve import CLONE_PREFIX, SEED_FOLDERS, resolve_agent, training_group
 from stsf_gym.agents.training_folder import CLONE, MODEL
@@ -66,7 +67,8 @@ def agent_name(agent: str) -> str:
     if path.match(f"*/{CLONE}"):
         return f"{agent_name(str(path.parent.parent / MODEL))} clone"
     folder = path.parent
-    if folder.parent.parent.name == pretrained.MODELS.name:  # <models>/<suite>/<agent>/seed-S.zip
+    # <shipped-agents folder>/<suite>/<agent>/seed-S.zip
+    if folder.parent.parent.name == pretrained.MODELS.name or is_agent_folder(folder):
         return f"{folder.name}/{path.stem}"
     if path.name != "model.zip":
         return path.stem
