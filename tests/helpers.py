@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -146,3 +147,14 @@ def interrupt_in_the_third_rollout(monkeypatch, run) -> None:
     with pytest.raises(KeyboardInterrupt):
         run()
     monkeypatch.setattr(EpisodeLog, "_on_step", original)
+
+
+def training_folder(root: Path, seeds, source: Path) -> Path:
+    """A `train --seeds N` folder holding the shipped agent ``source``'s models of ``seeds``
+    (``stsf_gym.agents.pretrained.MODELS / SUITE / NAME``), as the shipping tests ship."""
+    for seed in seeds:
+        run = root / f"seed-{seed}"
+        run.mkdir(parents=True)
+        shutil.copyfile(source / f"seed-{seed}.zip", run / "model.zip")
+        shutil.copyfile(source / f"seed-{seed}.json", run / "train.json")
+    return root

@@ -6,10 +6,10 @@ written."""
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 
 import pytest
+from helpers import training_folder as shared_training_folder
 
 from stsf_gym.agents import pretrained
 from stsf_gym.agents.pretrained import shipping
@@ -25,12 +25,7 @@ STSF = pretrained.MODELS / "corridor" / "dagger-stsf"  # seed 0, the same suite 
 
 def training_folder(root: Path, seeds=(0,), source: Path = SOURCE) -> Path:
     """A `train --seeds N` folder holding ``source``'s models of ``seeds``."""
-    for seed in seeds:
-        run = root / f"seed-{seed}"
-        run.mkdir(parents=True)
-        shutil.copyfile(source / f"seed-{seed}.zip", run / "model.zip")
-        shutil.copyfile(source / f"seed-{seed}.json", run / "train.json")
-    return root
+    return shared_training_folder(root, seeds, source)
 
 
 def package_files() -> dict[str, str]:

@@ -14,6 +14,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from helpers import training_folder as shared_training_folder
 
 from stsf_gym.agents import pretrained
 from stsf_gym.validation import ConfigError
@@ -24,12 +25,14 @@ STSF = pretrained.MODELS / "corridor" / "dagger-stsf"  # seed 0, the same suite 
 
 def training_folder(root: Path, seeds=(0, 1), source: Path = SOURCE) -> Path:
     """A `train --seeds N` folder holding ``source``'s models of ``seeds``."""
-    for seed in seeds:
-        run = root / f"seed-{seed}"
-        run.mkdir(parents=True)
-        shutil.copyfile(source / f"seed-{seed}.zip", run / "model.zip")
-        shutil.copyfile(source / f"seed-{seed}.json", run / "train.json")
-    return root
+    return shared_training_folder(root, seeds, source)
+
+
+def ship(run_cli, models: Path, training: Path, *extra: str) -> tuple[int, str]:
+    """``stsf-gym agents --ship-to MODELS --ship TRAINING --suite corridor EXTRA...``."""
+    return run_cli(
+        "agents", "--ship-to", str(models), "--ship", str(training), "--suite", "corridor", *extra
+    )
 
 
 @pytest.fixture
@@ -46,15 +49,7 @@ def shipped_files(models: Path) -> dict[str, bytes]:
 
 
 def test_a_ship_writes_the_agent_whole_and_its_listing(models, tmp_path, run_cli):
-    code, err = run_cli(
-        "agents",
-        "--ship-to",
-        str(models),
-        "--ship",
-        str(training_folder(tmp_path / "t")),
-        "--suite",
-        "corridor",
-    )
+    code, err = ship(run_cli, models, training_folder(tmp_path / "t"))
     assert code == 0, err
     record = json.loads((models / "corridor" / "dagger-truth" / "agent.json").read_text())
     assert record["seeds"] == [0, 1] and set(record["seen"]) == {"0", "1"}
@@ -62,42 +57,15 @@ def test_a_ship_writes_the_agent_whole_and_its_listing(models, tmp_path, run_cli
 
 
 def test_a_ship_over_a_shipped_name_is_refused_without_replace(models, tmp_path, run_cli):
-    assert (
-        run_cli(
-            "agents",
-            "--ship-to",
-            str(models),
-            "--ship",
-            str(training_folder(tmp_path / "a")),
-            "--suite",
-            "corridor",
-        )[0]
-        == 0
-    )
+    assert ship(run_cli, models, training_folder(tmp_path / "a"))[0] == 0
     before = shipped_files(models)
-    code, err = run_cli(
-        "agents",
-        "--ship-to",
-        str(models),
-        "--ship",
-        str(training_folder(tmp_path / "b", (2,))),
-        "--suite",
-        "corridor",
-    )
+    code, err = ship(run_cli, models, training_folder(tmp_path / "b", (2,)))
     assert code == 2 and "already shipped as corridor/dagger-truth" in err and "--replace" in err
     assert shipped_files(models) == before
 
 
 def test_a_replacing_ship_leaves_no_orphan_seeds(models, tmp_path, run_cli):
-    run_cli(
-        "agents",
-        "--ship-to",
-        str(models),
-        "--ship",
-        str(training_folder(tmp_path / "a", (0, 1))),
-        "--suite",
-        "corridor",
-    )
+    ship(run_cli, models, training_folder(tmp_path / "a", (0, 1)))
     argv = [
         "--ship-to",
         str(models),
@@ -118,15 +86,7 @@ def test_a_ship_failing_part_way_leaves_the_shipped_agent_as_it_was(
     models, tmp_path, run_cli, monkeypatch
 ):
     """The second seed's seen inputs fail (as an unreadable model would): nothing changes."""
-    run_cli(
-        "agents",
-        "--ship-to",
-        str(models),
-        "--ship",
-        str(training_folder(tmp_path / "a", (0, 1))),
-        "--suite",
-        "corridor",
-    )
+    ship(run_cli, models, training_folder(tmp_path / "a", (0, 1)))
     before = shipped_files(models)
     real, calls = pretrained.seen_inputs, []
 
@@ -213,15 +173,7 @@ def test_a_read_only_destination_fails_in_one_line(models, tmp_path, run_cli, mo
         raise PermissionError(f"{flag} {folder}: not writable (Read-only file system)")
 
     monkeypatch.setattr(shipping, "check_folder", refused)
-    code, err = run_cli(
-        "agents",
-        "--ship-to",
-        str(models),
-        "--ship",
-        str(training_folder(tmp_path / "t")),
-        "--suite",
-        "corridor",
-    )
+    code, err = ship(run_cli, models, training_folder(tmp_path / "t"))
     assert code == 2 and "the shipping destination" in err and "Traceback" not in err
     assert shipped_files(models) == {}
 
@@ -316,18 +268,7 @@ def test_a_shipped_agents_folder_is_readable_as_any_other(models, tmp_path, run_
 
     umask = os.umask(0o022)
     try:
-        assert (
-            run_cli(
-                "agents",
-                "--ship-to",
-                str(models),
-                "--ship",
-                str(training_folder(tmp_path / "t", (0,))),
-                "--suite",
-                "corridor",
-            )[0]
-            == 0
-        )
+        assert ship(run_cli, models, training_folder(tmp_path / "t", (0,)))[0] == 0
     finally:
         os.umask(umask)
     assert (models / "corridor" / "dagger-truth").stat().st_mode & 0o777 == 0o755
