@@ -145,9 +145,9 @@ def finished(unit: Path, settings: dict) -> bool:
                 )
                 result.rename(kept)
                 print(f"{unit}: its result ran with other settings; kept as {kept.name}")
-            for working in ("monitor", "eval", "state.json", "model.zip", "replay.pkl"):
-                target = unit / working
-                shutil.rmtree(target) if target.is_dir() else target.unlink(missing_ok=True)
+            shutil.rmtree(unit / "monitor", ignore_errors=True)
+            for working in ("state.json", "model.zip", "replay.pkl"):
+                (unit / working).unlink(missing_ok=True)
     return result.is_file()
 
 
