@@ -14,7 +14,7 @@ first five decisions; the val success and return at each evaluation; decisions p
 Usage::
 
     python benchmarks/studies/declaration_pilot.py [--suite corridor]
-        [--designs stop-goes-on,stop-graded,discrete] [--algo ppo|sac]
+        [--designs discrete-cheap,stop-cheap] [--algo ppo|sac]
         [--decisions 491520] [--eval-every 40960] [--seed 0]
         [--out benchmarks/results/declaration-pilot]
 
@@ -284,7 +284,7 @@ def run_design(
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", default="corridor")
-    parser.add_argument("--designs", default="stop-goes-on,stop-graded,discrete")
+    parser.add_argument("--designs", default="discrete-cheap,stop-cheap")
     parser.add_argument("--algo", choices=("ppo", "sac"), default="ppo")
     parser.add_argument("--decisions", type=int, default=491_520)
     parser.add_argument("--eval-every", type=int, default=40_960)

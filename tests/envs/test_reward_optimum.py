@@ -112,14 +112,15 @@ def test_a_reward_whose_optimum_is_not_the_task_is_refused(reward, key):
 GOES_ON = {**TASK, "false_stop_ends": False}
 
 
-def goes_on_return(xs: list[float], stops_at: set[int]) -> tuple[float, bool]:
-    """The return (and success) on a training leg where a false stop goes on
-    (``task.false_stop_ends: false``, the RL-ready ids' default), declaring at the steps
-    ``stops_at``."""
-    from stsf_gym.agents.rl.declaration import GOES_ON_FALSE_STOP
+def goes_on_return(
+    xs: list[float], stops_at: set[int], design: str = "stop-goes-on"
+) -> tuple[float, bool]:
+    """The return (and success) on a training leg of declaration ``design`` (a false stop
+    goes on: ``task.false_stop_ends: false``), declaring at the steps ``stops_at``."""
+    from stsf_gym.agents.rl.declaration import declaration
 
     cfg = load_config(
-        world="straight_10m", task=GOES_ON, reward={"false_stop": GOES_ON_FALSE_STOP},
+        world="straight_10m", task=GOES_ON, reward=declaration(design).training_env()["reward"],
         sim={"max_episode_seconds": TIME_LIMIT},
     )  # fmt: skip
     task = PathTask(cfg.world, cfg.reward, cfg.task)
@@ -137,16 +138,29 @@ def goes_on_return(xs: list[float], stops_at: set[int]) -> tuple[float, bool]:
     return total, task.success
 
 
-def test_under_the_training_rule_a_false_stop_costs_goes_on_and_never_pays():
+@pytest.mark.parametrize("design", ["stop-goes-on", "stop-cheap", "discrete-cheap"])
+def test_under_the_training_rule_a_false_stop_costs_goes_on_and_never_pays(design):
+    from stsf_gym.agents.rl.declaration import declaration
+
     xs = drive(1.0, GOAL_ARC)
     last = len(xs) - 1
-    correct, ok = goes_on_return(xs, {last})
-    tried_early, ok_early = goes_on_return(xs, {3, last})
-    spammed, ok_spam = goes_on_return(xs, set(range(1, last + 1)))
-    never, ok_never = goes_on_return(xs, set())
+    correct, ok = goes_on_return(xs, {last}, design)
+    tried_early, ok_early = goes_on_return(xs, {3, last}, design)
+    spammed, ok_spam = goes_on_return(xs, set(range(1, last + 1)), design)
+    never, ok_never = goes_on_return(xs, set(), design)
     assert ok and ok_early and ok_spam and not ok_never  # a false stop ends nothing
-    assert correct - tried_early == pytest.approx(1.0)  # each costs GOES_ON_FALSE_STOP
+    cost = -declaration(design).false_stop
+    assert correct - tried_early == pytest.approx(cost)  # each false stop costs the design's
     assert spammed < tried_early < correct and never < correct
+
+
+def test_the_cheap_false_stop_sits_in_the_window_its_module_derives():
+    from stsf_gym.agents.rl.declaration import CHEAP_FALSE_STOP
+
+    goal, radius, speed, period, longest = 10.0, 0.25, 0.122, 0.5, 10.0
+    inside = 2 * radius / speed / period  # decisions within the radius passing through a goal
+    leg = longest / speed / period  # decisions of the longest leg
+    assert goal / leg < -CHEAP_FALSE_STOP < goal * inside / leg
 
 
 def test_a_false_stop_that_goes_on_must_cost_something():
