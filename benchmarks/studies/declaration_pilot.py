@@ -18,10 +18,13 @@ Usage::
         [--decisions 491520] [--eval-every 40960] [--seed 0]
         [--out benchmarks/results/declaration-pilot]
 
-491,520 decisions are the target's two hours at about 68 decisions a second. Each design's
+The default 491,520 decisions are a pilot's budget: 40 minutes at the 200 decisions a second
+of 2026-12-02's machine (each ``state.json`` holds the bench's reference workload beside its
+wall time), a third of the target's two hours a seed. Each design's
 unit (``<out>/<algo>-<design>/``) checkpoints at every evaluation (``model.zip``,
 ``state.json``, SAC's replay buffer) and a rerun resumes it from there; ``result.json`` is
-written when it finishes, and a rerun skips it. A unit of other settings is set aside.
+written when it finishes, and a rerun skips it. A rerun with a larger ``--decisions`` and
+otherwise the same settings extends a unit; a unit of other settings is set aside.
 """
 
 from __future__ import annotations
@@ -131,23 +134,44 @@ def unit_settings(suite: str, algo: str, decisions: int, eval_every: int, seed: 
     }
 
 
+def extends(old: dict, new: dict) -> bool:
+    """Whether a unit of settings ``new`` continues one of ``old``: the same in all but a
+    larger budget of decisions."""
+    rest = {key: value for key, value in new.items() if key != "decisions"}
+    return {**old, "decisions": None} == {**rest, "decisions": None} and (
+        old.get("decisions", 0) <= new["decisions"]
+    )
+
+
 def finished(unit: Path, settings: dict) -> bool:
-    """Whether ``unit`` holds a result of ``settings``; one of other settings (finished or
-    not) is set aside, its result kept as ``result.<n>.json``."""
+    """Whether ``unit`` holds a result of ``settings``. One of a smaller budget, otherwise the
+    same, is extended (it resumes from its state); one of other settings (finished or not) is
+    set aside, its result kept as ``result.<n>.json``."""
     result, state = unit / "result.json", unit / "state.json"
     for path in (result, state):
-        if path.is_file() and json.loads(path.read_text()).get("settings") != settings:
-            if path == result:
-                kept = next(
-                    unit / f"result.{n}.json"
-                    for n in range(1, 1000)
-                    if not (unit / f"result.{n}.json").exists()
-                )
-                result.rename(kept)
-                print(f"{unit}: its result ran with other settings; kept as {kept.name}")
-            shutil.rmtree(unit / "monitor", ignore_errors=True)
-            for working in ("state.json", "model.zip", "replay.pkl"):
-                (unit / working).unlink(missing_ok=True)
+        if not path.is_file():
+            continue
+        held = json.loads(path.read_text())
+        if held.get("settings") == settings:
+            continue
+        if extends(held.get("settings", {}), settings) and state.is_file():
+            if path == state:
+                write_json(state, {**held, "settings": settings})
+                print(f"{unit}: extended to {settings['decisions']:,} decisions")
+            else:
+                result.unlink()  # written again when the longer run finishes
+            continue
+        if path == result:
+            kept = next(
+                unit / f"result.{n}.json"
+                for n in range(1, 1000)
+                if not (unit / f"result.{n}.json").exists()
+            )
+            result.rename(kept)
+            print(f"{unit}: its result ran with other settings; kept as {kept.name}")
+        shutil.rmtree(unit / "monitor", ignore_errors=True)
+        for working in ("state.json", "model.zip", "replay.pkl"):
+            (unit / working).unlink(missing_ok=True)
     return result.is_file()
 
 
@@ -184,13 +208,14 @@ def save_checkpoint(out: Path, model, state: dict) -> None:
     write_json(out / "state.json", state)
 
 
-def val_routes(model, eval_env, routes: int = 10) -> tuple[list[bool], list[float]]:
-    """Each of ``routes`` full val routes driven deterministically: success and return."""
-    successes: list[bool] = []
+def val_routes(model, eval_env, routes: int = 10) -> dict:
+    """``routes`` full val routes driven deterministically: their success, return, how they
+    ended and how near their goals they came (the legs' record, agents/rl/leg_record.py)."""
+    ended: list[dict] = []
 
     def note(local: dict, _: dict) -> None:
         if local["done"]:
-            successes.append(bool(local["info"].get("is_success")))
+            ended.append(local["info"])
 
     returns, _ = evaluate_policy(
         model,
@@ -200,7 +225,12 @@ def val_routes(model, eval_env, routes: int = 10) -> tuple[list[bool], list[floa
         return_episode_rewards=True,
         callback=note,
     )
-    return successes, list(returns)
+    return {
+        "success": float(np.mean([bool(info.get("is_success")) for info in ended])),
+        "return": float(np.mean(returns)),
+        "outcomes": {name: sum(info["outcome"] == name for info in ended) for name in OUTCOMES},
+        "median_closest_m": float(np.median([info["closest_m"] for info in ended])),
+    }
 
 
 def run_design(
@@ -237,7 +267,10 @@ def run_design(
         },
     )
     eval_env = make_vec_env(
-        env_id, n_envs=1, seed=seed + 10_000, env_kwargs={**kwargs, "split": "val"}
+        leg_recorded,
+        n_envs=1,
+        seed=seed + 10_000,
+        env_kwargs={"env_id": env_id, **kwargs, "split": "val"},
     )
     torch.set_num_threads(1)  # as the trainer: the learner leaves the cores to the env processes
     if resuming:
@@ -250,16 +283,10 @@ def run_design(
         started = time.perf_counter()
         chunk = min(eval_every, decisions - state["decisions"])
         model.learn(chunk, reset_num_timesteps=False, progress_bar=True)
-        successes, returns = val_routes(model, eval_env)
+        val = val_routes(model, eval_env)
         state["decisions"] = int(model.num_timesteps)
         state["wall_time_s"] += time.perf_counter() - started
-        state["val"].append(
-            {
-                "decisions": state["decisions"],
-                "success": float(np.mean(successes)),
-                "return": float(np.mean(returns)),
-            }
-        )
+        state["val"].append({"decisions": state["decisions"], **val})
         save_checkpoint(out, model, state)
         print(json.dumps(state["val"][-1]))
     venv.close()
