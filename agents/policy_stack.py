@@ -11,6 +11,7 @@ import gymnasium as gym
 
 from stsf_gym.agents.decision_interval import DecisionInterval
 from stsf_gym.agents.observation import ObservationConfig, PolicyObservation, observation_config
+from stsf_gym.agents.rl.near_goals import LearnerNearGoals
 from stsf_gym.agents.rl.residual import ResidualFollower
 
 
@@ -25,10 +26,13 @@ def policy_stack(
     policy's correction (:class:`~stsf_gym.agents.rl.residual.ResidualFollower`), then
     :class:`PolicyObservation` with ``observation``'s settings (checked already, or a saved
     model's mapping), then :class:`DecisionInterval` of ``decision_steps`` (1: a decision
-    every control step)."""
+    every control step); a residual that ``acts_within`` a distance of the goals decides
+    there only (:class:`~stsf_gym.agents.rl.near_goals.LearnerNearGoals`)."""
     if not isinstance(observation, ObservationConfig):
         observation = observation_config(observation)
     if residual is not None:
         env = ResidualFollower(env, **residual)
     features = PolicyObservation(env, observation)
-    return features if decision_steps == 1 else DecisionInterval(features, decision_steps)
+    stack = features if decision_steps == 1 else DecisionInterval(features, decision_steps)
+    near_goals = residual is not None and residual.get("acts_within") is not None
+    return LearnerNearGoals(stack) if near_goals else stack

@@ -18,7 +18,9 @@ step, as the follower runs when it drives alone. The policy's action is ``[dv, d
 The observation gains ``follower_action``: the follower's action for the state just reached
 (``[v, w, stop]``), which the policy's input reads (what it corrects, and when the follower
 would declare). A policy whose mean action is 0 (:func:`start_as_follower`) therefore drives
-exactly as the follower does, step for step.
+exactly as the follower does, step for step. With ``acts_within``, :attr:`near_goal` says
+whether the estimated position is within that many metres of the current goal, where
+:class:`~stsf_gym.agents.rl.near_goals.LearnerNearGoals` lets the policy decide.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from gymnasium import spaces
 
 from stsf_gym.agents.follower_agent import FollowerAgent
 from stsf_gym.envs.action_layout import ActionLayout
-from stsf_gym.validation import Range
+from stsf_gym.validation import Positive, Range
 
 PROPOSAL = "follower_action"  # the observation key of the follower's action
 
@@ -44,29 +46,41 @@ class ResidualConfig:
     """The residual's bounds (``residual:`` of the hyper-parameter file): ``scale`` of the
     correction in action units, ``hold_below`` the gate's threshold, and the standard
     deviations a fresh policy explores with (``correction_std`` on ``dv, dw``, ``gate_std`` on
-    ``hold``: a gate at 0 with 0.5 holds a declaration with probability 0.16)."""
+    ``hold``: a gate at 0 with 0.5 holds a declaration with probability 0.16); ``acts_within``
+    the metres from the goal within which the policy decides (None: everywhere)."""
 
     scale: Annotated[float, Range(gt=0, le=2)] = 0.5
     hold_below: Annotated[float, Range(ge=-1, le=1)] = -0.5
     correction_std: Annotated[float, Range(gt=0, le=1)] = 0.3
     gate_std: Annotated[float, Range(gt=0, le=1)] = 0.5
+    acts_within: Positive | None = None
 
     @property
     def bounds(self) -> dict:
         """What the policy stack needs (:class:`ResidualFollower`'s arguments)."""
-        return {"scale": self.scale, "hold_below": self.hold_below}
+        near = {} if self.acts_within is None else {"acts_within": self.acts_within}
+        return {"scale": self.scale, "hold_below": self.hold_below, **near}
 
 
 class ResidualFollower(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """The follower's action corrected by the policy's (see the module)."""
 
-    def __init__(self, env: gym.Env, scale: float = 0.5, hold_below: float = -0.5) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, scale=scale, hold_below=hold_below)
+    def __init__(
+        self,
+        env: gym.Env,
+        scale: float = 0.5,
+        hold_below: float = -0.5,
+        acts_within: float | None = None,
+    ) -> None:
+        gym.utils.RecordConstructorArgs.__init__(
+            self, scale=scale, hold_below=hold_below, acts_within=acts_within
+        )
         gym.Wrapper.__init__(self, env)
         inner = env.get_wrapper_attr("action_layout")
         if tuple(inner.names) != ("v", "w", "stop"):
             raise ValueError(f"ResidualFollower needs the action [v, w, stop], got {inner.names}")
-        self.scale, self.hold_below = scale, hold_below
+        self.scale, self.hold_below, self.acts_within = scale, hold_below, acts_within
+        self.near_goal = True  # whether the policy decides now (see acts_within)
         self.action_layout = ActionLayout(("v", "w", "hold"))
         self.action_space = self.action_layout.space
         proposal = spaces.Box(-1.0, 1.0, (3,), np.float32)
@@ -99,6 +113,9 @@ class ResidualFollower(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def _propose(self, obs: dict) -> dict:
         self._proposal = np.asarray(self.follower.act(obs), dtype=np.float32)
+        if self.acts_within is not None:
+            offset = np.asarray(obs["goal"], float) - np.asarray(obs["pose"], float)[:2]
+            self.near_goal = bool(np.hypot(*offset) <= self.acts_within)
         return {**obs, PROPOSAL: self._proposal.copy()}
 
 

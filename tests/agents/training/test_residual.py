@@ -141,7 +141,9 @@ def test_the_residual_stage_records_its_algo_and_resumes_to_the_same_weights(tmp
     whole = tmp_path / "whole"
     summary = train_tiny_residual(whole)
     assert summary["algo"] == "residual+ppo" and summary["timesteps"] == 96
-    assert model_metadata(whole / "model.zip")["residual"] == BOUNDS
+    run = resolve_run("residual+ppo", "truth", None, 0, "corridor", None, None, 1, "corridor")
+    assert run.residual is not None
+    assert model_metadata(whole / "model.zip")["residual"] == run.residual.bounds
     agent = SB3Agent(str(whole / "model.zip"))
     env = agent.make_env(sim__max_episode_seconds=2.0)
     try:
