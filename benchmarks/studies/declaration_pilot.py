@@ -16,7 +16,7 @@ Usage::
     python benchmarks/studies/declaration_pilot.py [--suite corridor]
         [--designs discrete-cheap,stop-cheap] [--algo ppo|sac]
         [--decisions 491520] [--eval-every 40960] [--seed 0]
-        [--out benchmarks/results/declaration-pilot]
+        [--out benchmarks/results/declaration-pilot] [--check-routes N]
 
 The default 491,520 decisions are a pilot's budget: 40 minutes at the 200 decisions a second
 of 2026-12-02's machine (each ``state.json`` holds the bench's reference workload beside its
@@ -25,6 +25,8 @@ unit (``<out>/<algo>-<design>/``) checkpoints at every evaluation (``model.zip``
 ``state.json``, SAC's replay buffer) and a rerun resumes it from there; ``result.json`` is
 written when it finishes, and a rerun skips it. A rerun with a larger ``--decisions`` and
 otherwise the same settings extends a unit; a unit of other settings is set aside.
+``--check-routes N`` drives each named unit's finished model on N val routes, its actions
+deterministic and sampled, into ``<unit>/routes.json`` (no training).
 """
 
 from __future__ import annotations
@@ -208,9 +210,10 @@ def save_checkpoint(out: Path, model, state: dict) -> None:
     write_json(out / "state.json", state)
 
 
-def val_routes(model, eval_env, routes: int = 10) -> dict:
-    """``routes`` full val routes driven deterministically: their success, return, how they
-    ended and how near their goals they came (the legs' record, agents/rl/leg_record.py)."""
+def val_routes(model, eval_env, routes: int = 10, deterministic: bool = True) -> dict:
+    """``routes`` full val routes driven deterministically (or sampled): their success,
+    return, how they ended and how near their goals they came (the legs' record,
+    agents/rl/leg_record.py)."""
     ended: list[dict] = []
 
     def note(local: dict, _: dict) -> None:
@@ -221,7 +224,7 @@ def val_routes(model, eval_env, routes: int = 10) -> dict:
         model,
         eval_env,
         n_eval_episodes=routes,
-        deterministic=True,
+        deterministic=deterministic,
         return_episode_rewards=True,
         callback=note,
     )
@@ -308,6 +311,29 @@ def run_design(
     }
 
 
+def check_routes(suite: str, algo: str, design: str, unit: Path, routes: int, seed: int) -> dict:
+    """A finished unit's model on ``routes`` val routes (the evaluations' first ``routes``),
+    its actions chosen deterministically and sampled: whether routes fail where legs succeed
+    by the policy's mean or by its draws. Kept in ``<unit>/routes.json``."""
+    if not (unit / "result.json").is_file():
+        raise SystemExit(f"{unit}: no result.json; run the unit to its end first")
+    eval_env = make_vec_env(
+        leg_recorded,
+        n_envs=1,
+        seed=seed + 10_000,
+        env_kwargs={"env_id": stsf_gym.rl_id(suite, "truth"), "declaration": design,
+                    "split": "val"},
+    )  # fmt: skip
+    model = (PPO if algo == "ppo" else SAC).load(unit / "model.zip", device="cpu")
+    checked = {"routes": routes}
+    for way, deterministic in (("deterministic", True), ("sampled", False)):
+        model.set_random_seed(seed)
+        checked[way] = val_routes(model, eval_env, routes, deterministic)
+    eval_env.close()
+    write_json(unit / "routes.json", checked)
+    return checked
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", default="corridor")
@@ -317,9 +343,21 @@ def main() -> None:
     parser.add_argument("--eval-every", type=int, default=40_960)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/declaration-pilot"))
+    parser.add_argument(
+        "--check-routes",
+        type=int,
+        metavar="N",
+        help="drive each finished unit's model on N val routes, deterministic and sampled",
+    )
     args = parser.parse_args()
     for design in args.designs.split(","):
         unit = args.out / f"{args.algo}-{design}"
+        if args.check_routes:
+            checked = check_routes(
+                args.suite, args.algo, design, unit, args.check_routes, args.seed
+            )
+            print(json.dumps({"design": design, **checked}))
+            continue
         settings = unit_settings(args.suite, args.algo, args.decisions, args.eval_every, args.seed)
         if finished(unit, settings):
             print(f"{unit}: finished, skipped")

@@ -74,7 +74,9 @@ def time_line(jobs: list[dict], lefts: list[RunLeft], workers: int) -> str:
         for units, unit in ((left.decisions, "decision"), (left.episodes, "episode")):
             if not units:
                 continue
-            found = speed_estimate(speed_desc(left.run, unit), speed_key(job), units, unit)
+            found = speed_estimate(
+                speed_desc(left.run, unit), speed_key(job, left.run), units, unit
+            )
             if found is None:
                 return f"{head}; no speed measured here yet: the bar's ETA follows the {unit}s"
             seconds += found[0]
@@ -88,11 +90,11 @@ def record_run(job: dict, left: RunLeft, summary: dict) -> None:
     if left.decisions:
         ran = summary["timesteps"] - summary["resumed_from"]
         seconds = summary["session_wall_time_s"]
-        record_speed(speed_desc(left.run, "decision"), speed_key(job), ran, seconds)
+        record_speed(speed_desc(left.run, "decision"), speed_key(job, left.run), ran, seconds)
     stage = summary.get("demonstrations")
     if left.episodes and isinstance(stage, dict):
         desc = speed_desc(left.run, "episode")
-        record_speed(desc, speed_key(job), left.episodes, stage["wall_time_s"])
+        record_speed(desc, speed_key(job, left.run), left.episodes, stage["wall_time_s"])
 
 
 def speed_desc(run: RunSettings, unit: str) -> str:
@@ -100,9 +102,19 @@ def speed_desc(run: RunSettings, unit: str) -> str:
     return f"train {run.algo} {run.suite or run.world}: {unit}s"
 
 
-def speed_key(job: dict) -> str:
-    """The training's work apart from its seeds, folder and budget (they leave its speed)."""
-    return work_key([{k: v for k, v in job.items() if k != "timesteps"}])
+def speed_key(job: dict, run: RunSettings) -> str:
+    """The training's work apart from its seeds, folder and budget (they leave its speed):
+    the command's settings and the hyper-parameters they resolve to, so a changed config file
+    (a residual that decides near the goals only) is other work."""
+    settings = {k: v for k, v in job.items() if k != "timesteps"}
+    return work_key([{**settings, "resolved": _without_budget(run.meta["hyperparams"])}])
+
+
+def _without_budget(settings: object) -> object:
+    """``settings`` with every ``timesteps`` entry left out, at any depth."""
+    if not isinstance(settings, dict):
+        return settings
+    return {k: _without_budget(v) for k, v in settings.items() if k != "timesteps"}
 
 
 def _has_work(left: RunLeft) -> bool:

@@ -109,3 +109,16 @@ def test_train_estimates_the_decisions_left_after_a_checkpoint(tmp_path, monkeyp
     ran = {"timesteps": 204_800, "resumed_from": 88_064, "session_wall_time_s": 2_000.0}
     train_estimate.record_run(job, left, ran)
     assert "measured here over 116,736 on this work" in train_estimate.time_line([job], [left], 1)
+
+
+def test_a_speed_is_kept_per_resolved_settings_not_per_command(tmp_path):
+    from stsf_gym.experiments.jobs import train_estimate
+
+    job = _train_job(tmp_path / "run")
+    changed = job | {"overrides": {**(job["overrides"] or {}), "n_steps": 64}}
+    key = train_estimate.speed_key(job, train_estimate.run_left(job).run)
+    longer = job | {"timesteps": 4096}
+    assert train_estimate.speed_key(longer, train_estimate.run_left(longer).run) == key
+    # the same command over a changed config file: the resolved settings tell them apart
+    run = train_estimate.run_left(changed).run
+    assert train_estimate.speed_key(job, run) != key
