@@ -354,7 +354,8 @@ class CorridorEnv(gym.Env):
         return self._start_episode(options)
 
     def require_open(self, call: str) -> None:
-        """Raise a :class:`RuntimeError` for ``call`` (``step``, ``reset``) after :meth:`close`."""
+        """Raise a :class:`RuntimeError` for ``call`` (``step``, ``reset``, ``render``) after
+        :meth:`close`."""
         if self.sim.closed:
             raise RuntimeError(f"{call}() after close(): this env is closed; make a new one")
 
@@ -520,6 +521,7 @@ class CorridorEnv(gym.Env):
 
     def render(self):
         """The frame of ``render.view`` (RGB uint8); in ``human`` mode shown, ``None`` returned."""
+        self.require_open("render")
         if self.render_mode is None:
             return None
         view = self.config.render.view

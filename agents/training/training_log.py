@@ -6,7 +6,9 @@ steps (control steps, 0.1 s each, of every stage) and against wall time."""
 from __future__ import annotations
 
 import csv
+import io
 import json
+import os
 import time
 from pathlib import Path
 
@@ -14,7 +16,7 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from stsf_gym.agents.demonstrations.dagger import read_history
-from stsf_gym.io import save_figure, write_json
+from stsf_gym.io import save_figure, write_atomic, write_json
 
 EPISODES_CSV = "episodes.csv"  # timesteps, reward, length, success, control steps
 EVAL_CSV = "eval.csv"  # timesteps, mean reward, success rate, control steps, wall time (s)
@@ -24,13 +26,22 @@ SMOOTHING = 20  # training episodes in the rolling mean of the curves
 
 
 def append_row(path: Path, header: list[str], row: list) -> None:
-    """Append ``row`` to the CSV file ``path``, writing ``header`` first when the file is new."""
+    """Append ``row`` to the CSV file ``path``, writing ``header`` first when the file is new;
+    a write that fails (a full disk) leaves the file as it was, no row cut short."""
     new = not path.is_file()
-    with path.open("a", newline="") as f:
-        writer = csv.writer(f)
-        if new:
-            writer.writerow(header)
-        writer.writerow(row)
+    size = 0 if new else path.stat().st_size
+    lines = io.StringIO()
+    writer = csv.writer(lines)
+    if new:
+        writer.writerow(header)
+    writer.writerow(row)
+    try:
+        with path.open("a", newline="") as f:
+            f.write(lines.getvalue())
+    except OSError:
+        if path.is_file():
+            os.truncate(path, size)
+        raise
 
 
 def read_rows(path: Path) -> np.ndarray:
@@ -58,8 +69,9 @@ def drop_rows_after(path: Path, timesteps: int) -> None:
         return
     with path.open() as f:
         header, *rows = list(csv.reader(f))
-    with path.open("w", newline="") as f:
-        csv.writer(f).writerows([header, *(r for r in rows if float(r[0]) <= timesteps)])
+    kept = io.StringIO()  # written atomically: a full disk leaves the file as it was
+    csv.writer(kept).writerows([header, *(r for r in rows if float(r[0]) <= timesteps)])
+    write_atomic(path, kept.getvalue())
 
 
 class EpisodeLog(BaseCallback):

@@ -1,8 +1,8 @@
 """What an env is handed, refused at the door in one line: keyword arguments it does not take
 (a ``TypeError``, as Python and Gymnasium raise), a section given a value, actions of the wrong
 kind, reset options that are no mapping, an observation scale of 0, a lens the undistortion
-cannot undo, a decoy board on no wall, actions of the wrong shape or value, a call after
-close(), and a start pose off the corridor."""
+cannot undo, a decoy board on no wall, actions of the wrong shape or value, a step, reset or
+render after close(), and a start pose off the corridor."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ import pytest
 from stsf_gym.agents.observation import observation_config
 from stsf_gym.envs.config import load_config
 from stsf_gym.validation import ConfigError
+from stsf_gym.wrappers import CameraPointingWrapper, PoseEstimateWrapper
 
 IDS = ["stsf_gym/Corridor-v0", "stsf_gym/Generated-v0", "stsf_gym/Suite-Sparse-STSF-v0"]
 NO_CAMERA = {"camera": {"enabled": False}}
@@ -120,14 +121,44 @@ def test_a_decoy_board_on_no_wall_is_refused():
 FAST = {"camera": {"mode": "fast"}}
 
 
-@pytest.mark.parametrize("env_id", ["stsf_gym/Corridor-v0", "stsf_gym/Suite-Corridor-Truth-v0"])
-@pytest.mark.parametrize("call", ["step", "reset"])
-def test_a_call_after_close_says_the_env_is_closed(make_env, env_id, call):
-    env = make_env(env_id, **FAST)
+AFTER_CLOSE_IDS = [
+    "stsf_gym/Corridor-v0",
+    "stsf_gym/Corridor-Truth-v0",
+    "stsf_gym/Suite-Corridor-Truth-v0",
+]
+
+
+def after_close(env: gym.Env, call: str) -> None:
+    """Make ``call`` (``step``, ``reset``, ``render``) on a closed ``env``."""
+    if call == "step":
+        env.step(env.action_space.sample())
+    elif call == "reset":
+        env.reset(seed=0)
+    else:
+        env.render()
+
+
+@pytest.mark.parametrize("env_id", AFTER_CLOSE_IDS)
+@pytest.mark.parametrize("render_mode", [None, "rgb_array"])
+@pytest.mark.parametrize("call", ["step", "reset", "render"])
+def test_a_call_after_close_says_the_env_is_closed(make_env, env_id, render_mode, call):
+    env = make_env(env_id, render_mode=render_mode, **FAST)
     env.reset(seed=0)
     env.close()
     with pytest.raises(RuntimeError, match=f"^{call}\\(\\) after close\\(\\): this env is closed"):
-        env.step(env.action_space.sample()) if call == "step" else env.reset(seed=0)
+        after_close(env, call)
+    env.close()  # a second close is a no-op, and so is the fixture's third
+
+
+@pytest.mark.parametrize("call", ["step", "reset", "render"])
+def test_a_hand_built_stack_after_close_says_the_env_is_closed(call):
+    pan = {"camera": {"mode": "fast", "control": "pan"}}
+    env = gym.make("stsf_gym/Corridor-v0", render_mode="rgb_array", **pan).unwrapped
+    stack = CameraPointingWrapper(PoseEstimateWrapper(env, "odometry"))  # no OrderEnforcing
+    stack.close()
+    with pytest.raises(RuntimeError, match=f"^{call}\\(\\) after close\\(\\): this env is closed"):
+        after_close(stack, call)  # the env's words, not a wrapper's AttributeError
+    stack.close()
 
 
 def test_a_refused_first_reset_leaves_the_env_stepping_after_a_valid_one(make_env):

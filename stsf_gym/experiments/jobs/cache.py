@@ -7,7 +7,9 @@ stopped, while a result made by other code or settings (an edited default, a cha
 is stale: it is recomputed, and the run says so. Rows are written in a transaction each
 (:mod:`~stsf_gym.experiments.jobs.store`). A job whose worker raises or dies is reported on
 stderr (name and error) and run once more; a job failing twice is reported in
-:class:`JobsFailed` once every other job has finished and been stored. Without a store
+:class:`JobsFailed` once every other job has finished and been stored. A job that meets a full
+disk (``OSError`` ``ENOSPC``) stops the run at once with that error, the rows stored before
+kept: the command line's one line for a full disk. Without a store
 nothing is cached: the jobs keep their own state (a training run resumes from its checkpoint).
 """
 
@@ -139,6 +141,8 @@ def run_cached(
             failed = []
             for job, outcome in runner(fn, todo):
                 if isinstance(outcome, Crash):
+                    if outcome.full_disk is not None:  # no retry: every job would fail alike
+                        raise outcome.full_disk  # the stored rows stay; a rerun resumes
                     failed.append(job)
                     errors[name(job)] = outcome.error
                     then = "running it again" if attempt < ATTEMPTS else "giving up"

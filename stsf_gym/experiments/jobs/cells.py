@@ -22,7 +22,7 @@ from pathlib import Path
 
 from stsf_gym.config_files import deep_merge
 from stsf_gym.experiments.jobs.checks import cell_problem
-from stsf_gym.experiments.jobs.spec import JobKind, failure
+from stsf_gym.experiments.jobs.spec import JobKind, failure, full_disk_error
 from stsf_gym.validation import ConfigError
 
 #: ``train`` keys that are arguments of ``stsf_gym.agents.training.train.train`` (with their
@@ -47,10 +47,13 @@ def cell_kind(kind: str) -> CellKind:
 
 
 def run_cell(cell: dict) -> dict:
-    """Run ``cell`` with its kind's function; an exception becomes ``{"error": ...}``."""
+    """Run ``cell`` with its kind's function; an exception becomes ``{"error": ...}``, but a
+    full disk (``ENOSPC``) is raised: it stops the sweep (:func:`~.spec.full_disk_error`)."""
     try:
         return cell_kind(cell["kind"]).run(cell)
     except Exception as err:
+        if full_disk_error(err) is not None:
+            raise
         return failure(err, traceback.format_exc())
 
 

@@ -9,6 +9,7 @@ code it ran with, :mod:`stsf_gym.results.freshness`).
 
 from __future__ import annotations
 
+import errno
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -38,9 +39,12 @@ class Finished:
 
 @dataclass(frozen=True)
 class Crash:
-    """What a runner yields for a job whose worker raised or died: the error, in words."""
+    """What a runner yields for a job whose worker raised or died: the error, in words, and
+    the ``OSError`` ``ENOSPC`` when it met a full disk (every job after it would too: the run
+    stops on it, :func:`~stsf_gym.experiments.jobs.cache.run_cached`)."""
 
     error: str
+    full_disk: OSError | None = None
 
     @classmethod
     def of(cls, err: BaseException) -> Crash:
@@ -48,7 +52,16 @@ class Crash:
         if isinstance(err, BrokenProcessPool):
             return cls("the worker process died (killed, os._exit or a crash in native code)")
         first_line = (str(err).strip().splitlines() or [""])[0]
-        return cls(f"{type(err).__name__}: {first_line}")
+        return cls(f"{type(err).__name__}: {first_line}", full_disk_error(err))
+
+
+def full_disk_error(err: BaseException) -> OSError | None:
+    """The ``OSError`` ``ENOSPC`` that ``err`` is, or wraps as a Ray task's error does (its
+    ``cause``); None for any other error."""
+    for candidate in (err, getattr(err, "cause", None)):
+        if isinstance(candidate, OSError) and candidate.errno == errno.ENOSPC:
+            return candidate
+    return None
 
 
 #: Runs ``fn`` on each job, yielding ``(job, Finished or Crash)`` in the order they finish.
