@@ -10,8 +10,9 @@ only while the estimated position is within ``acts_within`` metres of the curren
 (:attr:`~stsf_gym.agents.rl.residual.ResidualFollower.near_goal`); elsewhere the follower
 drives alone, as the zero correction drives, and its decisions are folded into the
 learner's next one: their rewards summed into its reward, their count in
-``info["follower_decisions"]``. The learner's episode is then the tens of decisions around
-each goal, and its return is what they earned.
+``info["follower_decisions"]``, their control steps in ``info["control_steps"]`` (the
+learner's decision's and theirs, as the training log counts the time driven). The learner's
+episode is then the tens of decisions around each goal, and its return is what they earned.
 
 A decision taken where the learner does not act (an episode's first, from a start far from
 the goal) is driven as the zero correction. The untrained learner therefore still drives the
@@ -50,8 +51,10 @@ class LearnerNearGoals(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if not self._learner_acts():
             action = self._neutral
         obs, total, terminated, truncated, info = self.env.step(action)
-        total, alone = float(total), 0
+        total, alone, steps = float(total), 0, int(info["control_steps"])
         while not (terminated or truncated or self._learner_acts()):
             obs, reward, terminated, truncated, info = self.env.step(self._neutral)
             total, alone = total + float(reward), alone + 1
-        return obs, total, terminated, truncated, {**info, "follower_decisions": alone}
+            steps += int(info["control_steps"])
+        done = {"follower_decisions": alone, "control_steps": steps}
+        return obs, total, terminated, truncated, {**info, **done}

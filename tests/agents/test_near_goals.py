@@ -60,12 +60,14 @@ def test_an_untrained_learner_near_goals_drives_the_followers_episode(source: st
                 break
         obs, info = stack.reset(seed=4)
         learner_return, decided, alone_decisions, near = 0.0, 0, info["follower_decisions"], []
+        control_steps = info["control_steps"]
         while True:
             action, _ = model.predict(obs, deterministic=True)
             obs, reward, terminated, truncated, info = stack.step(action)
             learner_return += float(reward)
             decided += 1
             alone_decisions += info["follower_decisions"]
+            control_steps += info["control_steps"]
             near.append(stack.get_wrapper_attr("near_goal"))
             if terminated or truncated:
                 break
@@ -78,3 +80,4 @@ def test_an_untrained_learner_near_goals_drives_the_followers_episode(source: st
     assert 0 < decided < alone_decisions  # most of the route driven by the follower alone
     assert all(near[:-1])  # every decision handed back is within reach of the goal
     assert (decided + alone_decisions) * 5 >= solo_steps > (decided + alone_decisions - 1) * 5
+    assert control_steps == solo_steps  # every control step driven is counted once
