@@ -14,13 +14,13 @@ from stsf_gym.agents import pretrained
 from stsf_gym.experiments.jobs.backends import make_runner
 from stsf_gym.results.code_identity import file_digest, loaded_code
 from stsf_gym.results.command import command_line
-from stsf_gym.results.run_context import PROCESS_RUN, RunContext, current_run, run_context
+from stsf_gym.results.run_context import RunContext, current_run, run_context
 
 QOS_MODULE, QOS_PATH = "stsf_gym.recording.qos", "stsf_gym/recording/qos.py"
 AGENT = "pretrained:corridor/dagger-truth"
 
 
-def test_two_runs_in_one_process_do_not_see_each_others_workers_or_data_files(monkeypatch):
+def test_two_runs_in_one_process_do_not_see_each_others_workers_or_data_files(monkeypatch, own_run):
     monkeypatch.delitem(sys.modules, QOS_MODULE, raising=False)  # only a worker imports it
     with run_context() as first:
         models = pretrained.models(AGENT)
@@ -36,7 +36,7 @@ def test_two_runs_in_one_process_do_not_see_each_others_workers_or_data_files(mo
         assert QOS_PATH not in loaded_code() and not data & set(loaded_code())
     assert not second.worker_modules and not second.data_files
     assert QOS_PATH in first.worker_modules and data == first.data_files
-    assert QOS_PATH not in PROCESS_RUN.worker_modules  # nothing leaked out of the blocks
+    assert not own_run.worker_modules and not own_run.data_files  # the test's run: nothing leaked
 
 
 def test_a_runner_notes_its_workers_into_the_run_it_was_made_for():
