@@ -20,6 +20,16 @@ def measured_rates(tmp_path_factory):
     os.environ[RATES_ENV] = str(tmp_path_factory.mktemp("rates") / "rates.json")
 
 
+@pytest.fixture(autouse=True)
+def own_run():
+    """Each test is a run of its own (:mod:`stsf_gym.results.run_context`): it sees no earlier
+    test's worker modules, data files or command."""
+    from stsf_gym.results.run_context import run_context
+
+    with run_context() as run:
+        yield run
+
+
 @pytest.fixture
 def make_env():
     """Factory of envs that are closed after the test."""

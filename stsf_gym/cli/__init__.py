@@ -16,7 +16,7 @@ from stsf_gym.cli.options import preflight, refuse_unknown
 from stsf_gym.cli.reports import NothingFinished
 from stsf_gym.envs.quiet import VERBOSE_ENV
 from stsf_gym.experiments.jobs.cache import JobsFailed
-from stsf_gym.results.command import set_command
+from stsf_gym.results.run_context import RunContext, run_context
 from stsf_gym.validation import ConfigError, FieldError
 
 #: Each command: its module in this package (its options and the handler that calls the API)
@@ -97,13 +97,13 @@ def main(argv: list[str] | None = None) -> int:
     if command_parser is not None:  # an unknown option first: named with the one meant
         refuse_unknown(command_parser, words)
     args = parser.parse_args(words)
-    set_command(["stsf-gym", *words])
     error = f"stsf-gym {args.command}: error:"
     try:
-        preflight(args)
-        if not args.verbose:
-            _silence_c_stdout()
-        result = args.run(args)
+        with run_context(RunContext.of(["stsf-gym", *words])):  # what its results record
+            preflight(args)
+            if not args.verbose:
+                _silence_c_stdout()
+            result = args.run(args)
     except (
         ConfigError,
         FieldError,

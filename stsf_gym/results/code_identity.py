@@ -8,9 +8,11 @@ package (the same for a wheel and the checkout it was built from). A results fil
 the code its run loaded (:func:`loaded_code`): each package module imported in the run's process
 or in a worker that ran its jobs (workers report theirs through :func:`run_reporting_modules`
 and :func:`worker_result`), every package config and the package data files it read
-(:func:`note_data_files`), with each file's digest; timings, which any rewrite may change, are
-judged by what that code computes (:func:`timed_code`). What a number depends on is the
-behaviour versions of the subsystems the run loaded (:mod:`stsf_gym.results.behaviour`).
+(:func:`note_data_files`), with each file's digest (the workers' modules and the data files
+are kept by the run's :class:`~stsf_gym.results.run_context.RunContext`); timings, which any
+rewrite may change, are judged by what that code computes (:func:`timed_code`). What a
+number depends on is the behaviour versions of the subsystems the run loaded
+(:mod:`stsf_gym.results.behaviour`).
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from typing import Any, TypeVar
 
 from stsf_gym.layers import PACKAGE_DIRS
 from stsf_gym.results.behaviour import behaviour, code_digest
+from stsf_gym.results.run_context import RunContext, current_run
 
 #: Distributions whose versions shape results (those installed are listed).
 RESULT_PACKAGES = (
@@ -46,11 +49,6 @@ CODE_PACKAGES = tuple(PACKAGE_DIRS)
 CODE_SUFFIXES = (".py", ".yaml")
 
 T = TypeVar("T")
-
-#: The package modules (relative paths, see :func:`loaded_modules`) workers of this run loaded.
-_worker_modules: set[str] = set()
-#: The package data files this run read (relative paths: a shipped agent's model).
-_data_files: set[str] = set()
 
 
 def _package_folders() -> list[Path]:
@@ -90,30 +88,33 @@ def run_reporting_modules(fn: Callable[..., T], *args: Any) -> tuple[T, list[str
     return fn(*args), loaded_modules()
 
 
-def note_worker_modules(modules: Iterable[str]) -> None:
-    """Count ``modules`` (relative paths a worker reported) as code this run loaded."""
-    _worker_modules.update(modules)
+def note_worker_modules(modules: Iterable[str], run: RunContext | None = None) -> None:
+    """Count ``modules`` (relative paths a worker reported) as code ``run`` (default the
+    current one) loaded."""
+    (current_run() if run is None else run).note_worker_modules(modules)
 
 
 def note_data_files(paths: Iterable[Path]) -> None:
-    """Count the package files ``paths`` (a shipped agent's models) as code this run loaded:
-    results made with other bytes there are stale."""
+    """Count the package files ``paths`` (a shipped agent's models) as code the current run
+    loaded: results made with other bytes there are stale."""
     folders = _package_folders()
     found = (_relative(Path(os.path.abspath(path)), folders) for path in paths)
-    _data_files.update(path for path in found if path is not None)
+    current_run().note_data_files(path for path in found if path is not None)
 
 
-def worker_result(reply: tuple[T, list[str]]) -> T:
-    """The result in a :func:`run_reporting_modules` reply, its modules noted as this run's."""
+def worker_result(reply: tuple[T, list[str]], run: RunContext | None = None) -> T:
+    """The result in a :func:`run_reporting_modules` reply, its modules noted as ``run``'s
+    (default the current one)."""
     result, modules = reply
-    note_worker_modules(modules)
+    note_worker_modules(modules, run)
     return result
 
 
 def loaded_code() -> dict[str, str]:
-    """``{relative path: file_digest}`` of the code this run loaded: the package modules
+    """``{relative path: file_digest}`` of the code the current run loaded: the package modules
     imported here and in its workers, every package config (read by name at run time) and the
     package data files it read (:func:`note_data_files`)."""
+    run = current_run()
     folders = _package_folders()
     configs = {
         found
@@ -123,7 +124,7 @@ def loaded_code() -> dict[str, str]:
     }
     parents = {folder.name: folder.parent for folder in folders}
     code = {}
-    for path in sorted({*loaded_modules(), *_worker_modules, *configs, *_data_files}):
+    for path in sorted({*loaded_modules(), *run.worker_modules, *configs, *run.data_files}):
         parent = parents.get(path.split("/", 1)[0])
         if parent is not None and (parent / path).is_file():
             code[path] = file_digest(parent / path)

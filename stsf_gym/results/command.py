@@ -1,8 +1,9 @@
 """The command line of a run, as a user would type it on any machine.
 
-The CLI records its ``argv`` (:func:`set_command`; a run not started by the CLI records
-``sys.argv``); a results file shows it with every absolute path named (``OUT``, ``BASELINE``,
-``CONFIG``, ``MODEL``: :func:`portable`), so no page or result carries this machine's paths.
+A run's command is its context's (:class:`~stsf_gym.results.run_context.RunContext`: the
+CLI's ``argv``; a run not started by the CLI records ``sys.argv``); a results file shows it
+with every absolute path named (``OUT``, ``BASELINE``, ``CONFIG``, ``MODEL``: :func:`portable`),
+so no page or result carries this machine's paths.
 """
 
 from __future__ import annotations
@@ -11,25 +12,18 @@ import itertools
 import os
 import re
 import shlex
-import sys
 from collections.abc import Sequence
 from typing import Any, TypeVar
 
+from stsf_gym.results.run_context import current_run
+
 T = TypeVar("T")
-
-_command: list[str] | None = None
-
-
-def set_command(argv: Sequence[str]) -> None:
-    """Record the command line of this run (the CLI calls it; default ``sys.argv``)."""
-    global _command
-    _command = list(argv)
 
 
 def command_line() -> str:
-    """The command of this run as a user would type it anywhere: each absolute path named
-    (:func:`portable`), as a shell would take it."""
-    return shlex.join(portable(list(_command if _command is not None else sys.argv)))
+    """The command of the current run as a user would type it anywhere: each absolute path
+    named (:func:`portable`), as a shell would take it."""
+    return shlex.join(portable(current_run().argv()))
 
 
 #: The names of the absolute paths given to these options in a recorded command.
@@ -58,11 +52,9 @@ def path_names(argv: Sequence[str]) -> dict[str, str]:
 
 def portable(value: T, argv: Sequence[str] | None = None) -> T:
     """``value`` (a string, or lists and dicts of them) with every absolute path of the command
-    ``argv`` (default this run's) replaced by its name (:func:`path_names`): what a results
-    file or a page shows, the same on every machine."""
-    names = path_names(
-        list(_command if _command is not None else sys.argv) if argv is None else argv
-    )
+    ``argv`` (default the current run's) replaced by its name (:func:`path_names`): what a
+    results file or a page shows, the same on every machine."""
+    names = path_names(current_run().argv() if argv is None else argv)
     ordered = sorted(names.items(), key=lambda item: -len(item[0]))
 
     def rename(text: str) -> str:

@@ -1,7 +1,8 @@
 """What made a result: the code, the packages, the resolved configuration, the seeds, the command.
 
 Every ``results.json``, ``train.json``, model file and recording carries a :func:`provenance`
-record, put together from its parts: the command line (:mod:`~stsf_gym.results.command`), the
+record, put together from its parts (those of the run it belongs to:
+:mod:`~stsf_gym.results.run_context`): the command line (:mod:`~stsf_gym.results.command`), the
 code and packages (:mod:`~stsf_gym.results.code_identity`) and the configuration as JSON
 (:mod:`~stsf_gym.results.fingerprint`, which also stamps the cached units of work). The
 machine's speed at the time of a run is :mod:`~stsf_gym.results.machine_speed`'s.

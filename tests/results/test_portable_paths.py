@@ -12,6 +12,7 @@ import pytest
 from helpers import ROOT
 
 from stsf_gym.results import command
+from stsf_gym.results.run_context import RunContext, run_context
 
 #: An absolute path of a machine: its user, work or scratch folders.
 MACHINE_PATH = re.compile(r"(?<![\w.~-])/(?:work|tmp|home|root|Users|mnt|media|srv|opt)/\w")
@@ -62,10 +63,9 @@ def test_no_page_result_or_shipped_agent_names_a_path_of_a_machine():
         ),
     ],
 )
-def test_a_command_names_its_absolute_paths(monkeypatch, argv, typed):
-    monkeypatch.setattr(command, "_command", None)
-    command.set_command(argv)
-    assert command.command_line() == typed
+def test_a_command_names_its_absolute_paths(argv, typed):
+    with run_context(RunContext.of(argv)):
+        assert command.command_line() == typed
 
 
 def test_paths_inside_a_named_one_are_named_through_it_in_a_results_file():

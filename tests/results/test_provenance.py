@@ -25,8 +25,8 @@ from stsf_gym.config_files import CONFIG_DIR
 from stsf_gym.experiments.evaluate import evaluate
 from stsf_gym.experiments.jobs.backends import make_runner
 from stsf_gym.experiments.jobs.store import read_rows
-from stsf_gym.results import command
 from stsf_gym.results.fingerprint import config_digest
+from stsf_gym.results.run_context import RunContext, run_context
 
 FAST = {"camera": {"enabled": False}, "sim": {"max_episode_seconds": 3.0}}
 TINY_PPO = {
@@ -40,8 +40,8 @@ TINY_PPO = {
 
 
 def test_a_results_file_names_code_packages_config_seeds_and_command(tmp_path):
-    command.set_command(["stsf-gym", "evaluate", "--seeds", "2"])
-    evaluate(tmp_path, ["odometry"], seeds=2, seed=5, world="straight_10m", workers=1, env=FAST)
+    with run_context(RunContext.of(["stsf-gym", "evaluate", "--seeds", "2"])):
+        evaluate(tmp_path, ["odometry"], seeds=2, seed=5, world="straight_10m", workers=1, env=FAST)
     made_by = json.loads((tmp_path / "results.json").read_text())["provenance"]
     code = made_by["stsf_gym"]
     assert code["version"] == __version__ and len(code["source_digest"]) == 16
@@ -60,7 +60,6 @@ def test_a_results_file_names_code_packages_config_seeds_and_command(tmp_path):
 
 def test_the_code_a_run_loaded_includes_what_only_its_workers_imported(monkeypatch):
     module, path = "stsf_gym.recording.qos", "stsf_gym/recording/qos.py"
-    monkeypatch.setattr(code_identity, "_worker_modules", set())  # no earlier test's workers
     monkeypatch.delitem(sys.modules, module, raising=False)  # this process never imports it
     assert path not in provenance.provenance()["stsf_gym"]["loaded_code"]
     jobs = [{"module": module, "n": n} for n in range(2)]

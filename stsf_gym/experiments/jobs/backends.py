@@ -6,7 +6,8 @@ as it finishes (:class:`~stsf_gym.experiments.jobs.spec.Finished`), or a
 :func:`~stsf_gym.experiments.jobs.cache.run_cached` stores it and moves the progress bar, so
 the store, resume and summary are the same whichever backend ran them. Each job's worker
 reports the package modules it had loaded (:func:`finished`): the code its stored result was
-made with, and part of the run's provenance.
+made with, and part of the provenance of the run the runner was made for (its
+:class:`~stsf_gym.results.run_context.RunContext`, noted into as each job finishes).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from typing import Any
 from stsf_gym.experiments.jobs.orphan_watchdog import start_watchdog
 from stsf_gym.experiments.jobs.spec import Crash, Finished, Runner
 from stsf_gym.results.code_identity import loaded_modules, run_reporting_modules, worker_result
+from stsf_gym.results.run_context import RunContext, current_run
 from stsf_gym.validation import ConfigError
 
 BACKENDS = ("local", "ray")
@@ -39,19 +41,25 @@ PARENT_CHECK_S = 2.0  # how often a local worker checks that the run that starte
 
 
 def make_runner(
-    backend: str, workers: int = 2, address: str | None = None, cpus_per_job: int = 1
+    backend: str,
+    workers: int = 2,
+    address: str | None = None,
+    cpus_per_job: int = 1,
+    context: RunContext | None = None,
 ) -> Runner:
     """The runner of ``backend``: ``local`` processes or ``ray`` (``address`` or a local Ray;
-    each job reserves ``cpus_per_job`` of its CPUs)."""
+    each job reserves ``cpus_per_job`` of its CPUs), its workers' modules noted as
+    ``context``'s (the run current now if None)."""
+    context = current_run() if context is None else context
     if workers < 1:
         raise ConfigError(f"workers must be at least 1, got {workers}")
     if backend == "local":
         if address is not None:
             raise ConfigError("--address is only for --backend ray")
-        return process_runner(workers)
+        return process_runner(workers, context)
     if backend == "ray":
         check_ray_address(address)
-        return ray_runner(address, workers, cpus_per_job)
+        return ray_runner(address, workers, cpus_per_job, context)
     raise ConfigError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
 
 
@@ -101,9 +109,14 @@ def _check_answers(address: str, timeout_s: float) -> None:
         ) from None
 
 
-def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int = 1) -> Runner:
+def ray_runner(
+    address: str | None = None,
+    workers: int = 2,
+    cpus_per_job: int = 1,
+    context: RunContext | None = None,
+) -> Runner:
     """Jobs as Ray tasks (``cpus_per_job`` CPUs each), gathered with ``ray.wait`` as they
-    finish.
+    finish, their modules noted as ``context``'s (the run current now if None).
 
     Uses the Ray instance already initialised in this process, else connects to ``address``
     (a running cluster, e.g. ``ray://head:10001`` or ``auto``) or, without one, starts a local
@@ -112,6 +125,7 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
     (:mod:`~stsf_gym.experiments.jobs.orphan_watchdog`).
     Nodes of a cluster need stsf-gym installed.
     """
+    context = current_run() if context is None else context
     try:
         import ray
     except ImportError as err:
@@ -138,7 +152,7 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
                 done, _ = ray.wait(list(pending), num_returns=1)
                 job = pending.pop(done[0])
                 try:
-                    result: Finished | Crash = finished(ray.get(done[0]))
+                    result: Finished | Crash = finished(ray.get(done[0]), context)
                 except ray.exceptions.RayError as err:  # the job raised, its worker died...
                     result = Crash.of(err)
                 yield job, result
@@ -153,8 +167,9 @@ def ray_runner(address: str | None = None, workers: int = 2, cpus_per_job: int =
     return run
 
 
-def process_runner(workers: int) -> Runner:
-    """Jobs in ``workers`` forkserver processes (in this process when ``workers`` is 1).
+def process_runner(workers: int, context: RunContext | None = None) -> Runner:
+    """Jobs in ``workers`` forkserver processes (in this process when ``workers`` is 1), their
+    modules noted as ``context``'s (the run current now if None).
 
     Each of the ``workers`` slots owns a one-process pool, so a worker that dies takes down
     only the job it was running: that job is yielded as a :class:`Crash`, and the slot starts
@@ -163,6 +178,7 @@ def process_runner(workers: int) -> Runner:
     A worker whose run was killed exits within :data:`PARENT_CHECK_S` (:func:`exit_with`):
     its job's result was lost with the run, and a rerun redoes it.
     """
+    context = current_run() if context is None else context
 
     def run(
         fn: Callable[[dict], object], jobs: list[dict]
@@ -201,7 +217,10 @@ def process_runner(workers: int) -> Runner:
             try:
                 for future in as_completed(futures):
                     error = future.exception()
-                    yield futures[future], Crash.of(error) if error else finished(future.result())
+                    yield (
+                        futures[future],
+                        Crash.of(error) if error else finished(future.result(), context),
+                    )
             finally:
                 for future in futures:
                     future.cancel()
@@ -212,10 +231,10 @@ def process_runner(workers: int) -> Runner:
     return run
 
 
-def finished(reply: tuple[object, list[str]]) -> Finished:
+def finished(reply: tuple[object, list[str]], context: RunContext) -> Finished:
     """A worker's :func:`~stsf_gym.results.code_identity.run_reporting_modules` reply as a
-    :class:`Finished`, its modules noted as the run's."""
-    return Finished(worker_result(reply), reply[1])
+    :class:`Finished`, its modules noted as ``context``'s."""
+    return Finished(worker_result(reply, context), reply[1])
 
 
 def exit_with(run_pid: int) -> None:

@@ -5,7 +5,9 @@ the training campaign each make their own list of jobs and write their own repor
 two, :func:`run_jobs` forgets the failures a rerun must redo, resolves every job's
 configuration once, runs the jobs still to do on the chosen backend (local processes or Ray)
 and stores each result as it finishes (one SQLite file per run,
-:mod:`~stsf_gym.experiments.jobs.store`).
+:mod:`~stsf_gym.experiments.jobs.store`). The code its workers loaded is noted into the run
+current when it is called (:class:`~stsf_gym.results.run_context.RunContext`: the CLI's
+command), which the report's provenance then reads.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from stsf_gym.experiments.jobs.backends import make_runner
 from stsf_gym.experiments.jobs.cache import run_cached
 from stsf_gym.experiments.jobs.spec import JobKind, failed
 from stsf_gym.experiments.jobs.store import delete_rows, open_store, read_rows
+from stsf_gym.results.run_context import current_run
 
 
 @dataclass(frozen=True)
@@ -53,7 +56,7 @@ def run_jobs(
     A job that raises (or whose worker dies) is run once more, then reported in
     :class:`~stsf_gym.experiments.jobs.cache.JobsFailed` after the others finished.
     """
-    runner = make_runner(backend, workers, address, cpus_per_job)
+    runner = make_runner(backend, workers, address, cpus_per_job, current_run())
     if store is not None:
         store = Path(store)
         jobs = [json.loads(json.dumps(job)) for job in jobs]  # as they are saved and read back
