@@ -34,12 +34,18 @@ import gymnasium as gym
 
 from stsf_gym.agents.observation import observation_config
 from stsf_gym.agents.policy_stack import policy_stack
-from stsf_gym.agents.rl.declaration import DEFAULT_DECLARATION, DiscreteActions, GradedFalseStop
+from stsf_gym.agents.rl.declaration import (
+    DEFAULT_DECLARATION,
+    DiscreteActions,
+    GradedFalseStop,
+    WeanedFalseStop,
+)
 from stsf_gym.agents.rl.declaration import declaration as design_of
 from stsf_gym.agents.training.hyperparams import Hyperparams, load_hyperparams
 from stsf_gym.agents.training.settings import suite_env
 from stsf_gym.agents.training.training_envs import env_id_for
 from stsf_gym.config_files import deep_merge
+from stsf_gym.envs.config import EnvConfig, RewardConfig, load_config
 from stsf_gym.envs.generated_env import generated_label
 from stsf_gym.episode_env import make_episode_env
 from stsf_gym.estimators import estimator_class
@@ -74,15 +80,24 @@ def rl_settings(suite: str, estimator: str, split: str, design: str) -> tuple[di
     return env, hp
 
 
+def evaluation_config(suite: str, estimator: str = TRUTH) -> tuple[EnvConfig, Hyperparams]:
+    """The env config of the suite's full routes (its val and test splits) and the trainer
+    settings they came from."""
+    env, hp = rl_settings(suite, estimator, "test", DEFAULT_DECLARATION)
+    return load_config(**{k: v for k, v in env.items() if k != "generator"}), hp
+
+
 def episode_decisions(suite: str, estimator: str = TRUTH) -> int:
     """The most decisions an episode of the suite's RL-ready ids takes: its time limit over the
     decision period (the legs' limit is shorter)."""
-    from stsf_gym.envs.config import load_config
+    config, hp = evaluation_config(suite, estimator)
+    period = config.sim.control_dt * hp.training.decision_steps
+    return math.ceil(config.sim.max_episode_seconds / period - 1e-9)
 
-    env, hp = rl_settings(suite, estimator, "test", DEFAULT_DECLARATION)
-    sim = load_config(**{k: v for k, v in env.items() if k != "generator"}).sim
-    period = sim.control_dt * hp.training.decision_steps
-    return math.ceil(sim.max_episode_seconds / period - 1e-9)
+
+def task_reward(suite: str, estimator: str = TRUTH) -> RewardConfig:
+    """The reward of the suite's full routes, which the training legs' designs change."""
+    return evaluation_config(suite, estimator)[0].reward
 
 
 def make_rl_env(
@@ -104,5 +119,8 @@ def make_rl_env(
     if design.graded and split == "train":
         progress = estimating.unwrapped.config.reward.progress  # type: ignore[attr-defined]
         estimating = GradedFalseStop(estimating, progress)
+    if design.weaned and split == "train":
+        routes = task_reward(suite, estimator).false_stop  # the task's, as its routes end
+        estimating = WeanedFalseStop(estimating, design.false_stop, routes)
     stack = policy_stack(estimating, features, hp.training.decision_steps)
     return DiscreteActions(stack) if design.discrete else stack

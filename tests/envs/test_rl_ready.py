@@ -10,8 +10,15 @@ import pytest
 from stable_baselines3 import PPO
 
 import stsf_gym
-from stsf_gym.agents.rl.declaration import DISCRETE_ACTIONS, GOES_ON_FALSE_STOP, GradedFalseStop
-from stsf_gym.agents.rl.ready import episode_decisions
+from stsf_gym.agents.rl.declaration import (
+    DISCRETE_ACTIONS,
+    GOES_ON_FALSE_STOP,
+    WEAN_LEGS,
+    WEAN_SUCCESS,
+    GradedFalseStop,
+    WeanedFalseStop,
+)
+from stsf_gym.agents.rl.ready import episode_decisions, task_reward
 from stsf_gym.envs.suite import suite_names
 
 EARLY = 5  # decisions: a false stop this early is a fresh policy's, not a learnt one
@@ -129,7 +136,7 @@ class _Stops(gym.Env):
             reward,
             success,
             False,
-            {"stops": self.count, "last_stop": last},
+            {"stops": self.count, "last_stop": last, "success": success},
         )
 
 
@@ -157,6 +164,68 @@ def test_graded_declaration_on_the_id_grades_training_legs_only():
     try:
         assert not any(isinstance(w, GradedFalseStop) for w in _wrappers(val))
     finally:
+        val.close()
+
+
+def _legs(env: WeanedFalseStop, legs: int) -> list[tuple[float, bool]]:
+    """``legs`` legs of a false stop, then the goal: each step's reward and ending."""
+    steps = []
+    for _ in range(legs):
+        env.reset()
+        while True:
+            _, reward, terminated, _, _ = env.step(np.zeros(1))
+            steps.append((reward, terminated))
+            if terminated:
+                break
+    return steps
+
+
+class _Legs(_Stops):
+    """One-step legs: each ends at its first step, on the goal or by the time limit."""
+
+    def __init__(self, outcomes: list[bool]) -> None:
+        super().__init__([])
+        self.outcomes = outcomes
+
+    def step(self, action):
+        success = self.outcomes.pop(0)
+        info = {"stops": int(success), "last_stop": {"success": success}, "success": success}
+        return np.zeros(1, np.float32), 10.0 * success, success, not success, info
+
+
+def _weaned_after(outcomes: list[bool]) -> bool:
+    env = WeanedFalseStop(_Legs(list(outcomes)), cheap=-1.0, task_false_stop=-10.0)
+    for _ in outcomes:
+        env.reset()
+        env.step(np.zeros(1))
+    return env.weaned
+
+
+def test_a_weaned_false_stop_ends_the_leg_at_the_tasks_cost_once_legs_succeed():
+    env = WeanedFalseStop(_Stops([1.0, 0.1]), cheap=GOES_ON_FALSE_STOP, task_false_stop=-10.0)
+    _, info = env.reset()
+    assert info["weaned"] is False
+    early = _legs(env, WEAN_LEGS)  # every leg: a false stop that goes on, then the goal
+    assert early[:2] == [(GOES_ON_FALSE_STOP, False), (10.0, True)]
+    assert len(early) == 2 * WEAN_LEGS and env.weaned  # 50 of 50 legs succeeded
+    assert _legs(env, 1) == [(-10.0, True)]  # the task's rule: the false stop ends the leg
+    assert _weaned_after([True] * (WEAN_LEGS - 1)) is False  # too few legs to judge
+    short = int(WEAN_SUCCESS * WEAN_LEGS) - 1
+    assert _weaned_after([True] * short + [False] * (WEAN_LEGS - short)) is False
+    assert _weaned_after([False] * 10 + [True] * WEAN_LEGS) is True  # the last 50 count
+    with pytest.raises(ValueError, match="task_false_stop"):
+        WeanedFalseStop(_Stops([]), cheap=-1.0, task_false_stop=-0.5)
+
+
+def test_the_weaned_design_weans_training_legs_only_toward_the_tasks_own_cost():
+    env = gym.make("stsf_gym/RL-Corridor-Truth-v0", declaration="stop-cheap-first")
+    val = gym.make("stsf_gym/RL-Corridor-Truth-v0", split="val", declaration="stop-cheap-first")
+    try:
+        weaning = [w for w in _wrappers(env) if isinstance(w, WeanedFalseStop)]
+        assert len(weaning) == 1 and not any(isinstance(w, WeanedFalseStop) for w in _wrappers(val))
+        assert weaning[0]._extra == pytest.approx(task_reward("corridor").false_stop + 0.1)
+    finally:
+        env.close()
         val.close()
 
 
