@@ -2,8 +2,9 @@
 
 :class:`PolicyObservation` sits on top of a :class:`stsf_gym.wrappers.PoseEstimateWrapper`
 and turns its ``Dict`` observation into one flat ``Box``. Everything comes from the pose
-estimate, the sensors, the world's path and the task's goals in the observation (public map
-knowledge), never from ``info`` or the env's task.
+estimate, the sensors, the task's goals in the observation and the episode's path, read from
+the reset's ``info["path"]`` (public map knowledge), never from the rest of ``info`` or the
+env's task.
 """
 
 from __future__ import annotations
@@ -103,13 +104,13 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
             raise ValueError(f"PolicyObservation needs the task's obs keys {missing}")
         self.config = config
         cfg = env.unwrapped.config
-        self._world, self.path = cfg.world, Polyline(cfg.world.path)
+        self.path = Polyline(cfg.world.path)  # until a reset gives the episode's
         self.sonar_range = (cfg.sonar.min_range, cfg.sonar.max_range)
         top_wheel_speed = cfg.robot.max_speed / cfg.robot.wheel_radius  # rad/s
         self.ticks_at_top_speed = (
             top_wheel_speed * env.unwrapped.dt * cfg.encoders.ticks_per_rev / (2 * math.pi)
         )
-        self.map_view: MapView | None = None  # built for each world, when the config asks
+        self.map_view: MapView | None = None  # built at each reset, when the config asks
         size = 2 * len(self.config.lookahead) + 9 + cfg.sonar.count + 2
         size += BOARD_FEATURES * config.boards + (cfg.sonar.count if config.predicted_sonar else 0)
         self._proposal = PROPOSAL in env.observation_space.spaces
@@ -117,9 +118,18 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
         self.observation_space = spaces.Box(-FEATURE_LIMIT, FEATURE_LIMIT, (size,), np.float32)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Reset the env: the policy's flat input, and ``info["is_success"]`` False."""
+        """Reset the env: the policy's flat input of the episode's path
+        (:meth:`follow_path`), and ``info["is_success"]`` False."""
         obs, info = self.env.reset(seed=seed, options=options)
+        self.follow_path(info)
         return self.observation(obs), {**info, "is_success": False}
+
+    def follow_path(self, info: Mapping[str, Any]) -> None:
+        """Take the episode's path from a reset's ``info["path"]`` (a generated world brings a
+        new one), and the map of its world when the config reads it."""
+        self.path = Polyline(info["path"])
+        uses_map = self.config.boards or self.config.predicted_sonar
+        self.map_view = MapView(self.env, self.config.scale) if uses_map else None
 
     def step(self, action):
         """Step the env: the policy's flat input, and ``info["is_success"]``, True only at the
@@ -130,12 +140,6 @@ class PolicyObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs)
 
     def observation(self, obs: dict) -> np.ndarray:
         """The policy's input (:attr:`observation_space`) from the wrapped env's observation."""
-        world = self.env.unwrapped.config.world
-        if world is not self._world:  # a generated world per episode: follow the new path
-            self._world, self.path, self.map_view = world, Polyline(world.path), None
-        uses_map = self.config.boards or self.config.predicted_sonar
-        if uses_map and self.map_view is None:
-            self.map_view = MapView(self.env, self.config.scale)
         x, y, yaw = (float(v) for v in obs["pose"])
         c, s = math.cos(yaw), math.sin(yaw)
         to_robot = np.array([[c, s], [-s, c]])

@@ -140,8 +140,10 @@ class CorridorEnv(gym.Env):
     ``sim_time`` (s), ``goals_reached`` (goals done so far), ``success`` (every goal reached),
     ``stops`` (``declare``: how many stops were declared) and ``last_stop`` (the latest as
     ``{goal, time, position, true_distance_m, success}``, the true distance to the goal it was
-    declared for; ``goal`` -1 before the first): every key keeps its shape and type through an
-    episode, so a recorder stores it (:mod:`stsf_gym.envs.step_info`).
+    declared for; ``goal`` -1 before the first) and ``path`` (``(N, 2)`` ``float64``, the
+    episode's world path, public map knowledge: a wrapper follows a new world's route from the
+    reset's): every key keeps its shape and type through an episode, so a recorder stores it
+    (:mod:`stsf_gym.envs.step_info`).
 
     ## Camera
     ``camera_matrix`` (K) and ``dist_coeffs`` (OpenCV ``k1 k2 p1 p2 k3``) are the TRUE camera of
@@ -517,6 +519,7 @@ class CorridorEnv(gym.Env):
             "success": bool(self.task.success),
             "stops": len(self.task.stops),
             "last_stop": stop_info(self.task.stops),
+            "path": np.array(self.config.world.path, dtype=np.float64),
         }
 
     def render(self):

@@ -11,20 +11,24 @@ own stops left it, so it labels any state the learner reaches: DAgger's requirem
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import gymnasium as gym
 import numpy as np
 
 from stsf_gym.agents.follower import PathFollower
 
+if TYPE_CHECKING:
+    from stsf_gym.agents.observation import PolicyObservation
+
 
 class ExpertLabel(gym.Wrapper):
     """Adds ``info["expert_action"]``: the follower's action (the env's action layout, its
     ``stop`` entry included) for the true pose and the sonar of the current observation.
 
-    With ``features`` (the policy's observation of a raw one: ``PolicyObservation.observation``)
-    it also keeps every control step's ``(features, label)``, between the policy's decisions
+    With ``features`` (a :class:`~stsf_gym.agents.observation.PolicyObservation` over the same
+    env, told each reset's path, whose ``observation`` makes the policy's of a raw one) it also
+    keeps every control step's ``(features, label)``, between the policy's decisions
     too: a state the robot passes while an action is held is a state like any other, and
     labelling it gives the cloning ``decision_steps`` times the data for the same driving.
     :meth:`pop_samples` hands them over. With ``pose="estimate"`` the follower drives on the
@@ -35,7 +39,7 @@ class ExpertLabel(gym.Wrapper):
     def __init__(
         self,
         env: gym.Env,
-        features: Callable[[dict], np.ndarray] | None = None,
+        features: PolicyObservation | None = None,
         pose: str = "truth",
     ) -> None:
         super().__init__(env)
@@ -57,6 +61,8 @@ class ExpertLabel(gym.Wrapper):
         """Reset, and label the first state with a follower of the episode's goals."""
         obs, info = self.env.reset(seed=seed, options=options)
         self.expert = PathFollower.for_env(self.env)  # its goal: the observation's (head_for)
+        if self.features is not None:
+            self.features.follow_path(info)
         return obs, self._label(obs, info)
 
     def step(self, action):
@@ -69,5 +75,5 @@ class ExpertLabel(gym.Wrapper):
         pose = info["true_pose"] if self.pose == "truth" else obs["pose"]
         info["expert_action"] = self.expert.act(pose, obs["sonar"])
         if self.features is not None:
-            self._samples.append((self.features(obs), info["expert_action"]))
+            self._samples.append((self.features.observation(obs), info["expert_action"]))
         return info

@@ -73,7 +73,7 @@ def make_training_env(
     estimating = make_episode_env(world, estimator, env, {})
     labelled = estimating
     if expert:  # the expert labels every control step in the policy's features
-        features = PolicyObservation(estimating, observation).observation
+        features = PolicyObservation(estimating, observation)
         labelled = ExpertLabel(estimating, features, expert)
     policy_env = policy_stack(labelled, observation, decision_steps, residual)
     fresh = not Path(f"{monitor_file}.{Monitor.EXT}").is_file()
