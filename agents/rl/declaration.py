@@ -162,7 +162,28 @@ class DiscreteActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
         return self._table[index].copy()
 
 
-class GradedFalseStop(gym.Wrapper, gym.utils.RecordConstructorArgs):
+class FalseStopWrapper(gym.Wrapper):
+    """A wrapper that sees each new stop declared off its goal (``info["stops"]`` grown and
+    ``info["last_stop"]`` not a success), counted from its last reset."""
+
+    def __init__(self, env: gym.Env) -> None:
+        gym.Wrapper.__init__(self, env)
+        self._stops = 0
+
+    def reset(self, **kwargs):
+        """Reset the env and the count of stops seen."""
+        self._stops = 0
+        return self.env.reset(**kwargs)
+
+    def new_false_stop(self, info: dict) -> bool:
+        """Whether the step whose ``info`` this is declared a new false stop."""
+        stops = int(info["stops"])
+        new = stops > self._stops and not info["last_stop"]["success"]
+        self._stops = stops
+        return new
+
+
+class GradedFalseStop(FalseStopWrapper, gym.utils.RecordConstructorArgs):
     """A false stop's cost graded by how far it falls short (training legs of ``stop-graded``,
     over an env whose false stop costs :data:`GOES_ON_FALSE_STOP` and goes on).
 
@@ -174,30 +195,22 @@ class GradedFalseStop(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def __init__(self, env: gym.Env, progress: float) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, progress=progress)
-        gym.Wrapper.__init__(self, env)
+        FalseStopWrapper.__init__(self, env)
         if progress <= 0:
             raise ValueError(f"GradedFalseStop needs reward.progress > 0, got {progress:g}")
         self._progress = progress
-        self._stops = 0
-
-    def reset(self, **kwargs):
-        """Reset the env and the count of stops seen."""
-        self._stops = 0
-        return self.env.reset(**kwargs)
 
     def step(self, action):
         """Step the env; a new false stop's flat cost is given back less its graded cost."""
         observation, reward, terminated, truncated, info = self.env.step(action)
-        stops = int(info["stops"])
-        last = info["last_stop"]
-        if stops > self._stops and not last["success"]:
-            cost = min(self._progress * float(last["true_distance_m"]), -GOES_ON_FALSE_STOP)
+        if self.new_false_stop(info):
+            distance = float(info["last_stop"]["true_distance_m"])
+            cost = min(self._progress * distance, -GOES_ON_FALSE_STOP)
             reward = float(reward) - GOES_ON_FALSE_STOP - cost  # the flat cost, given back graded
-        self._stops = stops
         return observation, reward, terminated, truncated, info
 
 
-class WeanedFalseStop(gym.Wrapper, gym.utils.RecordConstructorArgs):
+class WeanedFalseStop(FalseStopWrapper, gym.utils.RecordConstructorArgs):
     """``stop-cheap-first``'s training legs: over an env whose false stop costs ``cheap`` and
     goes on, once the env's last :data:`WEAN_LEGS` legs succeeded at :data:`WEAN_SUCCESS`
     (see the module), a false stop ends the leg and costs ``task_false_stop`` in all, as it
@@ -205,7 +218,7 @@ class WeanedFalseStop(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def __init__(self, env: gym.Env, cheap: float, task_false_stop: float) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, cheap=cheap, task_false_stop=task_false_stop)
-        gym.Wrapper.__init__(self, env)
+        FalseStopWrapper.__init__(self, env)
         if not task_false_stop <= cheap < 0:
             raise ValueError(
                 f"WeanedFalseStop needs task_false_stop <= cheap < 0, got {task_false_stop:g} "
@@ -214,21 +227,17 @@ class WeanedFalseStop(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._extra = task_false_stop - cheap
         self._legs: list[bool] = []
         self.weaned = False
-        self._stops = 0
 
     def reset(self, **kwargs):
         """Reset the env and the count of stops seen; ``info["weaned"]`` from the start."""
-        self._stops = 0
-        observation, info = self.env.reset(**kwargs)
+        observation, info = super().reset(**kwargs)
         return observation, {**info, "weaned": self.weaned}
 
     def step(self, action):
         """Step the env; weaned, a new false stop ends the leg at the task's cost."""
         observation, reward, terminated, truncated, info = self.env.step(action)
-        stops, last = int(info["stops"]), info["last_stop"]
-        if self.weaned and stops > self._stops and not last["success"]:
+        if self.new_false_stop(info) and self.weaned:
             reward, terminated = float(reward) + self._extra, True
-        self._stops = stops
         info = {**info, "weaned": self.weaned}
         if terminated or truncated:
             self._legs = [*self._legs[-(WEAN_LEGS - 1) :], bool(info["success"])]

@@ -11,6 +11,7 @@ import io
 import json
 import re
 import sys
+from functools import partial
 from pathlib import Path
 
 from stable_baselines3.common.callbacks import BaseCallback
@@ -58,13 +59,24 @@ def save_atomic(save, path: Path) -> Path:
     return write_atomic(path, buffer.getvalue())
 
 
+#: Attributes a saved model leaves out: where this machine logged TensorBoard (a path of the
+#: machine, which a resume sets again under its own folder: :func:`load_checkpoint`'s load).
+MACHINE_ATTRIBUTES = ["tensorboard_log"]
+
+
+def save_model(model, path: Path) -> Path:
+    """``model`` saved at ``path`` atomically (:func:`save_atomic`), without the machine's
+    paths (:data:`MACHINE_ATTRIBUTES`)."""
+    return save_atomic(partial(model.save, exclude=MACHINE_ATTRIBUTES), path)
+
+
 def save_checkpoint(model, out: Path) -> Path:
     """Save as ``CheckpointCallback`` names it (with the replay buffer of off-policy models)."""
     path = out / "checkpoints" / f"{PREFIX}_{model.num_timesteps}_steps.zip"
     if getattr(model, "replay_buffer", None) is not None:
         name = f"{PREFIX}_replay_buffer_{model.num_timesteps}_steps.pkl"
         save_atomic(model.save_replay_buffer, path.with_name(name))
-    return save_atomic(model.save, path)  # last: a checkpoint zip implies its buffer
+    return save_model(model, path)  # last: a checkpoint zip implies its buffer
 
 
 class AtomicCheckpoint(BaseCallback):
@@ -115,7 +127,7 @@ class SaveBest(BaseCallback):
         self.path = out / "best" / "best_model.zip"
 
     def _on_step(self) -> bool:
-        save_atomic(self.model.save, self.path)
+        save_model(self.model, self.path)
         return True
 
 
@@ -142,7 +154,7 @@ def resume(cls: type, out: Path, meta: dict, env: VecEnv):
             file=sys.stderr,
         )
         return None
-    model = cls.load(str(path), env=env, device="cpu")
+    model = cls.load(str(path), env=env, device="cpu", tensorboard_log=str(out / "tb"))
     setattr(model, META_KEY, {**saved, **meta, "wall_time_s": saved.get("wall_time_s", 0.0)})
     buffer = path.with_name(f"{PREFIX}_replay_buffer_{steps}_steps.pkl")
     if buffer.is_file():

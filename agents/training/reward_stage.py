@@ -17,8 +17,8 @@ from tqdm import tqdm
 from stsf_gym.agents.training.checkpoints import (
     AtomicCheckpoint,
     SaveBest,
-    save_atomic,
     save_checkpoint,
+    save_model,
 )
 from stsf_gym.agents.training.finetune import FinetunePPO, FreshRollouts, widen_exploration
 from stsf_gym.agents.training.progress import RewardProgress
@@ -36,7 +36,7 @@ def guard_the_clone(model: FinetunePPO, run: RunSettings, out: Path) -> None:
     settings = run.hp.finetune
     path = out / CLONE
     if not path.is_file():
-        save_atomic(model.save, path)
+        save_model(model, path)
     if model.num_timesteps == 0 and settings.exploration_std is not None:
         widen_exploration(model.policy, settings.exploration_std)
     clone = type(model).load(path, device="cpu").policy

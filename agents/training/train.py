@@ -38,6 +38,7 @@ from stsf_gym.agents.training.checkpoints import (
     resume,
     save_atomic,
     save_checkpoint,
+    save_model,
 )
 from stsf_gym.agents.training.finetune import FinetunePPO
 from stsf_gym.agents.training.hyperparams import algorithm_class, policy_kwargs_for_sb3
@@ -140,7 +141,7 @@ def save_run(model, run: RunSettings, out: Path, start: int, session: float, mac
         save_checkpoint(model, out)
     # the code as the run loaded it by now, here and in the env processes
     model.stsf_meta["provenance"] = {**model.stsf_meta["provenance"], "stsf_gym": code_version()}
-    save_atomic(model.save, out / "model.zip")
+    save_model(model, out / "model.zip")
     summary = {
         **{k: v for k, v in model.stsf_meta.items() if k != "wall_time_s"},
         "timesteps": model.num_timesteps,

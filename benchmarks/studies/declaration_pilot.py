@@ -139,10 +139,8 @@ def unit_settings(suite: str, algo: str, decisions: int, eval_every: int, seed: 
 def extends(old: dict, new: dict) -> bool:
     """Whether a unit of settings ``new`` continues one of ``old``: the same in all but a
     larger budget of decisions."""
-    rest = {key: value for key, value in new.items() if key != "decisions"}
-    return {**old, "decisions": None} == {**rest, "decisions": None} and (
-        old.get("decisions", 0) <= new["decisions"]
-    )
+    rest = [{k: v for k, v in settings.items() if k != "decisions"} for settings in (old, new)]
+    return rest[0] == rest[1] and old.get("decisions", 0) <= new["decisions"]
 
 
 def finished(unit: Path, settings: dict) -> bool:

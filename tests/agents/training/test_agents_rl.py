@@ -7,6 +7,7 @@ import math
 import subprocess
 import sys
 import warnings
+import zipfile
 
 import numpy as np
 import pytest
@@ -267,6 +268,10 @@ def test_interrupt_saves_a_checkpoint_and_a_rerun_resumes(tmp_path, monkeypatch)
     monkeypatch.setattr(EpisodeLog, "_on_step", original)
     summary = train("ppo", "truth", out, 320, n_envs=1, overrides=TINY_PPO, progress_bar=False)
     assert summary["resumed_from"] == 64 and summary["timesteps"] == 320
+    for saved in (latest_checkpoint(out)[0], out / "model.zip"):  # no path of this machine
+        with zipfile.ZipFile(saved) as archive:
+            assert "tensorboard_log" not in json.loads(archive.read("data"))
+    assert any((out / "tb").iterdir())  # the resumed run logged under its own folder again
     steps = read_rows(out / "episodes.csv")[:, 0]
     assert np.all(np.diff(steps) > 0)  # no episode logged twice across the resume
     with pytest.raises(ConfigError, match="estimator 'truth'"):
