@@ -51,10 +51,22 @@ task's cost. Ending one leg in five still leaves the learner most of its goals t
 (the STOP was suppressed under a dear false stop when 1 leg in 30 reached a goal: the
 ``discrete`` unit). Each env weans itself from its own legs, so a user's script needs no
 callback; a resumed run's new envs wean again after their first 50 legs.
+
+Measured, ``stop-cheap-first`` weaned too soon (docs/rl.md): its envs reached 0.8 of legs
+while the STOP still fired 26-30 times a leg on the way, so once weaned 0.9 of legs ended at
+their first false stop and the STOP was suppressed again. Success counts the legs that reach
+their goal, not the false stops on the way, and it is the false stops the task's rule ends.
+``stop-cheap-rare`` weans only when, besides that success, ending a leg at its first false
+stop would end at most ``1 - WEAN_SUCCESS`` of legs: with false stops arriving as a Poisson
+count of mean ``m`` a leg, a leg holds none with probability ``exp(-m)``, so the env's last
+:data:`WEAN_LEGS` legs must average at most :data:`WEAN_FALSE_STOPS` = ``-ln 0.8`` = 0.22
+false stops. Weaned then, the dear false stop removes no more legs than the success rule
+already allows.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import gymnasium as gym
@@ -68,6 +80,8 @@ CHEAP_FALSE_STOP = -0.1
 #: ``stop-cheap-first``: legs an env's weaning looks back over, and the success they need.
 WEAN_LEGS = 50
 WEAN_SUCCESS = 0.8
+#: ``stop-cheap-rare``: the most false stops a leg (mean over those legs) it weans at.
+WEAN_FALSE_STOPS = -math.log(WEAN_SUCCESS)
 #: The RL-ready ids' design, and plain RL's on a suite in ``stsf-gym train`` (docs/rl.md).
 DEFAULT_DECLARATION = "stop-goes-on"
 
@@ -97,6 +111,7 @@ class Declaration:
     graded: bool = False  # that cost graded by the distance to the goal (GradedFalseStop)
     false_stop: float = GOES_ON_FALSE_STOP  # what a false stop that goes on costs
     weaned: bool = False  # the task's rule once the legs succeed (WeanedFalseStop)
+    wean_false_stops: float = math.inf  # and once false stops a leg are at most this
 
     def training_env(self) -> dict:
         """The env settings the design adds to the training legs."""
@@ -120,6 +135,14 @@ DECLARATIONS = {
             discrete=False,
             false_stop=CHEAP_FALSE_STOP,
             weaned=True,
+        ),
+        Declaration(
+            "stop-cheap-rare",
+            goes_on=True,
+            discrete=False,
+            false_stop=CHEAP_FALSE_STOP,
+            weaned=True,
+            wean_false_stops=WEAN_FALSE_STOPS,
         ),
     )
 }
@@ -211,36 +234,60 @@ class GradedFalseStop(FalseStopWrapper, gym.utils.RecordConstructorArgs):
 
 
 class WeanedFalseStop(FalseStopWrapper, gym.utils.RecordConstructorArgs):
-    """``stop-cheap-first``'s training legs: over an env whose false stop costs ``cheap`` and
-    goes on, once the env's last :data:`WEAN_LEGS` legs succeeded at :data:`WEAN_SUCCESS`
-    (see the module), a false stop ends the leg and costs ``task_false_stop`` in all, as it
-    does on a route. ``info["weaned"]`` says which rule the step ran under."""
+    """The weaned designs' training legs: over an env whose false stop costs ``cheap`` and goes
+    on, once the env's last :data:`WEAN_LEGS` legs succeeded at :data:`WEAN_SUCCESS` and
+    declared at most ``max_false_stops`` false stops a leg on average (see the module), a false
+    stop ends the leg and costs ``task_false_stop`` in all, as it does on a route.
+    ``info["weaned"]`` says which rule the step ran under."""
 
-    def __init__(self, env: gym.Env, cheap: float, task_false_stop: float) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, cheap=cheap, task_false_stop=task_false_stop)
+    def __init__(
+        self,
+        env: gym.Env,
+        cheap: float,
+        task_false_stop: float,
+        max_false_stops: float = math.inf,
+    ) -> None:
+        gym.utils.RecordConstructorArgs.__init__(
+            self, cheap=cheap, task_false_stop=task_false_stop, max_false_stops=max_false_stops
+        )
         FalseStopWrapper.__init__(self, env)
         if not task_false_stop <= cheap < 0:
             raise ValueError(
                 f"WeanedFalseStop needs task_false_stop <= cheap < 0, got {task_false_stop:g} "
                 f"and {cheap:g}"
             )
+        if not max_false_stops >= 0:
+            raise ValueError(f"WeanedFalseStop needs max_false_stops >= 0, got {max_false_stops}")
         self._extra = task_false_stop - cheap
-        self._legs: list[bool] = []
+        self._max_false_stops = max_false_stops
+        self._legs: list[tuple[bool, int]] = []  # (success, false stops) of the last legs
+        self._leg_false_stops = 0
         self.weaned = False
 
     def reset(self, **kwargs):
-        """Reset the env and the count of stops seen; ``info["weaned"]`` from the start."""
+        """Reset the env and the counts of stops seen; ``info["weaned"]`` from the start."""
+        self._leg_false_stops = 0
         observation, info = super().reset(**kwargs)
         return observation, {**info, "weaned": self.weaned}
 
     def step(self, action):
         """Step the env; weaned, a new false stop ends the leg at the task's cost."""
         observation, reward, terminated, truncated, info = self.env.step(action)
-        if self.new_false_stop(info) and self.weaned:
-            reward, terminated = float(reward) + self._extra, True
+        if self.new_false_stop(info):
+            self._leg_false_stops += 1
+            if self.weaned:
+                reward, terminated = float(reward) + self._extra, True
         info = {**info, "weaned": self.weaned}
         if terminated or truncated:
-            self._legs = [*self._legs[-(WEAN_LEGS - 1) :], bool(info["success"])]
-            full = len(self._legs) == WEAN_LEGS
-            self.weaned = self.weaned or bool(full and np.mean(self._legs) >= WEAN_SUCCESS)
+            leg = (bool(info["success"]), self._leg_false_stops)
+            self._legs = [*self._legs[-(WEAN_LEGS - 1) :], leg]
+            self.weaned = self.weaned or self._ready()
         return observation, reward, terminated, truncated, info
+
+    def _ready(self) -> bool:
+        """Whether the last legs meet the weaning rule."""
+        if len(self._legs) < WEAN_LEGS:
+            return False
+        success = np.mean([ok for ok, _ in self._legs])
+        false_stops = np.mean([count for _, count in self._legs])
+        return bool(success >= WEAN_SUCCESS and false_stops <= self._max_false_stops)

@@ -121,6 +121,6 @@ def make_rl_env(
         estimating = GradedFalseStop(estimating, progress)
     if design.weaned and split == "train":
         routes = task_reward(suite, estimator).false_stop  # the task's, as its routes end
-        estimating = WeanedFalseStop(estimating, design.false_stop, routes)
+        estimating = WeanedFalseStop(estimating, design.false_stop, routes, design.wean_false_stops)
     stack = policy_stack(estimating, features, hp.training.decision_steps)
     return DiscreteActions(stack) if design.discrete else stack

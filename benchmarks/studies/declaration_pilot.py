@@ -47,6 +47,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import SubprocVecEnv
 
 import stsf_gym
+from stsf_gym.agents.rl.declaration import declaration
 from stsf_gym.agents.rl.leg_record import LEG_KEYS, OUTCOMES, LegRecord
 from stsf_gym.agents.rl.ready import rl_hyperparams
 from stsf_gym.agents.training.hyperparams import policy_kwargs_for_sb3
@@ -105,6 +106,11 @@ def leg_summary(rows: list[dict]) -> dict:
         "declared_when_within": share(reached, lambda row: row["outcome"] == "goal"),
         "median_closest_m": float(np.median([float(row["closest_m"]) for row in rows])),
         "false_stops_per_leg": float(np.mean([int(row["false_stops"]) for row in rows])),
+        **(
+            {"weaned": share(rows, lambda row: row["weaned"] == "True")}
+            if "weaned" in rows[0]
+            else {}
+        ),
     }
 
 
@@ -255,6 +261,7 @@ def run_design(
             "reference_ms_before": reference_ms(),
         }
     kwargs = {"declaration": design}
+    weaned = declaration(design).weaned  # its legs record which rule they ran under
     venv = make_vec_env(
         leg_recorded,
         n_envs=N_ENVS,
@@ -263,7 +270,7 @@ def run_design(
         vec_env_cls=SubprocVecEnv,
         monitor_dir=str(out / "monitor"),
         monitor_kwargs={
-            "info_keywords": ("is_success", *LEG_KEYS),
+            "info_keywords": ("is_success", *LEG_KEYS, *(("weaned",) if weaned else ())),
             "override_existing": not resuming,
         },
     )

@@ -139,7 +139,8 @@ def goes_on_return(
 
 
 @pytest.mark.parametrize(
-    "design", ["stop-goes-on", "stop-cheap", "discrete-cheap", "stop-cheap-first"]
+    "design",
+    ["stop-goes-on", "stop-cheap", "discrete-cheap", "stop-cheap-first", "stop-cheap-rare"],
 )
 def test_under_the_training_rule_a_false_stop_costs_goes_on_and_never_pays(design):
     from stsf_gym.agents.rl.declaration import declaration

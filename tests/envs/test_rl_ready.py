@@ -13,6 +13,7 @@ import stsf_gym
 from stsf_gym.agents.rl.declaration import (
     DISCRETE_ACTIONS,
     GOES_ON_FALSE_STOP,
+    WEAN_FALSE_STOPS,
     WEAN_LEGS,
     WEAN_SUCCESS,
     GradedFalseStop,
@@ -215,6 +216,35 @@ def test_a_weaned_false_stop_ends_the_leg_at_the_tasks_cost_once_legs_succeed():
     assert _weaned_after([False] * 10 + [True] * WEAN_LEGS) is True  # the last 50 count
     with pytest.raises(ValueError, match="task_false_stop"):
         WeanedFalseStop(_Stops([]), cheap=-1.0, task_false_stop=-0.5)
+
+
+def _weaned_rare_after(false_stop_legs: int) -> bool:
+    """Whether the rare-false-stop rule weans after 50 successful legs, the first
+    ``false_stop_legs`` of them declaring one false stop on the way."""
+    env = WeanedFalseStop(
+        _Stops([1.0, 0.1]), cheap=-1.0, task_false_stop=-10.0, max_false_stops=WEAN_FALSE_STOPS
+    )
+    _legs(env, false_stop_legs)
+    env.env.distances = [0.1]  # type: ignore[attr-defined]  # straight to the goal
+    _legs(env, WEAN_LEGS - false_stop_legs)
+    return env.weaned
+
+
+def test_the_rare_rule_weans_only_once_false_stops_are_rare_as_well():
+    assert WEAN_FALSE_STOPS == pytest.approx(-np.log(WEAN_SUCCESS))
+    # every leg succeeds: the success rule alone weans, the rare rule waits for the false stops
+    assert _weaned_rare_after(WEAN_LEGS) is False
+    allowed = int(WEAN_FALSE_STOPS * WEAN_LEGS)  # 11 of 50 legs with one false stop: 0.22
+    assert _weaned_rare_after(allowed) is True
+    assert _weaned_rare_after(allowed + 1) is False
+    with pytest.raises(ValueError, match="max_false_stops"):
+        WeanedFalseStop(_Stops([]), cheap=-1.0, task_false_stop=-10.0, max_false_stops=-1.0)
+    rare = gym.make("stsf_gym/RL-Corridor-Truth-v0", declaration="stop-cheap-rare")
+    try:
+        weaning = [w for w in _wrappers(rare) if isinstance(w, WeanedFalseStop)]
+        assert len(weaning) == 1 and weaning[0]._max_false_stops == WEAN_FALSE_STOPS
+    finally:
+        rare.close()
 
 
 def test_the_weaned_design_weans_training_legs_only_toward_the_tasks_own_cost():
